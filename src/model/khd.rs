@@ -1,0 +1,209 @@
+//! The Kowalewski–Hayhurst–Dyson creep-damage model of the seed paper (eqs. 1–4), in its
+//! four-state form and in its exact one-state reduction.
+
+use super::{ConstantSpec, CreepModel, Load, Scale};
+
+/// Largest sinh argument accepted as physical: beyond it the rate is absurd (A·e^200) and
+/// the state can only come from a trial step past rupture.
+pub const MAX_SINH_ARG: f64 = 200.0;
+
+/// The six constants b = [A, B, H*, h, Kc, C], with the seed paper's 560 °C Table 1 bounds
+/// and Table 4 start as defaults.
+pub fn constants() -> Vec<ConstantSpec> {
+    vec![
+        ConstantSpec {
+            name: "A",
+            unit: "1/h",
+            lb: 1e-10,
+            ub: 1e-9,
+            default: 1e-9,
+            scale: Scale::Log,
+            doc: "creep rate coefficient",
+        },
+        ConstantSpec {
+            name: "B",
+            unit: "1/MPa",
+            lb: 0.1,
+            ub: 0.2,
+            default: 0.11,
+            scale: Scale::Linear,
+            doc: "stress sensitivity of the creep rate",
+        },
+        ConstantSpec {
+            name: "Hstar",
+            unit: "-",
+            lb: 0.4,
+            ub: 0.8,
+            default: 0.426,
+            scale: Scale::Linear,
+            doc: "saturation value of the hardening variable H",
+        },
+        ConstantSpec {
+            name: "h",
+            unit: "MPa",
+            lb: 1e4,
+            ub: 2e5,
+            default: 5.05e4,
+            scale: Scale::Log,
+            doc: "hardening modulus (primary creep)",
+        },
+        ConstantSpec {
+            name: "Kc",
+            unit: "1/h",
+            lb: 1e-6,
+            ub: 3e-5,
+            default: 6.86e-6,
+            scale: Scale::Log,
+            doc: "carbide coarsening rate",
+        },
+        ConstantSpec {
+            name: "C",
+            unit: "-",
+            lb: 3.0,
+            ub: 10.0,
+            default: 4.311,
+            scale: Scale::Linear,
+            doc: "cavitation damage per unit strain (omega = C eps)",
+        },
+    ]
+}
+
+/// Per-simulation constants of the KHD model.
+#[derive(Debug, Clone, Copy)]
+pub struct KhdPrepared {
+    /// A, 1/h
+    pub a: f64,
+    /// B·σ, dimensionless
+    pub b_sigma: f64,
+    /// 1/H*
+    pub inv_hstar: f64,
+    /// H*
+    pub hstar: f64,
+    /// h/σ
+    pub h_over_sigma: f64,
+    /// Kc/3, 1/h
+    pub kc3: f64,
+    /// Kc, 1/h
+    pub kc: f64,
+    /// C
+    pub c: f64,
+    /// ω_f
+    pub omega_f: f64,
+}
+
+fn prepare(params: &[f64], load: &Load) -> KhdPrepared {
+    let (a, b, hstar, h, kc, c) = (
+        params[0], params[1], params[2], params[3], params[4], params[5],
+    );
+    KhdPrepared {
+        a,
+        b_sigma: b * load.stress_mpa,
+        inv_hstar: 1.0 / hstar,
+        hstar,
+        h_over_sigma: h / load.stress_mpa,
+        kc3: kc / 3.0,
+        kc,
+        c,
+        omega_f: load.omega_f,
+    }
+}
+
+/// Strain rate A·sinh(Bσ(1−H)/((1−Φ)(1−ω))), or `None` outside the model's domain.
+#[inline(always)]
+pub fn khd_rate(p: &KhdPrepared, hard: f64, one_minus_phi: f64, one_minus_omega: f64) -> Option<f64> {
+    let denom = one_minus_phi * one_minus_omega;
+    if !(denom > 0.0) {
+        return None;
+    }
+    let arg = p.b_sigma * (1.0 - hard) / denom;
+    if !(arg.abs() <= MAX_SINH_ARG) {
+        return None;
+    }
+    Some(p.a * arg.sinh())
+}
+
+/// The paper's four-state model, state y = [ε, H, Φ, ω].
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Khd;
+
+impl CreepModel<4> for Khd {
+    type Prepared = KhdPrepared;
+    fn prepare(&self, params: &[f64], load: &Load) -> KhdPrepared {
+        prepare(params, load)
+    }
+    fn init(&self, _p: &KhdPrepared) -> [f64; 4] {
+        [0.0; 4]
+    }
+    #[inline(always)]
+    fn rhs(&self, p: &KhdPrepared, _t: f64, y: &[f64; 4], dy: &mut [f64; 4]) -> bool {
+        let [_, hard, phi, omega] = *y;
+        let one_minus_phi = 1.0 - phi;
+        let Some(rate) = khd_rate(p, hard, one_minus_phi, 1.0 - omega) else {
+            return false;
+        };
+        let sq = one_minus_phi * one_minus_phi;
+        dy[0] = rate;
+        dy[1] = p.h_over_sigma * rate * (1.0 - hard * p.inv_hstar);
+        dy[2] = p.kc3 * sq * sq;
+        dy[3] = p.c * rate;
+        true
+    }
+    #[inline(always)]
+    fn event(&self, p: &KhdPrepared, y: &[f64; 4]) -> f64 {
+        y[3] - p.omega_f
+    }
+    #[inline(always)]
+    fn strain(&self, _p: &KhdPrepared, y: &[f64; 4]) -> f64 {
+        y[0]
+    }
+    #[inline(always)]
+    fn strain_rate(&self, _p: &KhdPrepared, _y: &[f64; 4], dy: &[f64; 4]) -> f64 {
+        dy[0]
+    }
+    fn state_names(&self) -> [&'static str; 4] {
+        ["strain", "H", "Phi", "omega"]
+    }
+}
+
+/// The exact one-state reduction of [`Khd`] (DESIGN.md §1), state y = [ε]:
+/// Φ(t) = 1 − (1 + Kc t)^(−1/3), ω = Cε, H = H*(1 − exp(−hε/(σH*))).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct KhdReduced;
+
+impl CreepModel<1> for KhdReduced {
+    type Prepared = KhdPrepared;
+    fn prepare(&self, params: &[f64], load: &Load) -> KhdPrepared {
+        prepare(params, load)
+    }
+    fn init(&self, _p: &KhdPrepared) -> [f64; 1] {
+        [0.0]
+    }
+    #[inline(always)]
+    fn rhs(&self, p: &KhdPrepared, t: f64, y: &[f64; 1], dy: &mut [f64; 1]) -> bool {
+        let eps = y[0];
+        let hard = p.hstar * (1.0 - (-p.h_over_sigma * eps * p.inv_hstar).exp());
+        let one_minus_phi = (1.0 + p.kc * t).powf(-1.0 / 3.0);
+        match khd_rate(p, hard, one_minus_phi, 1.0 - p.c * eps) {
+            Some(rate) => {
+                dy[0] = rate;
+                true
+            }
+            None => false,
+        }
+    }
+    #[inline(always)]
+    fn event(&self, p: &KhdPrepared, y: &[f64; 1]) -> f64 {
+        p.c * y[0] - p.omega_f
+    }
+    #[inline(always)]
+    fn strain(&self, _p: &KhdPrepared, y: &[f64; 1]) -> f64 {
+        y[0]
+    }
+    #[inline(always)]
+    fn strain_rate(&self, _p: &KhdPrepared, _y: &[f64; 1], dy: &[f64; 1]) -> f64 {
+        dy[0]
+    }
+    fn state_names(&self) -> [&'static str; 1] {
+        ["strain"]
+    }
+}

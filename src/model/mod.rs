@@ -1,0 +1,184 @@
+//! Constitutive models: the [`CreepModel`] trait that the integrator is monomorphised over,
+//! the object-safe [`Model`] that the fit and the commands use, and the registry by name.
+//!
+//! A model exposes its constants ([`ConstantSpec`]: name, unit, default bounds, scale), a
+//! per-simulation preparation of derived constants, the right-hand side, the rupture event
+//! and the strain read-out. Adding an extension means one file that implements
+//! [`CreepModel`] plus one line in [`registry`].
+
+mod khd;
+
+pub use khd::{Khd, KhdReduced};
+
+use crate::error::{Error, Result};
+use crate::ode::{self, OdeOptions, SimResult};
+
+/// How a constant is mapped to the optimiser's unit box.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Scale {
+    /// u = (x − lb)/(ub − lb)
+    #[default]
+    Linear,
+    /// u = (ln x − ln lb)/(ln ub − ln lb); for constants that span decades (needs lb > 0).
+    Log,
+}
+
+/// Description of one material constant of a model.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ConstantSpec {
+    /// Name as used in configurations and output files (e.g. `Hstar`).
+    pub name: &'static str,
+    /// Physical unit (`1/h`, `1/MPa`, `MPa`, `-`).
+    pub unit: &'static str,
+    /// Default lower bound (used when a configuration does not give one).
+    pub lb: f64,
+    /// Default upper bound.
+    pub ub: f64,
+    /// Default value (start when nothing else is known).
+    pub default: f64,
+    /// Default scale in the optimiser.
+    pub scale: Scale,
+    /// One line on what the constant does.
+    pub doc: &'static str,
+}
+
+/// The loading of one test: nominal stress and the damage at rupture.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Load {
+    /// Nominal (initial) stress, MPa.
+    pub stress_mpa: f64,
+    /// Damage at rupture ω_f (the paper: 1/3).
+    pub omega_f: f64,
+}
+
+/// A constitutive model with an `N`-component state, integrated by [`crate::ode`].
+///
+/// All methods are called in the integrator's hot loop: they must not allocate.
+pub trait CreepModel<const N: usize>: Send + Sync {
+    /// Constants derived once per simulation from the material constants and the load.
+    type Prepared: Copy;
+    /// Derive the per-simulation constants; `params` follow [`CreepModel::constants`].
+    fn prepare(&self, params: &[f64], load: &Load) -> Self::Prepared;
+    /// State at t = 0.
+    fn init(&self, p: &Self::Prepared) -> [f64; N];
+    /// Right-hand side dy/dt at (t, y). Returns `false` when the state is outside the model's
+    /// domain or the rate is non-finite or absurd (a trial step past rupture): the integrator
+    /// then rejects the step and shrinks it.
+    fn rhs(&self, p: &Self::Prepared, t: f64, y: &[f64; N], dy: &mut [f64; N]) -> bool;
+    /// Rupture event function: negative before rupture, zero at rupture (ω − ω_f).
+    fn event(&self, p: &Self::Prepared, y: &[f64; N]) -> f64;
+    /// Total strain (fraction) read from the state.
+    fn strain(&self, p: &Self::Prepared, y: &[f64; N]) -> f64;
+    /// Strain rate (1/h) from the state and its derivative.
+    fn strain_rate(&self, p: &Self::Prepared, y: &[f64; N], dy: &[f64; N]) -> f64;
+    /// Names of the state components, for trajectory output.
+    fn state_names(&self) -> [&'static str; N];
+}
+
+/// Object-safe face of a model: what fits, reports and commands need.
+pub trait Model: Send + Sync {
+    /// Registry name, e.g. `khd`.
+    fn name(&self) -> &str;
+    /// The constants, in the order parameter vectors use.
+    fn constants(&self) -> &[ConstantSpec];
+    /// Integrate one test to rupture. `times` (h) must be sorted ascending; the predicted
+    /// strain (fraction) at each time up to the rupture is written to `strain_out` (which has
+    /// the length of `times`); entries after rupture are left untouched
+    /// ([`SimResult::n_out`] says how many were written).
+    fn simulate(
+        &self,
+        params: &[f64],
+        load: &Load,
+        times: &[f64],
+        strain_out: &mut [f64],
+        opts: &OdeOptions,
+    ) -> SimResult;
+    /// Integrate and return the full state at each of `times` up to rupture (for reports).
+    fn trajectory(
+        &self,
+        params: &[f64],
+        load: &Load,
+        times: &[f64],
+        opts: &OdeOptions,
+    ) -> (SimResult, Vec<(f64, f64, Vec<f64>)>);
+    /// Names of the state components reported by [`Model::trajectory`].
+    fn state_names(&self) -> Vec<&'static str>;
+}
+
+/// Adapts any [`CreepModel`] to the object-safe [`Model`]; the integration stays
+/// monomorphised.
+pub struct Integrated<M, const N: usize> {
+    name: &'static str,
+    model: M,
+    constants: Vec<ConstantSpec>,
+}
+
+impl<M, const N: usize> Integrated<M, N> {
+    /// Wrap `model` under a registry `name` with its `constants`.
+    pub fn new(name: &'static str, model: M, constants: Vec<ConstantSpec>) -> Self {
+        Integrated {
+            name,
+            model,
+            constants,
+        }
+    }
+}
+
+impl<M: CreepModel<N>, const N: usize> Model for Integrated<M, N> {
+    fn name(&self) -> &str {
+        self.name
+    }
+    fn constants(&self) -> &[ConstantSpec] {
+        &self.constants
+    }
+    fn simulate(
+        &self,
+        params: &[f64],
+        load: &Load,
+        times: &[f64],
+        strain_out: &mut [f64],
+        opts: &OdeOptions,
+    ) -> SimResult {
+        let p = self.model.prepare(params, load);
+        ode::integrate(&self.model, &p, times, opts, |k, _t, y| {
+            strain_out[k] = self.model.strain(&p, y)
+        })
+    }
+    fn trajectory(
+        &self,
+        params: &[f64],
+        load: &Load,
+        times: &[f64],
+        opts: &OdeOptions,
+    ) -> (SimResult, Vec<(f64, f64, Vec<f64>)>) {
+        let p = self.model.prepare(params, load);
+        let mut out = Vec::with_capacity(times.len());
+        let res = ode::integrate(&self.model, &p, times, opts, |_k, t, y| {
+            out.push((t, self.model.strain(&p, y), y.to_vec()))
+        });
+        (res, out)
+    }
+    fn state_names(&self) -> Vec<&'static str> {
+        self.model.state_names().to_vec()
+    }
+}
+
+/// Names of the registered models.
+pub const MODEL_NAMES: &[&str] = &["khd", "khd1"];
+
+/// Pick a model by its registry name.
+///
+/// `khd` is the paper's four-state model (eqs. 1–4); `khd1` is its exact one-state reduction
+/// (DESIGN.md §1), the same constants and predictions by a cheaper integration.
+pub fn registry(name: &str) -> Result<Box<dyn Model>> {
+    match name {
+        "khd" => Ok(Box::new(Integrated::new("khd", Khd, khd::constants()))),
+        "khd1" => Ok(Box::new(Integrated::new(
+            "khd1",
+            KhdReduced,
+            khd::constants(),
+        ))),
+        _ => Err(Error::UnknownModel(name.to_string(), MODEL_NAMES.join(", "))),
+    }
+}

@@ -1,0 +1,532 @@
+//! Embedded Dormand–Prince 5(4) integrator with adaptive steps, Hairer's dense output at the
+//! measurement times, the rupture event located by root finding on the dense output, and
+//! step statistics. Fixed-size state (`[f64; N]`): no heap allocation per step.
+
+use crate::model::CreepModel;
+
+/// Integration options; times in h.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OdeOptions {
+    /// Relative tolerance of the local error estimate.
+    pub rtol: f64,
+    /// Absolute tolerance (state units: strain fraction, H, Φ, ω are all O(1) or less).
+    pub atol: f64,
+    /// Time horizon, h: no rupture before it is outcome [`Outcome::Horizon`].
+    pub t_end: f64,
+    /// Most accepted + rejected steps before giving up.
+    pub max_steps: usize,
+    /// Fixed step size, h (no error control): for convergence-order studies only.
+    pub fixed_step: Option<f64>,
+}
+
+impl Default for OdeOptions {
+    fn default() -> Self {
+        OdeOptions {
+            rtol: 1e-10,
+            atol: 1e-13,
+            t_end: 1e7,
+            max_steps: 200_000,
+            fixed_step: None,
+        }
+    }
+}
+
+/// How an integration ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Outcome {
+    /// The rupture event (ω = ω_f) was reached and located.
+    Ruptured,
+    /// The horizon `t_end` was reached without rupture.
+    Horizon,
+    /// The step size fell below the floating-point resolution of t.
+    StepUnderflow,
+    /// `max_steps` was exhausted.
+    MaxSteps,
+    /// The right-hand side is not defined at the initial state.
+    InvalidStart,
+}
+
+impl Outcome {
+    /// Short name for tables and CSV status columns.
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            Outcome::Ruptured => "ruptured",
+            Outcome::Horizon => "no_rupture",
+            Outcome::StepUnderflow => "step_underflow",
+            Outcome::MaxSteps => "max_steps",
+            Outcome::InvalidStart => "invalid_start",
+        }
+    }
+}
+
+/// Work counters of one integration.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct Stats {
+    /// Accepted steps.
+    pub steps: usize,
+    /// Rejected trial steps (error too large or state outside the model's domain).
+    pub rejected: usize,
+    /// Right-hand-side evaluations.
+    pub evals: usize,
+}
+
+/// Result of one integration.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SimResult {
+    /// How it ended.
+    pub outcome: Outcome,
+    /// Time reached, h: the rupture time when `outcome` is `Ruptured`.
+    pub t_end: f64,
+    /// Strain (fraction) at `t_end`.
+    pub strain_end: f64,
+    /// Strain rate (1/h) at `t_end`.
+    pub rate_end: f64,
+    /// Minimum strain rate over the integration (1/h), refined by a parabola through the
+    /// three step points around the smallest rate.
+    pub min_rate: f64,
+    /// Time of the minimum strain rate, h.
+    pub t_min_rate: f64,
+    /// Number of leading output times that were written (times up to `t_end`).
+    pub n_out: usize,
+    /// Work counters.
+    pub stats: Stats,
+}
+
+impl SimResult {
+    /// Whether the rupture was reached.
+    pub fn ruptured(&self) -> bool {
+        self.outcome == Outcome::Ruptured
+    }
+}
+
+// Dormand–Prince 5(4) coefficients (Hairer, Nørsett & Wanner, DOPRI5).
+const C2: f64 = 1.0 / 5.0;
+const C3: f64 = 3.0 / 10.0;
+const C4: f64 = 4.0 / 5.0;
+const C5: f64 = 8.0 / 9.0;
+const A21: f64 = 1.0 / 5.0;
+const A31: f64 = 3.0 / 40.0;
+const A32: f64 = 9.0 / 40.0;
+const A41: f64 = 44.0 / 45.0;
+const A42: f64 = -56.0 / 15.0;
+const A43: f64 = 32.0 / 9.0;
+const A51: f64 = 19372.0 / 6561.0;
+const A52: f64 = -25360.0 / 2187.0;
+const A53: f64 = 64448.0 / 6561.0;
+const A54: f64 = -212.0 / 729.0;
+const A61: f64 = 9017.0 / 3168.0;
+const A62: f64 = -355.0 / 33.0;
+const A63: f64 = 46732.0 / 5247.0;
+const A64: f64 = 49.0 / 176.0;
+const A65: f64 = -5103.0 / 18656.0;
+const A71: f64 = 35.0 / 384.0;
+const A73: f64 = 500.0 / 1113.0;
+const A74: f64 = 125.0 / 192.0;
+const A75: f64 = -2187.0 / 6784.0;
+const A76: f64 = 11.0 / 84.0;
+const E1: f64 = 71.0 / 57600.0;
+const E3: f64 = -71.0 / 16695.0;
+const E4: f64 = 71.0 / 1920.0;
+const E5: f64 = -17253.0 / 339200.0;
+const E6: f64 = 22.0 / 525.0;
+const E7: f64 = -1.0 / 40.0;
+const D1: f64 = -12715105075.0 / 11282082432.0;
+const D3: f64 = 87487479700.0 / 32700410799.0;
+const D4: f64 = -10690763975.0 / 1880347072.0;
+const D5: f64 = 701980252875.0 / 199316789632.0;
+const D6: f64 = -1453857185.0 / 822651844.0;
+const D7: f64 = 69997945.0 / 29380423.0;
+
+/// Step-size controller constants (Hairer's DOPRI5 defaults).
+const SAFETY: f64 = 0.9;
+/// Largest growth of the step is 1/FAC_MIN, largest shrink 1/FAC_MAX.
+const FAC_MIN: f64 = 0.2;
+const FAC_MAX: f64 = 10.0;
+const BETA: f64 = 0.04;
+/// Shrink factor after a trial step that left the model's domain (no error estimate).
+const DOMAIN_SHRINK: f64 = 0.25;
+/// Relative tolerance of the event location in the step's θ ∈ [0, 1].
+const EVENT_TOL: f64 = 1e-15;
+
+/// Hairer's continuous extension of one accepted step.
+struct Dense<const N: usize> {
+    r: [[f64; N]; 5],
+}
+
+impl<const N: usize> Dense<N> {
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    fn new(
+        h: f64,
+        y: &[f64; N],
+        y1: &[f64; N],
+        k1: &[f64; N],
+        k3: &[f64; N],
+        k4: &[f64; N],
+        k5: &[f64; N],
+        k6: &[f64; N],
+        k7: &[f64; N],
+    ) -> Self {
+        let mut r = [[0.0; N]; 5];
+        for i in 0..N {
+            let ydiff = y1[i] - y[i];
+            let bspl = h * k1[i] - ydiff;
+            r[0][i] = y[i];
+            r[1][i] = ydiff;
+            r[2][i] = bspl;
+            r[3][i] = ydiff - h * k7[i] - bspl;
+            r[4][i] = h
+                * (D1 * k1[i] + D3 * k3[i] + D4 * k4[i] + D5 * k5[i] + D6 * k6[i] + D7 * k7[i]);
+        }
+        Dense { r }
+    }
+    /// State at fraction θ ∈ [0, 1] of the step.
+    #[inline]
+    fn at(&self, theta: f64) -> [f64; N] {
+        let t1 = 1.0 - theta;
+        let mut out = [0.0; N];
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = self.r[0][i]
+                + theta
+                    * (self.r[1][i]
+                        + t1 * (self.r[2][i] + theta * (self.r[3][i] + t1 * self.r[4][i])));
+        }
+        out
+    }
+}
+
+/// Tracks the smallest strain rate over the accepted step points and refines it with a
+/// parabola through the smallest point and its two neighbours.
+struct MinRate {
+    window: [(f64, f64); 3],
+    n: usize,
+    best: (f64, f64),
+    bracket: Option<[(f64, f64); 3]>,
+}
+
+impl MinRate {
+    fn new(t0: f64, r0: f64) -> Self {
+        MinRate {
+            window: [(t0, r0); 3],
+            n: 1,
+            best: (t0, r0),
+            bracket: None,
+        }
+    }
+    fn push(&mut self, t: f64, r: f64) {
+        self.window = [self.window[1], self.window[2], (t, r)];
+        self.n += 1;
+        if r < self.best.1 {
+            self.best = (t, r);
+        }
+        let [p0, p1, p2] = self.window;
+        if self.n >= 3 && p1.1 <= p0.1 && p1.1 <= p2.1 && p1 == self.best {
+            self.bracket = Some(self.window);
+        }
+    }
+    /// (time, rate) of the minimum, refined where the discrete minimum is interior.
+    fn finish(&self) -> (f64, f64) {
+        match self.bracket {
+            Some([p0, p1, p2]) if p1 == self.best => parabola_min(p0, p1, p2).unwrap_or(self.best),
+            _ => self.best,
+        }
+    }
+}
+
+/// Vertex of the parabola through three points (x0<x1<x2); `None` if it opens downward.
+fn parabola_min(p0: (f64, f64), p1: (f64, f64), p2: (f64, f64)) -> Option<(f64, f64)> {
+    let (x0, y0) = p0;
+    let (x1, y1) = p1;
+    let (x2, y2) = p2;
+    if !(x0 < x1 && x1 < x2) {
+        return None;
+    }
+    let f01 = (y1 - y0) / (x1 - x0);
+    let f12 = (y2 - y1) / (x2 - x1);
+    let a = (f12 - f01) / (x2 - x0);
+    if !(a > 0.0) {
+        return None;
+    }
+    let xs = (0.5 * (x0 + x1) - f01 / (2.0 * a)).clamp(x0, x2);
+    let ys = y0 + f01 * (xs - x0) + a * (xs - x0) * (xs - x1);
+    Some((xs, ys.min(y1)))
+}
+
+/// Integrate `model` from its initial state until rupture, the horizon or a failure.
+///
+/// `times` must be sorted ascending and non-negative; `out(k, t_k, y(t_k))` is called for
+/// every output time up to the end of the integration, in order.
+pub fn integrate<const N: usize, M, F>(
+    model: &M,
+    p: &M::Prepared,
+    times: &[f64],
+    opts: &OdeOptions,
+    mut out: F,
+) -> SimResult
+where
+    M: CreepModel<N>,
+    F: FnMut(usize, f64, &[f64; N]),
+{
+    let mut stats = Stats::default();
+    let mut t = 0.0_f64;
+    let mut y = model.init(p);
+    let mut k1 = [0.0; N];
+    let mut result = |outcome, t: f64, y: &[f64; N], rate: f64, mr: &MinRate, n_out, stats| {
+        let (t_min, min_rate) = mr.finish();
+        SimResult {
+            outcome,
+            t_end: t,
+            strain_end: model.strain(p, y),
+            rate_end: rate,
+            min_rate,
+            t_min_rate: t_min,
+            n_out,
+            stats,
+        }
+    };
+    stats.evals += 1;
+    if !model.rhs(p, t, &y, &mut k1) {
+        let mr = MinRate::new(0.0, f64::NAN);
+        return result(Outcome::InvalidStart, t, &y, f64::NAN, &mr, 0, stats);
+    }
+    let mut mr = MinRate::new(t, model.strain_rate(p, &y, &k1));
+    let mut next = 0;
+    while next < times.len() && times[next] <= t {
+        out(next, times[next], &y);
+        next += 1;
+    }
+
+    let t_end = opts.t_end;
+    let mut h = match opts.fixed_step {
+        Some(hf) => hf,
+        None => initial_step(model, p, &y, &k1, opts, &mut stats),
+    };
+    let mut facold = 1e-4_f64;
+    let mut last_rejected = false;
+    let (mut k2, mut k3, mut k4, mut k5, mut k6, mut k7) =
+        ([0.0; N], [0.0; N], [0.0; N], [0.0; N], [0.0; N], [0.0; N]);
+    let mut yt = [0.0; N];
+    let mut y1 = [0.0; N];
+
+    loop {
+        if stats.steps + stats.rejected >= opts.max_steps {
+            return result(Outcome::MaxSteps, t, &y, model.strain_rate(p, &y, &k1), &mr, next, stats);
+        }
+        if h.abs() <= 16.0 * f64::EPSILON * t.abs().max(1.0) {
+            return result(Outcome::StepUnderflow, t, &y, model.strain_rate(p, &y, &k1), &mr, next, stats);
+        }
+        if t + h > t_end {
+            h = t_end - t;
+        }
+
+        // Stages; a stage outside the model's domain rejects the trial step.
+        let mut ok = true;
+        macro_rules! stage {
+            ($k:ident, $c:expr, $($a:expr, $kk:ident),+) => {
+                if ok {
+                    for i in 0..N {
+                        yt[i] = y[i] + h * (0.0 $(+ $a * $kk[i])+);
+                    }
+                    stats.evals += 1;
+                    ok = model.rhs(p, t + $c * h, &yt, &mut $k);
+                }
+            };
+        }
+        stage!(k2, C2, A21, k1);
+        stage!(k3, C3, A31, k1, A32, k2);
+        stage!(k4, C4, A41, k1, A42, k2, A43, k3);
+        stage!(k5, C5, A51, k1, A52, k2, A53, k3, A54, k4);
+        stage!(k6, 1.0, A61, k1, A62, k2, A63, k3, A64, k4, A65, k5);
+        if ok {
+            for i in 0..N {
+                y1[i] = y[i] + h * (A71 * k1[i] + A73 * k3[i] + A74 * k4[i] + A75 * k5[i] + A76 * k6[i]);
+            }
+            stats.evals += 1;
+            ok = model.rhs(p, t + h, &y1, &mut k7) && y1.iter().all(|v| v.is_finite());
+        }
+        if !ok {
+            stats.rejected += 1;
+            last_rejected = true;
+            h *= DOMAIN_SHRINK;
+            continue;
+        }
+
+        let err = if opts.fixed_step.is_some() {
+            0.0
+        } else {
+            let mut s = 0.0;
+            for i in 0..N {
+                let sk = opts.atol + opts.rtol * y[i].abs().max(y1[i].abs());
+                let e = h
+                    * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] + E7 * k7[i]);
+                s += (e / sk) * (e / sk);
+            }
+            (s / N as f64).sqrt()
+        };
+        if !err.is_finite() {
+            stats.rejected += 1;
+            last_rejected = true;
+            h *= DOMAIN_SHRINK;
+            continue;
+        }
+        // Step-size proposal (PI controller).
+        let fac11 = err.powf(0.2 - BETA * 0.75);
+        if err > 1.0 {
+            stats.rejected += 1;
+            last_rejected = true;
+            h /= (1.0 / FAC_MIN).min(fac11 / SAFETY);
+            continue;
+        }
+
+        // Accepted.
+        stats.steps += 1;
+        let g1 = model.event(p, &y1);
+        let dense_needed = g1 >= 0.0 || (next < times.len() && times[next] <= t + h);
+        let dense = if dense_needed {
+            Some(Dense::new(h, &y, &y1, &k1, &k3, &k4, &k5, &k6, &k7))
+        } else {
+            None
+        };
+        if g1 >= 0.0 {
+            let d = dense.as_ref().expect("dense built when the event fires");
+            let g0 = model.event(p, &y);
+            let theta = locate_event(|th| model.event(p, &d.at(th)), g0, g1);
+            let tr = t + theta * h;
+            let yr = d.at(theta);
+            while next < times.len() && times[next] <= tr {
+                let th = ((times[next] - t) / h).clamp(0.0, 1.0);
+                out(next, times[next], &d.at(th));
+                next += 1;
+            }
+            let mut kr = [0.0; N];
+            stats.evals += 1;
+            let rate_r = if model.rhs(p, tr, &yr, &mut kr) {
+                model.strain_rate(p, &yr, &kr)
+            } else {
+                // The rupture state is on the domain's edge only for ω_f → 1; fall back to
+                // the interpolated rate between the step ends.
+                let r0 = model.strain_rate(p, &y, &k1);
+                let r1 = model.strain_rate(p, &y1, &k7);
+                r0 + theta * (r1 - r0)
+            };
+            mr.push(tr, rate_r);
+            return result(Outcome::Ruptured, tr, &yr, rate_r, &mr, next, stats);
+        }
+        if let Some(d) = dense.as_ref() {
+            while next < times.len() && times[next] <= t + h {
+                let th = ((times[next] - t) / h).clamp(0.0, 1.0);
+                out(next, times[next], &d.at(th));
+                next += 1;
+            }
+        }
+        let r1 = model.strain_rate(p, &y1, &k7);
+        mr.push(t + h, r1);
+        t += h;
+        y = y1;
+        k1 = k7;
+        if t >= t_end {
+            return result(Outcome::Horizon, t, &y, r1, &mr, next, stats);
+        }
+        if opts.fixed_step.is_none() {
+            let mut fac = fac11 / facold.powf(BETA);
+            fac = (1.0 / FAC_MAX).max((1.0 / FAC_MIN).min(fac / SAFETY));
+            let mut hnew = h / fac;
+            facold = err.max(1e-4);
+            if last_rejected {
+                hnew = hnew.min(h);
+            }
+            last_rejected = false;
+            h = hnew;
+        }
+    }
+}
+
+/// Find θ ∈ (0, 1] where `g` changes sign, given g(0) = g0 < 0 ≤ g1 = g(1)
+/// (Illinois variant of regula falsi, then bisection safeguard).
+fn locate_event(g: impl Fn(f64) -> f64, g0: f64, g1: f64) -> f64 {
+    if g0 >= 0.0 {
+        return 0.0;
+    }
+    let (mut a, mut fa, mut b, mut fb) = (0.0_f64, g0, 1.0_f64, g1);
+    if fb == 0.0 {
+        return 1.0;
+    }
+    let mut side = 0i32;
+    for _ in 0..200 {
+        if (b - a) <= EVENT_TOL {
+            break;
+        }
+        let mut c = (a * fb - b * fa) / (fb - fa);
+        if !(c > a && c < b) {
+            c = 0.5 * (a + b);
+        }
+        let fc = g(c);
+        if fc == 0.0 {
+            return c;
+        }
+        if fc < 0.0 {
+            a = c;
+            fa = fc;
+            if side == -1 {
+                fb *= 0.5;
+            }
+            side = -1;
+        } else {
+            b = c;
+            fb = fc;
+            if side == 1 {
+                fa *= 0.5;
+            }
+            side = 1;
+        }
+    }
+    // b is on the ruptured side: the first time at which ω ≥ ω_f.
+    b
+}
+
+/// Hairer's starting step-size heuristic.
+fn initial_step<const N: usize, M: CreepModel<N>>(
+    model: &M,
+    p: &M::Prepared,
+    y0: &[f64; N],
+    f0: &[f64; N],
+    opts: &OdeOptions,
+    stats: &mut Stats,
+) -> f64 {
+    let hmax = opts.t_end;
+    let (mut dnf, mut dny) = (0.0, 0.0);
+    for i in 0..N {
+        let sk = opts.atol + opts.rtol * y0[i].abs();
+        dnf += (f0[i] / sk).powi(2);
+        dny += (y0[i] / sk).powi(2);
+    }
+    let mut h = if dnf <= 1e-10 || dny <= 1e-10 {
+        1e-6
+    } else {
+        (dny / dnf).sqrt() * 0.01
+    };
+    h = h.min(hmax);
+    let mut y1 = [0.0; N];
+    for i in 0..N {
+        y1[i] = y0[i] + h * f0[i];
+    }
+    let mut f1 = [0.0; N];
+    stats.evals += 1;
+    if !model.rhs(p, h, &y1, &mut f1) {
+        return h;
+    }
+    let mut der2 = 0.0;
+    for i in 0..N {
+        let sk = opts.atol + opts.rtol * y0[i].abs();
+        der2 += ((f1[i] - f0[i]) / sk).powi(2);
+    }
+    let der2 = der2.sqrt() / h;
+    let der12 = der2.abs().max(dnf.sqrt());
+    let h1 = if der12 <= 1e-15 {
+        (h * 1e-3).max(1e-6)
+    } else {
+        (0.01 / der12).powf(0.2)
+    };
+    (100.0 * h).min(h1).min(hmax)
+}
