@@ -5,6 +5,7 @@
 
 pub mod error;
 pub mod model;
+pub mod lsq;
 pub mod ode;
 
 pub use error::{Error, Result};
