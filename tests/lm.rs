@@ -1,0 +1,269 @@
+//! The bounded Levenberg–Marquardt on classic least-squares problems with known minima
+//! (Moré, Garbow & Hillstrom 1981), bounded and unbounded, and a check that no residual is
+//! ever evaluated outside the box.
+
+use creepfit::lsq::{minimize, EvalFailure, LeastSquaresProblem, LmOptions, Termination};
+use std::sync::Mutex;
+
+struct Fun<F: Fn(&[f64], &mut [f64]) + Sync> {
+    n: usize,
+    m: usize,
+    f: F,
+}
+
+impl<F: Fn(&[f64], &mut [f64]) + Sync> LeastSquaresProblem for Fun<F> {
+    fn n_params(&self) -> usize {
+        self.n
+    }
+    fn n_residuals(&self) -> usize {
+        self.m
+    }
+    fn residuals(&self, x: &[f64], r: &mut [f64]) -> Result<(), EvalFailure> {
+        (self.f)(x, r);
+        Ok(())
+    }
+}
+
+const INF: f64 = f64::INFINITY;
+
+fn free(n: usize) -> (Vec<f64>, Vec<f64>) {
+    (vec![-INF; n], vec![INF; n])
+}
+
+fn rosenbrock() -> Fun<impl Fn(&[f64], &mut [f64]) + Sync> {
+    Fun {
+        n: 2,
+        m: 2,
+        f: |x: &[f64], r: &mut [f64]| {
+            r[0] = 10.0 * (x[1] - x[0] * x[0]);
+            r[1] = 1.0 - x[0];
+        },
+    }
+}
+
+#[test]
+fn rosenbrock_unbounded() {
+    let (lb, ub) = free(2);
+    let rep = minimize(&rosenbrock(), &[-1.2, 1.0], &lb, &ub, &LmOptions::default());
+    assert!(rep.termination.converged(), "{:?}", rep.termination);
+    assert!((rep.x[0] - 1.0).abs() < 1e-8 && (rep.x[1] - 1.0).abs() < 1e-8, "{:?}", rep.x);
+    assert!(rep.objective < 1e-20);
+}
+
+#[test]
+fn rosenbrock_with_active_upper_bound() {
+    // x1 ≤ 0.5: the constrained minimum is (0.5, 0.25) with f = 0.25.
+    let rep = minimize(
+        &rosenbrock(),
+        &[-1.2, 1.0],
+        &[-2.0, -1.0],
+        &[0.5, 2.0],
+        &LmOptions::default(),
+    );
+    assert!(rep.termination.converged(), "{:?}", rep.termination);
+    assert_eq!(rep.x[0], 0.5);
+    assert!((rep.x[1] - 0.25).abs() < 1e-9, "{:?}", rep.x);
+    assert!((rep.objective - 0.25).abs() < 1e-12);
+}
+
+#[test]
+fn beale() {
+    let y = [1.5, 2.25, 2.625];
+    let p = Fun {
+        n: 2,
+        m: 3,
+        f: move |x: &[f64], r: &mut [f64]| {
+            for i in 0..3 {
+                r[i] = y[i] - x[0] * (1.0 - x[1].powi(i as i32 + 1));
+            }
+        },
+    };
+    let (lb, ub) = free(2);
+    let rep = minimize(&p, &[1.0, 1.0], &lb, &ub, &LmOptions::default());
+    assert!((rep.x[0] - 3.0).abs() < 1e-8 && (rep.x[1] - 0.5).abs() < 1e-8, "{:?}", rep.x);
+}
+
+#[test]
+fn powell_singular() {
+    // Singular Jacobian at the solution: convergence is only linear, but it must get there.
+    let p = Fun {
+        n: 4,
+        m: 4,
+        f: |x: &[f64], r: &mut [f64]| {
+            r[0] = x[0] + 10.0 * x[1];
+            r[1] = 5f64.sqrt() * (x[2] - x[3]);
+            r[2] = (x[1] - 2.0 * x[2]).powi(2);
+            r[3] = 10f64.sqrt() * (x[0] - x[3]).powi(2);
+        },
+    };
+    let (lb, ub) = free(4);
+    let opts = LmOptions {
+        max_iterations: 1000,
+        ..LmOptions::default()
+    };
+    let rep = minimize(&p, &[3.0, -1.0, 0.0, 1.0], &lb, &ub, &opts);
+    assert!(rep.objective < 1e-16, "{} {:?}", rep.objective, rep.termination);
+    assert!(rep.x.iter().all(|v| v.abs() < 1e-3), "{:?}", rep.x);
+}
+
+#[test]
+fn freudenstein_roth_reaches_one_of_its_known_minima() {
+    let p = Fun {
+        n: 2,
+        m: 2,
+        f: |x: &[f64], r: &mut [f64]| {
+            r[0] = -13.0 + x[0] + ((5.0 - x[1]) * x[1] - 2.0) * x[1];
+            r[1] = -29.0 + x[0] + ((x[1] + 1.0) * x[1] - 14.0) * x[1];
+        },
+    };
+    let (lb, ub) = free(2);
+    let rep = minimize(&p, &[0.5, -2.0], &lb, &ub, &LmOptions::default());
+    assert!(rep.termination.converged(), "{:?}", rep.termination);
+    let global = rep.objective < 1e-16 && (rep.x[0] - 5.0).abs() < 1e-6;
+    let local = (rep.objective - 48.98425367924).abs() < 1e-6 && (rep.x[0] - 11.41).abs() < 0.01;
+    assert!(global || local, "{} at {:?}", rep.objective, rep.x);
+    // From a start in the global basin it must find the zero residual.
+    let rep = minimize(&p, &[6.0, 3.0], &lb, &ub, &LmOptions::default());
+    assert!(rep.objective < 1e-16 && (rep.x[1] - 4.0).abs() < 1e-8, "{:?}", rep.x);
+}
+
+fn box3d() -> Fun<impl Fn(&[f64], &mut [f64]) + Sync> {
+    Fun {
+        n: 3,
+        m: 10,
+        f: |x: &[f64], r: &mut [f64]| {
+            for (i, ri) in r.iter_mut().enumerate() {
+                let t = 0.1 * (i + 1) as f64;
+                *ri = (-t * x[0]).exp() - (-t * x[1]).exp() - x[2] * ((-t).exp() - (-10.0 * t).exp());
+            }
+        },
+    }
+}
+
+#[test]
+fn box_3d() {
+    let (lb, ub) = free(3);
+    let rep = minimize(&box3d(), &[0.0, 10.0, 20.0], &lb, &ub, &LmOptions::default());
+    assert!(rep.objective < 1e-20, "{}", rep.objective);
+    assert!((rep.x[0] - 1.0).abs() < 1e-6 && (rep.x[1] - 10.0).abs() < 1e-5 && (rep.x[2] - 1.0).abs() < 1e-6, "{:?}", rep.x);
+}
+
+#[test]
+fn bard() {
+    let y = [
+        0.14, 0.18, 0.22, 0.25, 0.29, 0.32, 0.35, 0.39, 0.37, 0.58, 0.73, 0.96, 1.34, 2.10, 4.39,
+    ];
+    let p = Fun {
+        n: 3,
+        m: 15,
+        f: move |x: &[f64], r: &mut [f64]| {
+            for i in 0..15 {
+                let u = (i + 1) as f64;
+                let v = 16.0 - u;
+                let w = u.min(v);
+                r[i] = y[i] - (x[0] + u / (v * x[1] + w * x[2]));
+            }
+        },
+    };
+    let (lb, ub) = free(3);
+    let rep = minimize(&p, &[1.0, 1.0, 1.0], &lb, &ub, &LmOptions::default());
+    assert!((rep.objective - 8.21487730657e-3).abs() < 1e-12, "{}", rep.objective);
+}
+
+/// Wraps a problem and records every point at which residuals were requested.
+struct Recorder<P> {
+    inner: P,
+    seen: Mutex<Vec<Vec<f64>>>,
+}
+
+impl<P: LeastSquaresProblem> LeastSquaresProblem for Recorder<P> {
+    fn n_params(&self) -> usize {
+        self.inner.n_params()
+    }
+    fn n_residuals(&self) -> usize {
+        self.inner.n_residuals()
+    }
+    fn residuals(&self, x: &[f64], r: &mut [f64]) -> Result<(), EvalFailure> {
+        self.seen.lock().unwrap().push(x.to_vec());
+        self.inner.residuals(x, r)
+    }
+}
+
+#[test]
+fn no_iterate_or_finite_difference_step_leaves_the_box() {
+    // Box 3-D in a box that excludes its minimum (1, 10, 1): several bounds become active,
+    // one of them at the start point, where finite differences must step inward.
+    let lb = [0.0, 5.0, 1.5];
+    let ub = [2.0, 9.5, 3.0];
+    let rec = Recorder {
+        inner: box3d(),
+        seen: Mutex::new(Vec::new()),
+    };
+    let rep = minimize(&rec, &[2.0, 5.0, 3.0], &lb, &ub, &LmOptions::default());
+    let seen = rec.seen.into_inner().unwrap();
+    assert!(seen.len() > 10);
+    for x in &seen {
+        for j in 0..3 {
+            assert!(x[j] >= lb[j] && x[j] <= ub[j], "evaluated outside the box: {x:?}");
+        }
+    }
+    assert!(rep.termination.converged(), "{:?}", rep.termination);
+    // KKT conditions at the result, with a central-difference gradient of ½‖r‖².
+    let f = |x: &[f64]| {
+        let mut r = vec![0.0; 10];
+        box3d().residuals(x, &mut r).unwrap();
+        0.5 * r.iter().map(|v| v * v).sum::<f64>()
+    };
+    let mut active = 0;
+    for j in 0..3 {
+        let h = 1e-7;
+        let mut xp = rep.x.clone();
+        let mut xm = rep.x.clone();
+        xp[j] += h;
+        xm[j] -= h;
+        let g = (f(&xp) - f(&xm)) / (2.0 * h);
+        if rep.x[j] <= lb[j] {
+            assert!(g >= -1e-6, "at lb with g = {g}");
+            active += 1;
+        } else if rep.x[j] >= ub[j] {
+            assert!(g <= 1e-6, "at ub with g = {g}");
+            active += 1;
+        } else {
+            // Forward differences (step 1e-6) limit the gradient's accuracy to about 1e-7.
+            assert!(g.abs() < 1e-6, "free variable {j} with gradient {g}: {rep:?}");
+        }
+    }
+    assert!(active >= 1, "the box should bind: {:?}", rep.x);
+}
+
+/// A problem that cannot be evaluated in part of its domain (like a simulation that fails).
+#[test]
+fn evaluation_failure_is_reported_at_the_start_and_avoided_later() {
+    let p = Fun {
+        n: 1,
+        m: 1,
+        f: |x: &[f64], r: &mut [f64]| r[0] = x[0] - 2.0,
+    };
+    struct Failing<P>(P);
+    impl<P: LeastSquaresProblem> LeastSquaresProblem for Failing<P> {
+        fn n_params(&self) -> usize {
+            1
+        }
+        fn n_residuals(&self) -> usize {
+            1
+        }
+        fn residuals(&self, x: &[f64], r: &mut [f64]) -> Result<(), EvalFailure> {
+            if x[0] > 3.0 {
+                return Err(EvalFailure("simulation failed".into()));
+            }
+            self.0.residuals(x, r)
+        }
+    }
+    let fp = Failing(p);
+    let rep = minimize(&fp, &[5.0], &[-10.0], &[10.0], &LmOptions::default());
+    assert_eq!(rep.termination, Termination::SimulationFailure);
+    assert!(rep.failure.as_deref() == Some("simulation failed"));
+    let rep = minimize(&fp, &[-8.0], &[-10.0], &[10.0], &LmOptions::default());
+    assert!(rep.termination.converged());
+    assert!((rep.x[0] - 2.0).abs() < 1e-9);
+}
