@@ -1,1 +1,13 @@
-fn main(){}
+//! The `creepfit` binary: parse the command line, run the library, map errors to a one-line
+//! `error:` message and a non-zero exit status.
+
+use clap::Parser;
+
+fn main() {
+    let cli = creepfit::cli::Cli::parse();
+    if let Err(e) = creepfit::cli::run(cli).map_err(anyhow::Error::from) {
+        let msg = format!("{e:#}").replace('\n', " ");
+        eprintln!("error: {msg}");
+        std::process::exit(1);
+    }
+}

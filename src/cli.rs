@@ -1,0 +1,266 @@
+//! Command-line interface (DESIGN.md §5): argument parsing and the commands, which call the
+//! library and write the output files.
+
+use std::path::{Path, PathBuf};
+
+use clap::{Parser, Subcommand};
+
+use crate::config::RunConfig;
+use crate::data::{self, Dataset};
+use crate::error::Result;
+use crate::fit::{param_space, run_fit};
+use crate::model::{registry, Load};
+use crate::ode::OdeOptions;
+use crate::report::plot::{plot_creep_curves, CurvePlot};
+use crate::report::tables::{self, default_out, ensure_dir, num, write_csv, write_text};
+
+/// creepfit: calibrate creep-damage constitutive equations against measured creep curves.
+#[derive(Debug, Parser)]
+#[command(name = "creepfit", version, about)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The commands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// The paper's procedure: initial guess, a local bounded LM fit for every w, the best w.
+    Fit {
+        /// Run configuration (TOML).
+        config: PathBuf,
+        /// Output folder (default results/<name>/fit/).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// Simulate the configured tests with given constants (dense curves, ruptures).
+    Simulate {
+        /// Run configuration (TOML).
+        config: PathBuf,
+        /// constants.csv (name,value,…); default: the configuration's start values.
+        #[arg(long)]
+        constants: Option<PathBuf>,
+        /// Output folder (default results/<name>/simulate/).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+}
+
+/// Load a configuration and its data.
+pub fn load(config: &Path) -> Result<(RunConfig, Dataset)> {
+    let cfg = RunConfig::load(config)?;
+    let data = data::load(&cfg.curves, &cfg.ruptures, &cfg.load_options())?;
+    for w in &data.warnings {
+        eprintln!("warning: {w}");
+    }
+    Ok((cfg, data))
+}
+
+/// Run a parsed command line.
+pub fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Fit { config, out } => fit(&config, out),
+        Command::Simulate {
+            config,
+            constants,
+            out,
+        } => simulate(&config, constants, out),
+    }
+}
+
+/// Dense time grid from 0 to `t_end` (h), with extra resolution near the end of life.
+fn dense_grid(t_end: f64, n: usize) -> Vec<f64> {
+    let mut g: Vec<f64> = (0..=n)
+        .map(|i| {
+            let s = i as f64 / n as f64;
+            // uniform over most of life, refined near rupture
+            t_end * (1.0 - (1.0 - s).powi(2))
+        })
+        .collect();
+    g.dedup();
+    g
+}
+
+fn fit(config: &Path, out: Option<PathBuf>) -> Result<()> {
+    let (cfg, data) = load(config)?;
+    let run = run_fit(&cfg, &data)?;
+    let out = out.unwrap_or_else(|| default_out(&cfg.name, "fit"));
+    ensure_dir(&out)?;
+    let best = &run.fits[run.best];
+    let curves = &data.curves;
+    tables::write_constants(&out.join("constants.csv"), run.model.as_ref(), &run.space, &best.params)?;
+    let rows = tables::error_rows(best, curves);
+    tables::write_errors(&out.join("errors.csv"), &rows)?;
+    tables::write_fit_curves(&out.join("curves.csv"), best, curves)?;
+    let summary = tables::fit_summary(&run, curves);
+    write_text(
+        &out.join("summary.json"),
+        &serde_json::to_string_pretty(&summary).expect("JSON of plain values"),
+    )?;
+
+    println!(
+        "{}: model {}, {} curves, {} local fits in {:.2} s",
+        cfg.name,
+        run.model.name(),
+        curves.len(),
+        run.fits.len(),
+        run.wall_s
+    );
+    println!(
+        "best: start {}, w = {:?}, objective {:.6}, normalised residual {:.6}, {} ({} iterations, {} evaluations)",
+        best.start_label,
+        best.w,
+        best.eval.objective,
+        best.eval.norm_residual,
+        best.lm.termination.as_str(),
+        best.lm.iterations,
+        best.lm.evaluations
+    );
+    for (j, c) in run.model.constants().iter().enumerate() {
+        let pin = run
+            .space
+            .at_bound(j, best.params[j], 1e-6)
+            .map(|s| format!("  (at {s} bound)"))
+            .unwrap_or_default();
+        println!("  {:>6} = {:<12.6e} {}{}", c.name, best.params[j], c.unit, pin);
+    }
+    print!("{}", tables::error_table(&rows, run.used_min_rate));
+
+    // Plot last: a plotting failure never loses the numeric outputs above.
+    let plot_path = out.join("fit.png");
+    let plots = curve_plots(&cfg, &data, &best.params, &run.settings.ode, run.model.as_ref());
+    match plot_creep_curves(&plot_path, &format!("{} — measured (points) and fitted (lines)", cfg.name), &plots) {
+        Ok(()) => println!("wrote {}", out.display()),
+        Err(e) => {
+            eprintln!("warning: plot not written: {e}");
+            println!("wrote {} (without plot)", out.display());
+        }
+    }
+    Ok(())
+}
+
+/// Measured points and dense predicted curves for a plot.
+fn curve_plots(
+    cfg: &RunConfig,
+    data: &Dataset,
+    params: &[f64],
+    ode: &OdeOptions,
+    model: &dyn crate::model::Model,
+) -> Vec<CurvePlot> {
+    data.curves
+        .iter()
+        .map(|c| {
+            let load = Load {
+                stress_mpa: c.stress_mpa,
+                omega_f: cfg.objective.omega_f,
+            };
+            let span = c.rupture_time_h.unwrap_or(0.0).max(*c.times_h.last().unwrap_or(&0.0));
+            let o = OdeOptions {
+                t_end: crate::objective::HORIZON_FACTOR * span,
+                ..*ode
+            };
+            let (res, _) = model.trajectory(params, &load, &[], &o);
+            let grid = dense_grid(res.t_end, 400);
+            let (_, traj) = model.trajectory(params, &load, &grid, &o);
+            CurvePlot {
+                label: format!("{} MPa", c.stress_mpa),
+                measured: c
+                    .times_h
+                    .iter()
+                    .zip(&c.strains)
+                    .map(|(t, e)| (*t, 100.0 * e))
+                    .collect(),
+                predicted: traj.iter().map(|(t, e, _)| (*t, 100.0 * e)).collect(),
+            }
+        })
+        .collect()
+}
+
+fn simulate(config: &Path, constants: Option<PathBuf>, out: Option<PathBuf>) -> Result<()> {
+    let (cfg, data) = load(config)?;
+    let model = registry(&cfg.model)?;
+    let params = match constants {
+        Some(path) => tables::read_constants(&path, model.as_ref())?,
+        None => cfg.starts_all_given().ok_or_else(|| {
+            crate::Error::config(
+                &cfg.path,
+                "simulate needs --constants FILE or a start value for every constant",
+            )
+        })?,
+    };
+    let space = param_space(&cfg);
+    let _ = &space;
+    let out = out.unwrap_or_else(|| default_out(&cfg.name, "simulate"));
+    ensure_dir(&out)?;
+    let ode = OdeOptions {
+        rtol: cfg.solver.rtol,
+        atol: cfg.solver.atol,
+        ..OdeOptions::default()
+    };
+    let names = model.state_names();
+    let idx = |n: &str| names.iter().position(|s| *s == n);
+    let (ih, iphi, iom) = (idx("H"), idx("Phi"), idx("omega"));
+    let mut curve_rows = Vec::new();
+    let mut rupture_rows = Vec::new();
+    for c in &data.curves {
+        let load = Load {
+            stress_mpa: c.stress_mpa,
+            omega_f: cfg.objective.omega_f,
+        };
+        let span = c.rupture_time_h.unwrap_or(0.0).max(*c.times_h.last().unwrap_or(&0.0));
+        let o = OdeOptions {
+            t_end: crate::objective::HORIZON_FACTOR * span,
+            ..ode
+        };
+        let (res, _) = model.trajectory(&params, &load, &[], &o);
+        let mut grid = dense_grid(res.t_end, 200);
+        grid.extend(c.times_h.iter().copied().filter(|t| *t <= res.t_end));
+        grid.sort_by(|a, b| a.total_cmp(b));
+        grid.dedup();
+        let (_, traj) = model.trajectory(&params, &load, &grid, &o);
+        for (t, e, y) in &traj {
+            let get = |i: Option<usize>| i.map(|i| num(y[i])).unwrap_or_default();
+            curve_rows.push(vec![
+                num(c.temperature_c),
+                num(c.stress_mpa),
+                num(*t),
+                num(100.0 * e),
+                get(ih),
+                get(iphi),
+                get(iom),
+            ]);
+        }
+        rupture_rows.push(vec![
+            num(c.temperature_c),
+            num(c.stress_mpa),
+            if res.ruptured() { num(res.t_end) } else { String::new() },
+            if res.ruptured() { num(100.0 * res.strain_end) } else { String::new() },
+            num(100.0 * res.min_rate),
+        ]);
+        println!(
+            "{} °C {:>6} MPa: {} at t = {:.1} h, strain {:.3} %, min rate {:.4e} %/h",
+            c.temperature_c,
+            c.stress_mpa,
+            res.outcome.as_str(),
+            res.t_end,
+            100.0 * res.strain_end,
+            100.0 * res.min_rate
+        );
+    }
+    write_csv(
+        &out.join("curves.csv"),
+        &["temperature_C", "stress_MPa", "time_h", "strain_pct", "H", "Phi", "omega"],
+        &curve_rows,
+    )?;
+    write_csv(
+        &out.join("ruptures.csv"),
+        &["temperature_C", "stress_MPa", "rupture_time_h", "rupture_strain_pct", "min_rate_pct_per_h"],
+        &rupture_rows,
+    )?;
+    let plots = curve_plots(&cfg, &data, &params, &ode, model.as_ref());
+    if let Err(e) = plot_creep_curves(&out.join("simulate.png"), &format!("{} — simulated", cfg.name), &plots) {
+        eprintln!("warning: plot not written: {e}");
+    }
+    println!("wrote {}", out.display());
+    Ok(())
+}

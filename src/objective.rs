@@ -1,0 +1,361 @@
+//! The seed paper's objective (eq. 8) as a residual vector, the mapping of constants to the
+//! optimiser's unit box, and the evaluation of a constant set for reports.
+//!
+//! Residual layout: for each curve (ascending stress) its strain residuals
+//! (ε_pred(t_j) − ε_j)/ε_f at every measured time, then one lifetime residual
+//! √w·(t_f,pred − t_f)/t_f ("late": only when positive, else 0).
+//!
+//! **After a predicted rupture** a measured time t_j > t_r gets the C¹ continuation
+//! ε_pred(t_j) = ε_r + ε̇_r·(t_j − t_r) (strain and rate at rupture). Holding ε_r instead is
+//! continuous but has a kink in the constants whenever t_r crosses a measured time (DESIGN.md
+//! §7: half the 590 °C fits ended on such kinks); the linear continuation matches value and
+//! first derivative there, so the residual vector is C¹ and Levenberg–Marquardt sees a smooth
+//! problem. It also penalises early rupture through the strain term, which the "late"
+//! lifetime term does not.
+
+use crate::config::LifetimeTerm;
+use crate::data::Curve;
+use crate::lsq::{EvalFailure, LeastSquaresProblem};
+use crate::model::{Load, Model, Scale};
+use crate::ode::{OdeOptions, Outcome};
+
+/// Integration horizon as a multiple of the longest measured time of a curve (rupture time
+/// or last point): a prediction that has not ruptured by then is a failed simulation.
+pub const HORIZON_FACTOR: f64 = 100.0;
+
+/// Largest number of constants a model may have (fixed-size parameter buffers).
+pub const MAX_PARAMS: usize = 16;
+
+/// Bounds, scale and free/fixed status of every constant; maps to the unit box [0, 1]^k of
+/// the free constants, in which the optimiser works.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ParamSpace {
+    /// Lower bounds (physical units).
+    pub lb: Vec<f64>,
+    /// Upper bounds.
+    pub ub: Vec<f64>,
+    /// Scale per constant.
+    pub scale: Vec<Scale>,
+    /// Values of the held constants (used where `free[j]` is false).
+    pub fixed: Vec<f64>,
+    /// Which constants the optimiser moves.
+    pub free: Vec<bool>,
+}
+
+impl ParamSpace {
+    /// All constants free.
+    pub fn new(lb: Vec<f64>, ub: Vec<f64>, scale: Vec<Scale>) -> Self {
+        let n = lb.len();
+        assert!(n <= MAX_PARAMS, "too many constants");
+        ParamSpace {
+            fixed: lb.clone(),
+            free: vec![true; n],
+            lb,
+            ub,
+            scale,
+        }
+    }
+    /// Number of constants.
+    pub fn len(&self) -> usize {
+        self.lb.len()
+    }
+    /// Whether there are no constants.
+    pub fn is_empty(&self) -> bool {
+        self.lb.is_empty()
+    }
+    /// Number of free constants.
+    pub fn n_free(&self) -> usize {
+        self.free.iter().filter(|f| **f).count()
+    }
+    /// Hold constant `j` at `value`.
+    pub fn hold(&mut self, j: usize, value: f64) {
+        self.free[j] = false;
+        self.fixed[j] = value;
+    }
+    /// Unit-box coordinate of constant `j` at physical value `x`.
+    pub fn to_unit_one(&self, j: usize, x: f64) -> f64 {
+        let (lb, ub) = (self.lb[j], self.ub[j]);
+        match self.scale[j] {
+            Scale::Linear => (x - lb) / (ub - lb),
+            Scale::Log => (x.ln() - lb.ln()) / (ub.ln() - lb.ln()),
+        }
+    }
+    /// Physical value of constant `j` at unit-box coordinate `u`.
+    pub fn from_unit_one(&self, j: usize, u: f64) -> f64 {
+        let (lb, ub) = (self.lb[j], self.ub[j]);
+        let x = match self.scale[j] {
+            Scale::Linear => lb + u * (ub - lb),
+            Scale::Log => (lb.ln() + u * (ub.ln() - lb.ln())).exp(),
+        };
+        x.clamp(lb, ub)
+    }
+    /// Unit-box coordinates of the free constants of a full physical vector.
+    pub fn to_unit(&self, x: &[f64]) -> Vec<f64> {
+        (0..self.len())
+            .filter(|&j| self.free[j])
+            .map(|j| self.to_unit_one(j, x[j]))
+            .collect()
+    }
+    /// Full physical vector from the free constants' unit coordinates (held ones filled in).
+    pub fn from_unit(&self, u: &[f64], x: &mut [f64]) {
+        let mut k = 0;
+        for j in 0..self.len() {
+            if self.free[j] {
+                x[j] = self.from_unit_one(j, u[k]);
+                k += 1;
+            } else {
+                x[j] = self.fixed[j];
+            }
+        }
+    }
+    /// Whether physical constant `j` sits on a bound (within `tol` in unit coordinates).
+    pub fn at_bound(&self, j: usize, x: f64, tol: f64) -> Option<&'static str> {
+        let u = self.to_unit_one(j, x);
+        if u <= tol {
+            Some("lower")
+        } else if u >= 1.0 - tol {
+            Some("upper")
+        } else {
+            None
+        }
+    }
+}
+
+/// Eq. 8 for one set of curves, one model and one weight per curve.
+pub struct Objective<'a> {
+    /// The constitutive model.
+    pub model: &'a dyn Model,
+    /// Measured curves, ascending stress.
+    pub curves: &'a [Curve],
+    /// Lifetime weight w_i per curve.
+    pub w: Vec<f64>,
+    /// Which lifetime errors count.
+    pub lifetime: LifetimeTerm,
+    /// Damage at rupture ω_f.
+    pub omega_f: f64,
+    /// Integration options (the horizon is set per curve).
+    pub ode: OdeOptions,
+}
+
+/// Prediction for one curve at one constant set.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CurvePrediction {
+    /// How the simulation ended.
+    pub outcome: Outcome,
+    /// Predicted rupture time, h (NaN if it did not rupture).
+    pub rupture_time_h: f64,
+    /// Predicted rupture strain, fraction.
+    pub rupture_strain: f64,
+    /// Predicted minimum strain rate, 1/h.
+    pub min_rate: f64,
+    /// Predicted strain at the measured times (with the post-rupture continuation).
+    pub strain: Vec<f64>,
+}
+
+/// Objective value and its parts at one constant set.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Evaluation {
+    /// Eq. 8 (sum of squared residuals), NaN where a simulation failed.
+    pub objective: f64,
+    /// The strain term alone, Σ((ε_pred − ε)/ε_f)², comparable across w.
+    pub norm_residual: f64,
+    /// Per-curve predictions.
+    pub curves: Vec<CurvePrediction>,
+}
+
+impl Evaluation {
+    /// Signed lifetime errors, % of the measured rupture time (NaN if unknown).
+    pub fn lifetime_errors_pct(&self, curves: &[Curve]) -> Vec<f64> {
+        self.curves
+            .iter()
+            .zip(curves)
+            .map(|(p, c)| match c.rupture_time_h {
+                Some(t) => 100.0 * (p.rupture_time_h - t) / t,
+                None => f64::NAN,
+            })
+            .collect()
+    }
+    /// Signed minimum-rate errors, % of the measured (or, where not given, estimated) rate.
+    pub fn min_rate_errors_pct(&self, curves: &[Curve]) -> Vec<f64> {
+        self.curves
+            .iter()
+            .zip(curves)
+            .map(|(p, c)| {
+                let m = c.min_rate_measured.unwrap_or(c.min_rate_estimated);
+                100.0 * (p.min_rate - m) / m
+            })
+            .collect()
+    }
+}
+
+/// Mean of absolute values, skipping NaN (NaN if none).
+pub fn mean_abs(v: &[f64]) -> f64 {
+    let f: Vec<f64> = v.iter().filter(|x| x.is_finite()).map(|x| x.abs()).collect();
+    if f.is_empty() {
+        f64::NAN
+    } else {
+        f.iter().sum::<f64>() / f.len() as f64
+    }
+}
+
+impl<'a> Objective<'a> {
+    /// Number of residuals: every measured point plus one lifetime term per curve.
+    pub fn n_residuals(&self) -> usize {
+        self.curves.iter().map(|c| c.times_h.len() + 1).sum()
+    }
+
+    fn load(&self, c: &Curve) -> Load {
+        Load {
+            stress_mpa: c.stress_mpa,
+            omega_f: self.omega_f,
+        }
+    }
+
+    fn ode_for(&self, c: &Curve) -> OdeOptions {
+        let last = c.times_h.last().copied().unwrap_or(0.0);
+        let span = c.rupture_time_h.unwrap_or(0.0).max(last);
+        OdeOptions {
+            t_end: HORIZON_FACTOR * span,
+            ..self.ode
+        }
+    }
+
+    /// Simulate curve `i` at `params`, writing the predicted strain (with continuation) into
+    /// `strain`. Returns (outcome, rupture time, rupture strain, min rate).
+    fn predict(
+        &self,
+        i: usize,
+        params: &[f64],
+        strain: &mut [f64],
+    ) -> Result<(Outcome, f64, f64, f64), EvalFailure> {
+        let c = &self.curves[i];
+        let res = self
+            .model
+            .simulate(params, &self.load(c), &c.times_h, strain, &self.ode_for(c));
+        let n = c.times_h.len();
+        match res.outcome {
+            Outcome::Ruptured => {
+                for k in res.n_out..n {
+                    strain[k] = res.strain_end + res.rate_end * (c.times_h[k] - res.t_end);
+                }
+                Ok((res.outcome, res.t_end, res.strain_end, res.min_rate))
+            }
+            Outcome::Horizon if c.rupture_time_h.is_none() && res.n_out == n => {
+                Ok((res.outcome, f64::NAN, f64::NAN, res.min_rate))
+            }
+            other => Err(EvalFailure(format!(
+                "{} °C {} MPa: {}",
+                c.temperature_c,
+                c.stress_mpa,
+                other.as_str()
+            ))),
+        }
+    }
+
+    /// Fill `r` (length [`Objective::n_residuals`]) at the physical constants `params`.
+    pub fn residuals(&self, params: &[f64], r: &mut [f64]) -> Result<(), EvalFailure> {
+        let mut off = 0;
+        for (i, c) in self.curves.iter().enumerate() {
+            let n = c.times_h.len();
+            let (_, t_r, _, _) = self.predict(i, params, &mut r[off..off + n])?;
+            let inv = 1.0 / c.rupture_strain;
+            for k in 0..n {
+                r[off + k] = (r[off + k] - c.strains[k]) * inv;
+            }
+            r[off + n] = match c.rupture_time_h {
+                Some(t_exp) => {
+                    let rel = (t_r - t_exp) / t_exp;
+                    let rel = match self.lifetime {
+                        LifetimeTerm::Late => rel.max(0.0),
+                        LifetimeTerm::Both => rel,
+                    };
+                    self.w[i].sqrt() * rel
+                }
+                None => 0.0,
+            };
+            off += n + 1;
+        }
+        Ok(())
+    }
+
+    /// Evaluate everything reports need at `params`; a failed simulation gives NaN entries.
+    pub fn evaluate(&self, params: &[f64]) -> Evaluation {
+        let mut curves = Vec::with_capacity(self.curves.len());
+        let mut objective = 0.0;
+        let mut norm = 0.0;
+        for (i, c) in self.curves.iter().enumerate() {
+            let n = c.times_h.len();
+            let mut strain = vec![f64::NAN; n];
+            match self.predict(i, params, &mut strain) {
+                Ok((outcome, t_r, e_r, min_rate)) => {
+                    let s: f64 = (0..n)
+                        .map(|k| ((strain[k] - c.strains[k]) / c.rupture_strain).powi(2))
+                        .sum();
+                    norm += s;
+                    objective += s;
+                    if let Some(t_exp) = c.rupture_time_h {
+                        let rel = (t_r - t_exp) / t_exp;
+                        let rel = match self.lifetime {
+                            LifetimeTerm::Late => rel.max(0.0),
+                            LifetimeTerm::Both => rel,
+                        };
+                        objective += self.w[i] * rel * rel;
+                    }
+                    curves.push(CurvePrediction {
+                        outcome,
+                        rupture_time_h: t_r,
+                        rupture_strain: e_r,
+                        min_rate,
+                        strain,
+                    });
+                }
+                Err(_) => {
+                    let res = self.model.simulate(
+                        params,
+                        &self.load(c),
+                        &c.times_h,
+                        &mut strain,
+                        &self.ode_for(c),
+                    );
+                    objective = f64::NAN;
+                    norm = f64::NAN;
+                    curves.push(CurvePrediction {
+                        outcome: res.outcome,
+                        rupture_time_h: f64::NAN,
+                        rupture_strain: f64::NAN,
+                        min_rate: res.min_rate,
+                        strain,
+                    });
+                }
+            }
+        }
+        Evaluation {
+            objective,
+            norm_residual: norm,
+            curves,
+        }
+    }
+}
+
+/// Eq. 8 in the unit box of a [`ParamSpace`]: what the optimiser sees.
+pub struct CreepProblem<'a> {
+    /// The objective in physical constants.
+    pub objective: Objective<'a>,
+    /// The mapping to the unit box.
+    pub space: ParamSpace,
+}
+
+impl LeastSquaresProblem for CreepProblem<'_> {
+    fn n_params(&self) -> usize {
+        self.space.n_free()
+    }
+    fn n_residuals(&self) -> usize {
+        self.objective.n_residuals()
+    }
+    fn residuals(&self, u: &[f64], r: &mut [f64]) -> Result<(), EvalFailure> {
+        let mut x = [0.0; MAX_PARAMS];
+        let n = self.space.len();
+        self.space.from_unit(u, &mut x[..n]);
+        self.objective.residuals(&x[..n], r)
+    }
+}

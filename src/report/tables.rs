@@ -1,0 +1,337 @@
+//! Output files of `fit` and `simulate` (DESIGN.md §5) and the printed error table.
+
+use std::fmt::Write as _;
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use serde_json::{json, Value};
+
+use crate::data::Curve;
+use crate::error::{Error, Result};
+use crate::fit::{FitRun, LocalFit};
+use crate::model::Model;
+use crate::objective::ParamSpace;
+
+/// Create `dir` (and parents).
+pub fn ensure_dir(dir: &Path) -> Result<()> {
+    fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))
+}
+
+/// Write `text` to `path`.
+pub fn write_text(path: &Path, text: &str) -> Result<()> {
+    fs::write(path, text).map_err(|e| Error::io(path, e))
+}
+
+/// Write a CSV file from a header and rows of already formatted cells.
+pub fn write_csv(path: &Path, header: &[&str], rows: &[Vec<String>]) -> Result<()> {
+    let mut w = csv::Writer::from_path(path).map_err(|e| Error::io(path, csv_io(e)))?;
+    w.write_record(header).map_err(|e| Error::io(path, csv_io(e)))?;
+    for r in rows {
+        w.write_record(r).map_err(|e| Error::io(path, csv_io(e)))?;
+    }
+    w.flush().map_err(|e| Error::io(path, e))
+}
+
+fn csv_io(e: csv::Error) -> std::io::Error {
+    std::io::Error::other(e.to_string())
+}
+
+/// A number as CSV text: shortest round-trip form, empty for NaN.
+pub fn num(v: f64) -> String {
+    if v.is_finite() {
+        format!("{v}")
+    } else {
+        String::new()
+    }
+}
+
+/// JSON number or null.
+pub fn jnum(v: f64) -> Value {
+    if v.is_finite() {
+        json!(v)
+    } else {
+        Value::Null
+    }
+}
+
+/// `constants.csv`: name,value,unit,lb,ub
+pub fn write_constants(path: &Path, model: &dyn Model, space: &ParamSpace, params: &[f64]) -> Result<()> {
+    let rows: Vec<Vec<String>> = model
+        .constants()
+        .iter()
+        .enumerate()
+        .map(|(j, c)| {
+            vec![
+                c.name.to_string(),
+                num(params[j]),
+                c.unit.to_string(),
+                num(space.lb[j]),
+                num(space.ub[j]),
+            ]
+        })
+        .collect();
+    write_csv(path, &["name", "value", "unit", "lb", "ub"], &rows)
+}
+
+/// Read a `constants.csv` (columns `name,value`, any order, extra columns ignored) into the
+/// model's order; every model constant must be present.
+pub fn read_constants(path: &Path, model: &dyn Model) -> Result<Vec<f64>> {
+    let mut rdr = csv::ReaderBuilder::new()
+        .has_headers(true)
+        .from_path(path)
+        .map_err(|e| match e.kind() {
+            csv::ErrorKind::Io(_) => Error::io(path, std::io::Error::other(e.to_string())),
+            _ => Error::data(path, 0, e.to_string()),
+        })?;
+    let headers = rdr
+        .headers()
+        .map_err(|e| Error::data(path, 1, e.to_string()))?
+        .clone();
+    let col = |name: &str| {
+        headers
+            .iter()
+            .position(|h| h.trim() == name)
+            .ok_or_else(|| Error::data(path, 1, format!("missing column '{name}'")))
+    };
+    let (ci, cv) = (col("name")?, col("value")?);
+    let specs = model.constants();
+    let mut values = vec![f64::NAN; specs.len()];
+    for rec in rdr.records() {
+        let rec = rec.map_err(|e| {
+            let line = e.position().map(|p| p.line() as usize).unwrap_or(0);
+            Error::data(path, line, e.to_string())
+        })?;
+        let line = rec.position().map(|p| p.line() as usize).unwrap_or(0);
+        let name = rec.get(ci).unwrap_or("").trim();
+        let text = rec.get(cv).unwrap_or("").trim();
+        let v: f64 = text.parse().map_err(|_| {
+            Error::data(path, line, format!("field 'value': cannot parse '{text}' as a number"))
+        })?;
+        if !v.is_finite() {
+            return Err(Error::data(path, line, format!("field 'value': '{text}' is not finite")));
+        }
+        match specs.iter().position(|s| s.name == name) {
+            Some(j) => values[j] = v,
+            None => {
+                return Err(Error::data(
+                    path,
+                    line,
+                    format!("field 'name': '{name}' is not a constant of model {}", model.name()),
+                ))
+            }
+        }
+    }
+    if let Some(j) = values.iter().position(|v| v.is_nan()) {
+        return Err(Error::data(path, 0, format!("constant '{}' is missing", specs[j].name)));
+    }
+    Ok(values)
+}
+
+/// Per-curve error rows of a fit (the columns of `errors.csv`), as numbers.
+pub struct ErrorRow {
+    pub temperature_c: f64,
+    pub stress_mpa: f64,
+    pub rupture_time_exp_h: f64,
+    pub rupture_time_pred_h: f64,
+    pub lifetime_err_pct: f64,
+    pub min_rate_exp_pct_per_h: f64,
+    pub min_rate_pred_pct_per_h: f64,
+    pub min_rate_err_pct: f64,
+    pub rupture_strain_exp_pct: f64,
+    pub rupture_strain_pred_pct: f64,
+}
+
+/// The error rows of a local fit.
+pub fn error_rows(fit: &LocalFit, curves: &[Curve]) -> Vec<ErrorRow> {
+    curves
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let p = &fit.eval.curves[i];
+            ErrorRow {
+                temperature_c: c.temperature_c,
+                stress_mpa: c.stress_mpa,
+                rupture_time_exp_h: c.rupture_time_h.unwrap_or(f64::NAN),
+                rupture_time_pred_h: p.rupture_time_h,
+                lifetime_err_pct: fit.lifetime_err_pct[i],
+                min_rate_exp_pct_per_h: 100.0 * c.min_rate_measured.unwrap_or(c.min_rate_estimated),
+                min_rate_pred_pct_per_h: 100.0 * p.min_rate,
+                min_rate_err_pct: fit.min_rate_err_pct[i],
+                rupture_strain_exp_pct: 100.0 * c.rupture_strain,
+                rupture_strain_pred_pct: 100.0 * p.rupture_strain,
+            }
+        })
+        .collect()
+}
+
+/// `errors.csv`.
+pub fn write_errors(path: &Path, rows: &[ErrorRow]) -> Result<()> {
+    let header = [
+        "temperature_C",
+        "stress_MPa",
+        "rupture_time_exp_h",
+        "rupture_time_pred_h",
+        "lifetime_err_pct",
+        "min_rate_exp_pct_per_h",
+        "min_rate_pred_pct_per_h",
+        "min_rate_err_pct",
+        "rupture_strain_exp_pct",
+        "rupture_strain_pred_pct",
+    ];
+    let rows: Vec<Vec<String>> = rows
+        .iter()
+        .map(|r| {
+            [
+                r.temperature_c,
+                r.stress_mpa,
+                r.rupture_time_exp_h,
+                r.rupture_time_pred_h,
+                r.lifetime_err_pct,
+                r.min_rate_exp_pct_per_h,
+                r.min_rate_pred_pct_per_h,
+                r.min_rate_err_pct,
+                r.rupture_strain_exp_pct,
+                r.rupture_strain_pred_pct,
+            ]
+            .iter()
+            .map(|v| num(*v))
+            .collect()
+        })
+        .collect();
+    write_csv(path, &header, &rows)
+}
+
+/// `curves.csv` of a fit: measured and predicted strain at every measured time.
+pub fn write_fit_curves(path: &Path, fit: &LocalFit, curves: &[Curve]) -> Result<()> {
+    let mut rows = Vec::new();
+    for (i, c) in curves.iter().enumerate() {
+        for (k, &t) in c.times_h.iter().enumerate() {
+            rows.push(vec![
+                num(c.temperature_c),
+                num(c.stress_mpa),
+                num(t),
+                num(100.0 * c.strains[k]),
+                num(100.0 * fit.eval.curves[i].strain[k]),
+            ]);
+        }
+    }
+    write_csv(
+        path,
+        &["temperature_C", "stress_MPa", "time_h", "strain_exp_pct", "strain_pred_pct"],
+        &rows,
+    )
+}
+
+/// The paper-style table (Tables 6/7): lifetime and minimum-rate errors per stress.
+pub fn error_table(rows: &[ErrorRow], min_rate_measured: bool) -> String {
+    let mut s = String::new();
+    let rate_note = if min_rate_measured { "measured" } else { "estimated from the curve" };
+    let _ = writeln!(
+        s,
+        "{:>6} {:>7} | {:>10} {:>10} {:>8} | {:>11} {:>11} {:>8} | {:>7} {:>7}",
+        "T(C)", "MPa", "t_f exp h", "t_f pred h", "err %", "rate exp", "rate pred", "err %", "e_f exp", "e_f pred"
+    );
+    for r in rows {
+        let _ = writeln!(
+            s,
+            "{:>6} {:>7} | {:>10.0} {:>10.0} {:>8.2} | {:>11.4e} {:>11.4e} {:>8.2} | {:>7.3} {:>7.3}",
+            r.temperature_c,
+            r.stress_mpa,
+            r.rupture_time_exp_h,
+            r.rupture_time_pred_h,
+            r.lifetime_err_pct,
+            r.min_rate_exp_pct_per_h,
+            r.min_rate_pred_pct_per_h,
+            r.min_rate_err_pct,
+            r.rupture_strain_exp_pct,
+            r.rupture_strain_pred_pct
+        );
+    }
+    let mean = |f: &dyn Fn(&ErrorRow) -> f64| {
+        let v: Vec<f64> = rows.iter().map(f).filter(|x| x.is_finite()).map(f64::abs).collect();
+        v.iter().sum::<f64>() / v.len().max(1) as f64
+    };
+    let _ = writeln!(
+        s,
+        "{:>14} | {:>21} {:>8.2} | {:>23} {:>8.2} |   (rates in %/h, {rate_note}; strains in %)",
+        "mean |err|",
+        "",
+        mean(&|r| r.lifetime_err_pct),
+        "",
+        mean(&|r| r.min_rate_err_pct)
+    );
+    s
+}
+
+/// Default output folder for a command: `results/<name>/<command>/`.
+pub fn default_out(name: &str, command: &str) -> PathBuf {
+    PathBuf::from("results").join(name).join(command)
+}
+
+/// `summary.json` of a fit.
+pub fn fit_summary(run: &FitRun, curves: &[Curve]) -> Value {
+    let best = &run.fits[run.best];
+    let names: Vec<&str> = run.model.constants().iter().map(|c| c.name).collect();
+    let consts = |p: &[f64]| -> Value {
+        let mut m = serde_json::Map::new();
+        for (n, v) in names.iter().zip(p) {
+            m.insert(n.to_string(), jnum(*v));
+        }
+        Value::Object(m)
+    };
+    let pinned: Vec<Value> = (0..run.space.len())
+        .filter_map(|j| {
+            run.space
+                .at_bound(j, best.params[j], 1e-6)
+                .map(|side| json!({"name": names[j], "bound": side, "value": best.params[j]}))
+        })
+        .collect();
+    let candidates: Vec<Value> = run
+        .fits
+        .iter()
+        .map(|f| {
+            json!({
+                "start": f.start_label,
+                "w": f.w,
+                "objective": jnum(f.eval.objective),
+                "norm_residual": jnum(f.eval.norm_residual),
+                "mean_lifetime_err_pct": jnum(f.mean_lifetime_err()),
+                "mean_min_rate_err_pct": jnum(f.mean_min_rate_err()),
+                "lifetime_err_pct": f.lifetime_err_pct.iter().map(|v| jnum(*v)).collect::<Vec<_>>(),
+                "termination": f.lm.termination.as_str(),
+                "iterations": f.lm.iterations,
+                "evaluations": f.lm.evaluations,
+                "wall_s": f.wall_s,
+                "constants": consts(&f.params),
+            })
+        })
+        .collect();
+    json!({
+        "model": run.model.name(),
+        "objective": jnum(best.eval.objective),
+        "norm_residual": jnum(best.eval.norm_residual),
+        "w": best.w,
+        "start": best.start_label,
+        "iterations": best.lm.iterations,
+        "evaluations": best.lm.evaluations,
+        "wall_s": run.wall_s,
+        "fit_wall_s": best.wall_s,
+        "termination": best.lm.termination.as_str(),
+        "constants": consts(&best.params),
+        "pinned_at_bounds": pinned,
+        "mean_lifetime_err_pct": jnum(best.mean_lifetime_err()),
+        "mean_min_rate_err_pct": jnum(best.mean_min_rate_err()),
+        "lifetime_err_pct": best.lifetime_err_pct.iter().map(|v| jnum(*v)).collect::<Vec<_>>(),
+        "min_rate_err_pct": best.min_rate_err_pct.iter().map(|v| jnum(*v)).collect::<Vec<_>>(),
+        "stresses_MPa": curves.iter().map(|c| c.stress_mpa).collect::<Vec<_>>(),
+        "min_rate_source": if run.used_min_rate { "measured" } else { "estimated_from_curve" },
+        "best_w_rule": "min-max normalised sum of norm_residual, mean |lifetime error| and (if measured) mean |min-rate error| over converged fits",
+        "initial_guess": {
+            "constants": consts(&run.guess.params),
+            "min_rates_pct_per_h": run.guess.min_rates.iter().map(|r| 100.0 * r).collect::<Vec<_>>(),
+            "clamped_to_bounds": run.guess.clamped,
+        },
+        "ode": {"rtol": run.settings.ode.rtol, "atol": run.settings.ode.atol},
+        "candidates": candidates,
+    })
+}

@@ -1,0 +1,164 @@
+//! Recovery: curves simulated from known constants, fitted from a start elsewhere in the
+//! box, give the constants back (exactly without noise; stably with noise).
+
+use creepfit::config::LifetimeTerm;
+use creepfit::data::{estimate_min_rate, Curve};
+use creepfit::fit::{local_fit, FitSettings};
+use creepfit::lsq::LmOptions;
+use creepfit::model::{registry, Load, Model, Scale};
+use creepfit::objective::ParamSpace;
+use creepfit::ode::OdeOptions;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// The paper's 560 °C box (Table 1).
+fn space_560() -> ParamSpace {
+    ParamSpace::new(
+        vec![1e-10, 0.1, 0.4, 1e4, 1e-6, 3.0],
+        vec![1e-9, 0.2, 0.8, 2e5, 3e-5, 10.0],
+        vec![Scale::Log, Scale::Linear, Scale::Linear, Scale::Log, Scale::Log, Scale::Linear],
+    )
+}
+
+/// Irregularly sampled synthetic curves (like digitized ones) from `truth`, with Gaussian
+/// noise of `noise` × rupture strain on every point but t = 0.
+fn synth(model: &dyn Model, truth: &[f64], stresses: &[f64], n: usize, noise: f64, seed: u64) -> Vec<Curve> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let ode = OdeOptions {
+        rtol: 1e-12,
+        atol: 1e-15,
+        ..OdeOptions::default()
+    };
+    stresses
+        .iter()
+        .map(|&s| {
+            let load = Load {
+                stress_mpa: s,
+                omega_f: 1.0 / 3.0,
+            };
+            let mut dummy = [];
+            let r = model.simulate(truth, &load, &[], &mut dummy, &ode);
+            assert!(r.ruptured());
+            let mut times: Vec<f64> = (1..n)
+                .map(|k| {
+                    let f = (k as f64 + rng.gen_range(-0.4..0.4)) / n as f64;
+                    r.t_end * (1.0 - (1.0 - f).powf(1.5))
+                })
+                .collect();
+            times.insert(0, 0.0);
+            times.sort_by(|a, b| a.total_cmp(b));
+            let mut strain = vec![0.0; times.len()];
+            let r2 = model.simulate(truth, &load, &times, &mut strain, &ode);
+            assert_eq!(r2.n_out, times.len());
+            for e in strain.iter_mut().skip(1) {
+                let z: f64 = rng.sample(rand_distr_normal());
+                *e += noise * r.strain_end * z;
+            }
+            Curve {
+                temperature_c: 560.0,
+                stress_mpa: s,
+                specimen: None,
+                min_rate_estimated: estimate_min_rate(&times, &strain, r.t_end),
+                times_h: times,
+                strains: strain,
+                rupture_time_h: Some(r.t_end),
+                rupture_strain: r.strain_end,
+                min_rate_measured: Some(r.min_rate),
+            }
+        })
+        .collect()
+}
+
+/// Standard normal by Box–Muller (keeps the test free of extra crates).
+fn rand_distr_normal() -> impl rand::distributions::Distribution<f64> {
+    struct N;
+    impl rand::distributions::Distribution<f64> for N {
+        fn sample<R: Rng + ?Sized>(&self, rng: &mut R) -> f64 {
+            let u1: f64 = rng.gen_range(f64::MIN_POSITIVE..1.0);
+            let u2: f64 = rng.gen();
+            (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
+        }
+    }
+    N
+}
+
+fn settings() -> FitSettings {
+    FitSettings {
+        lm: LmOptions {
+            max_iterations: 300,
+            ..LmOptions::default()
+        },
+        ode: OdeOptions::default(),
+        omega_f: 1.0 / 3.0,
+        lifetime: LifetimeTerm::Both,
+    }
+}
+
+/// A start displaced by `shift` in every unit-box coordinate (alternating sign).
+fn displaced(space: &ParamSpace, truth: &[f64], shift: f64) -> Vec<f64> {
+    let u: Vec<f64> = space
+        .to_unit(truth)
+        .iter()
+        .enumerate()
+        .map(|(j, u)| {
+            let s = if j % 2 == 0 { shift } else { -shift };
+            let v = u + s;
+            if (0.02..=0.98).contains(&v) { v } else { u - s }
+        })
+        .collect();
+    let mut x = truth.to_vec();
+    space.from_unit(&u, &mut x);
+    x
+}
+
+#[test]
+fn recovers_constants_without_noise() {
+    let model = registry("khd").unwrap();
+    let space = space_560();
+    for (truth, stresses, seed) in [
+        (vec![4e-10, 0.12, 0.55, 6e4, 8e-6, 5.0], vec![85.0, 100.0, 110.0], 1u64),
+        (vec![2.5e-10, 0.15, 0.62, 3e4, 1.5e-5, 4.2], vec![80.0, 95.0, 105.0, 120.0], 2),
+    ] {
+        let curves = synth(model.as_ref(), &truth, &stresses, 36, 0.0, seed);
+        let start = displaced(&space, &truth, 0.12);
+        let fit = local_fit(model.as_ref(), &curves, &space, &vec![1.0; curves.len()], &start, "test", &settings());
+        assert!(fit.lm.termination.converged(), "{:?}", fit.lm);
+        for j in 0..truth.len() {
+            let rel = (fit.params[j] - truth[j]).abs() / truth[j];
+            assert!(rel < 1e-4, "constant {j}: {} vs {} (rel {rel:e}); start {start:?}", fit.params[j], truth[j]);
+        }
+        assert!(fit.eval.objective < 1e-12, "{}", fit.eval.objective);
+    }
+}
+
+#[test]
+fn noisy_fit_is_stable_and_reports_its_error() {
+    let model = registry("khd").unwrap();
+    let space = space_560();
+    let truth = vec![4e-10, 0.12, 0.55, 6e4, 8e-6, 5.0];
+    let stresses = [85.0, 100.0, 110.0];
+    let noise = 0.01; // 1 % of the rupture strain, like careful digitizing
+    let mut errs = Vec::new();
+    for seed in [11u64, 12, 13] {
+        let curves = synth(model.as_ref(), &truth, &stresses, 36, noise, seed);
+        let start = displaced(&space, &truth, 0.12);
+        let fit = local_fit(model.as_ref(), &curves, &space, &[1.0; 3], &start, "test", &settings());
+        assert!(fit.lm.termination.converged(), "{:?}", fit.lm.termination);
+        // At the minimum the residual is the noise: Σ r² ≈ m σ² (σ = noise in units of ε_f).
+        let m = curves.iter().map(|c| c.times_h.len() - 1).sum::<usize>() as f64;
+        let expected = m * noise * noise;
+        assert!(fit.eval.norm_residual < 1.5 * expected, "{} vs {expected}", fit.eval.norm_residual);
+        assert!(fit.eval.norm_residual > 0.3 * expected);
+        // Lifetimes are predicted within a few %, and C (the best-determined constant) within 5 %.
+        for e in &fit.lifetime_err_pct {
+            assert!(e.abs() < 5.0, "lifetime error {e} %");
+        }
+        let c_err = (fit.params[5] - truth[5]).abs() / truth[5];
+        assert!(c_err < 0.05, "C error {c_err}");
+        errs.push(fit.params.iter().zip(&truth).map(|(p, t)| (p - t) / t).collect::<Vec<_>>());
+    }
+    eprintln!("relative constant errors with 1 % noise (A, B, H*, h, Kc, C):");
+    for e in &errs {
+        eprintln!("  {:?}", e.iter().map(|v| format!("{:+.3}", v)).collect::<Vec<_>>());
+    }
+}
