@@ -272,7 +272,7 @@ where
     let mut t = 0.0_f64;
     let mut y = model.init(p);
     let mut k1 = [0.0; N];
-    let mut result = |outcome, t: f64, y: &[f64; N], rate: f64, mr: &MinRate, n_out, stats| {
+    let result = |outcome, t: f64, y: &[f64; N], rate: f64, mr: &MinRate, n_out, stats| {
         let (t_min, min_rate) = mr.finish();
         SimResult {
             outcome,
