@@ -3,6 +3,8 @@
 //!
 //! Units throughout: time in h, stress in MPa, strain as a fraction (files use percent).
 
+pub mod config;
+pub mod data;
 pub mod error;
 pub mod model;
 pub mod lsq;

@@ -1,0 +1,907 @@
+//! Creep curves and rupture records: read, validate, group by (temperature, stress[, specimen])
+//! and match curves with their rupture records (DESIGN.md §3).
+//!
+//! Files hold strain in percent and rates in percent per hour; everything in this module's
+//! output is a fraction (strain) or 1/h (rate).
+//!
+//! Both CSV files need a header (line 1); columns may come in any order and extra columns are
+//! ignored. Every error names the file, the 1-based line (header = line 1) and the field.
+
+use std::collections::HashMap;
+use std::fs::File;
+use std::path::{Path, PathBuf};
+
+use crate::error::{Error, Result};
+
+/// Required columns of the curves file.
+pub const CURVE_COLUMNS: &[&str] = &["temperature_C", "stress_MPa", "time_h", "strain_pct"];
+/// Required columns of the ruptures file.
+pub const RUPTURE_COLUMNS: &[&str] = &["temperature_C", "stress_MPa", "rupture_time_h"];
+/// Fraction of the life a window of [`estimate_min_rate`] must span at least.
+pub const MIN_RATE_WINDOW_FRACTION: f64 = 0.15;
+/// Fewest points a curve may have (after exact duplicates are dropped).
+pub const MIN_POINTS: usize = 3;
+
+/// One measured creep curve (one test), ready for fitting.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Curve {
+    /// Test temperature, °C.
+    pub temperature_c: f64,
+    /// Nominal stress, MPa.
+    pub stress_mpa: f64,
+    /// Specimen label, when the curves file has a `specimen` column (and the cell is not empty).
+    pub specimen: Option<String>,
+    /// Measurement times, h, sorted ascending (stable: equal times keep their file order).
+    pub times_h: Vec<f64>,
+    /// Measured strains (fraction), one per time.
+    pub strains: Vec<f64>,
+    /// Measured rupture time, h; `None` only for a test declared interrupted.
+    pub rupture_time_h: Option<f64>,
+    /// Rupture strain (fraction): from the ruptures file, else the last measured strain (the
+    /// largest strain among the points at the largest time).
+    pub rupture_strain: f64,
+    /// Minimum creep rate (1/h) from the ruptures file, if given there.
+    pub min_rate_measured: Option<f64>,
+    /// Minimum creep rate (1/h) estimated from the curve by [`estimate_min_rate`], with the
+    /// rupture time (or, for an interrupted test, the last measured time) as the life.
+    pub min_rate_estimated: f64,
+}
+
+impl Curve {
+    /// The minimum creep rate to compare predictions with: the measured one when the ruptures
+    /// file gives it, else the estimate from the curve.
+    pub fn min_rate(&self) -> f64 {
+        self.min_rate_measured.unwrap_or(self.min_rate_estimated)
+    }
+
+    /// The life used for estimates: the rupture time, or the last measured time of an
+    /// interrupted test.
+    pub fn life_h(&self) -> f64 {
+        self.rupture_time_h
+            .unwrap_or_else(|| self.times_h.last().copied().unwrap_or(0.0))
+    }
+
+    /// A short human label, e.g. `560 °C, 85 MPa` or `560 °C, 85 MPa, specimen S3`.
+    pub fn label(&self) -> String {
+        let mut s = format!("{} °C, {} MPa", self.temperature_c, self.stress_mpa);
+        if let Some(sp) = &self.specimen {
+            s.push_str(&format!(", specimen {sp}"));
+        }
+        s
+    }
+}
+
+/// The curves of one run, with the warnings raised while loading them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Dataset {
+    /// Sorted by temperature, then stress ascending, then specimen.
+    pub curves: Vec<Curve>,
+    /// Non-fatal findings (dropped duplicate points, unused rupture records, …), one line each.
+    pub warnings: Vec<String>,
+}
+
+/// What [`load`] keeps and what it tolerates.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct LoadOptions {
+    /// Keep only curves at this temperature (°C).
+    pub temperature_c: Option<f64>,
+    /// Stresses (MPa) of tests declared interrupted: they need no rupture record.
+    pub interrupted: Vec<f64>,
+}
+
+/// The points of one curve as read from the curves file: grouped, sorted by time (stable)
+/// and without exact duplicates.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RawCurve {
+    /// Test temperature, °C.
+    pub temperature_c: f64,
+    /// Nominal stress, MPa.
+    pub stress_mpa: f64,
+    /// Specimen label, if any.
+    pub specimen: Option<String>,
+    /// Times, h, ascending.
+    pub times_h: Vec<f64>,
+    /// Strains, fraction.
+    pub strains: Vec<f64>,
+    /// 1-based file line of each point.
+    pub lines: Vec<usize>,
+    /// 1-based line of the curve's first row in the file.
+    pub first_line: usize,
+}
+
+/// One row of the ruptures file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RuptureRecord {
+    /// Test temperature, °C.
+    pub temperature_c: f64,
+    /// Nominal stress, MPa.
+    pub stress_mpa: f64,
+    /// Rupture time, h (> 0).
+    pub rupture_time_h: f64,
+    /// Rupture strain (fraction), if given.
+    pub rupture_strain: Option<f64>,
+    /// Minimum creep rate, 1/h, if given.
+    pub min_rate: Option<f64>,
+    /// Specimen label, if the file has the column and the cell is not empty.
+    pub specimen: Option<String>,
+    /// 1-based line in the file.
+    pub line: usize,
+}
+
+/// Read both files, group the curves, match each with its rupture record, estimate minimum
+/// rates and apply the options.
+///
+/// Matching is by temperature and stress (exact values as parsed; `560` and `560.0` are the
+/// same), and by specimen when both the curve and the record have one. A record with a
+/// specimen equal to the curve's wins over a record without specimen; two equally good
+/// records for one curve are an error. Records at a temperature that has no curve at all are
+/// ignored silently (a lifetimes file may hold other temperatures); records at a temperature
+/// with curves that match no curve give a warning. A test declared interrupted gets no
+/// rupture time even if a record exists (the record is then ignored, with a warning).
+pub fn load(curves: &Path, ruptures: &Path, opts: &LoadOptions) -> Result<Dataset> {
+    let (raw, mut warnings) = read_curves(curves)?;
+    let records = read_ruptures(ruptures)?;
+
+    let raw: Vec<RawCurve> = match opts.temperature_c {
+        Some(t) => raw
+            .into_iter()
+            .filter(|c| close(c.temperature_c, t))
+            .collect(),
+        None => raw,
+    };
+    if raw.is_empty() {
+        let msg = match opts.temperature_c {
+            Some(t) => format!("no curves at temperature_C = {t}"),
+            None => "no curves".to_string(),
+        };
+        return Err(Error::data(curves, 0, msg));
+    }
+
+    let mut used = vec![false; records.len()];
+    let mut out = Vec::with_capacity(raw.len());
+    for c in raw {
+        let interrupted = opts.interrupted.iter().any(|&s| close(s, c.stress_mpa));
+        let rec = match_record(&c, &records, ruptures)?;
+        if let Some(i) = rec {
+            used[i] = true;
+        }
+        let rec = match (rec, interrupted) {
+            (Some(i), true) => {
+                warnings.push(format!(
+                    "{}:{}: rupture record ignored: the test at {} °C, {} MPa is declared interrupted",
+                    ruptures.display(),
+                    records[i].line,
+                    c.temperature_c,
+                    c.stress_mpa
+                ));
+                None
+            }
+            (Some(i), false) => Some(&records[i]),
+            (None, true) => None,
+            (None, false) => {
+                return Err(Error::data(
+                    curves,
+                    c.first_line,
+                    format!(
+                    "curve at temperature_C = {}, stress_MPa = {}{} has no rupture record in {} \
+                         (declare the test interrupted in the configuration if it did not rupture)",
+                    c.temperature_c,
+                    c.stress_mpa,
+                    c.specimen
+                        .as_ref()
+                        .map(|s| format!(", specimen = {s}"))
+                        .unwrap_or_default(),
+                    ruptures.display()
+                ),
+                ))
+            }
+        };
+        out.push(finish_curve(c, rec, curves, ruptures, &mut warnings));
+    }
+
+    // Unused records at a temperature that has curves.
+    for (r, u) in records.iter().zip(&used) {
+        if !*u && out.iter().any(|c| c.temperature_c == r.temperature_c) {
+            warnings.push(format!(
+                "{}:{}: rupture record at {} °C, {} MPa{} matches no curve; ignored",
+                ruptures.display(),
+                r.line,
+                r.temperature_c,
+                r.stress_mpa,
+                r.specimen
+                    .as_ref()
+                    .map(|s| format!(", specimen {s}"))
+                    .unwrap_or_default()
+            ));
+        }
+    }
+
+    out.sort_by(|a, b| {
+        a.temperature_c
+            .total_cmp(&b.temperature_c)
+            .then(a.stress_mpa.total_cmp(&b.stress_mpa))
+            .then_with(|| a.specimen.cmp(&b.specimen))
+    });
+    Ok(Dataset {
+        curves: out,
+        warnings,
+    })
+}
+
+/// Relative closeness for values typed by people (temperature filter, interrupted stresses).
+fn close(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-9 * a.abs().max(b.abs()).max(1.0)
+}
+
+/// Index of the record for curve `c`, if any.
+fn match_record(c: &RawCurve, records: &[RuptureRecord], ruptures: &Path) -> Result<Option<usize>> {
+    // rank 2: same specimen; rank 1: one of the two has no specimen.
+    let mut best: Option<(u8, usize)> = None;
+    let mut tie: Option<usize> = None;
+    for (i, r) in records.iter().enumerate() {
+        if r.temperature_c != c.temperature_c || r.stress_mpa != c.stress_mpa {
+            continue;
+        }
+        let rank = match (&c.specimen, &r.specimen) {
+            (Some(a), Some(b)) if a == b => 2,
+            (Some(_), Some(_)) => continue,
+            _ => 1,
+        };
+        match best {
+            Some((br, _)) if br > rank => {}
+            Some((br, _)) if br == rank => tie = Some(i),
+            _ => {
+                best = Some((rank, i));
+                tie = None;
+            }
+        }
+    }
+    if let (Some((_, i)), Some(j)) = (best, tie) {
+        return Err(Error::data(
+            ruptures,
+            records[j].line,
+            format!(
+                "rupture records on lines {} and {} both match the curve at temperature_C = {}, \
+                 stress_MPa = {}{}",
+                records[i].line,
+                records[j].line,
+                c.temperature_c,
+                c.stress_mpa,
+                c.specimen
+                    .as_ref()
+                    .map(|s| format!(", specimen = {s}"))
+                    .unwrap_or_default()
+            ),
+        ));
+    }
+    Ok(best.map(|(_, i)| i))
+}
+
+fn finish_curve(
+    c: RawCurve,
+    rec: Option<&RuptureRecord>,
+    curves: &Path,
+    ruptures: &Path,
+    warnings: &mut Vec<String>,
+) -> Curve {
+    let t_last = *c
+        .times_h
+        .last()
+        .expect("curves have at least MIN_POINTS points");
+    // Largest strain among the points at the largest time.
+    let last_strain = c
+        .times_h
+        .iter()
+        .zip(&c.strains)
+        .filter(|(t, _)| **t == t_last)
+        .map(|(_, e)| *e)
+        .fold(f64::NEG_INFINITY, f64::max);
+    let rupture_time_h = rec.map(|r| r.rupture_time_h);
+    if let Some(r) = rec {
+        if r.rupture_time_h < t_last {
+            warnings.push(format!(
+                "{}:{}: rupture_time_h = {} is before the last measured time {} h of the curve \
+                 at {} °C, {} MPa in {}",
+                ruptures.display(),
+                r.line,
+                r.rupture_time_h,
+                t_last,
+                c.temperature_c,
+                c.stress_mpa,
+                curves.display()
+            ));
+        }
+    }
+    let rupture_strain = rec.and_then(|r| r.rupture_strain).unwrap_or(last_strain);
+    let life = rupture_time_h.unwrap_or(t_last);
+    let min_rate_estimated = estimate_min_rate(&c.times_h, &c.strains, life);
+    if min_rate_estimated.is_nan() || min_rate_estimated <= 0.0 {
+        warnings.push(format!(
+            "{}:{}: could not estimate a positive minimum creep rate for the curve at {} °C, {} MPa \
+             (estimate {})",
+            curves.display(),
+            c.first_line,
+            c.temperature_c,
+            c.stress_mpa,
+            min_rate_estimated
+        ));
+    }
+    Curve {
+        temperature_c: c.temperature_c,
+        stress_mpa: c.stress_mpa,
+        specimen: c.specimen,
+        times_h: c.times_h,
+        strains: c.strains,
+        rupture_time_h,
+        rupture_strain,
+        min_rate_measured: rec.and_then(|r| r.min_rate),
+        min_rate_estimated,
+    }
+}
+
+/// A CSV file opened with its header mapped to column indices.
+struct Table {
+    path: PathBuf,
+    reader: csv::Reader<File>,
+    columns: HashMap<String, usize>,
+}
+
+impl Table {
+    fn open(path: &Path, required: &[&str]) -> Result<Table> {
+        let file = File::open(path).map_err(|e| Error::io(path, e))?;
+        let mut reader = csv::ReaderBuilder::new()
+            .has_headers(true)
+            .flexible(false)
+            .trim(csv::Trim::All)
+            .from_reader(file);
+        let header = reader.headers().map_err(|e| csv_error(path, e))?.clone();
+        let mut columns = HashMap::new();
+        for (i, name) in header.iter().enumerate() {
+            // First occurrence wins; a repeated column name is an error (which one to use?).
+            if columns.insert(name.to_string(), i).is_some() && !name.is_empty() {
+                return Err(Error::data(
+                    path,
+                    1,
+                    format!("column '{name}' appears more than once in the header"),
+                ));
+            }
+        }
+        for name in required {
+            if !columns.contains_key(*name) {
+                return Err(Error::data(
+                    path,
+                    1,
+                    format!(
+                        "missing required column '{name}' (header must contain {})",
+                        required.join(", ")
+                    ),
+                ));
+            }
+        }
+        Ok(Table {
+            path: path.to_path_buf(),
+            reader,
+            columns,
+        })
+    }
+
+    /// Each record with its 1-based line.
+    fn rows(&mut self) -> Result<Vec<(usize, csv::StringRecord)>> {
+        let mut out = Vec::new();
+        for rec in self.reader.records() {
+            let rec = rec.map_err(|e| csv_error(&self.path, e))?;
+            let line = rec.position().map(|p| p.line() as usize).unwrap_or(0);
+            out.push((line, rec));
+        }
+        Ok(out)
+    }
+
+    fn col(&self, name: &str) -> Option<usize> {
+        self.columns.get(name).copied()
+    }
+}
+
+fn csv_error(path: &Path, e: csv::Error) -> Error {
+    let line = e.position().map(|p| p.line() as usize).unwrap_or(0);
+    match e.into_kind() {
+        csv::ErrorKind::Io(io) => Error::io(path, io),
+        csv::ErrorKind::UnequalLengths {
+            expected_len, len, ..
+        } => Error::data(
+            path,
+            line,
+            format!("row has {len} fields, the header has {expected_len}"),
+        ),
+        csv::ErrorKind::Utf8 { err, .. } => Error::data(
+            path,
+            line,
+            format!("invalid UTF-8 in field {}", err.field() + 1),
+        ),
+        other => Error::data(path, line, format!("{other:?}")),
+    }
+}
+
+/// A cell read as a number: parsed, finite and in the allowed range.
+struct Field<'a> {
+    path: &'a Path,
+    line: usize,
+    rec: &'a csv::StringRecord,
+}
+
+#[derive(Clone, Copy, PartialEq)]
+enum Range {
+    Any,
+    NonNegative,
+    Positive,
+}
+
+impl Field<'_> {
+    fn text(&self, col: usize) -> &str {
+        self.rec.get(col).unwrap_or("")
+    }
+
+    /// `Ok(None)` for an empty cell.
+    fn opt_num(&self, col: usize, name: &str, range: Range) -> Result<Option<f64>> {
+        let text = self.text(col);
+        if text.is_empty() {
+            return Ok(None);
+        }
+        let v: f64 = text.parse().map_err(|_| {
+            Error::data(
+                self.path,
+                self.line,
+                format!("column '{name}': cannot parse '{text}' as a number"),
+            )
+        })?;
+        if !v.is_finite() {
+            return Err(Error::data(
+                self.path,
+                self.line,
+                format!("column '{name}': '{text}' is not a finite number"),
+            ));
+        }
+        let bad = match range {
+            Range::Any => None,
+            Range::NonNegative if v < 0.0 => Some("must not be negative"),
+            Range::Positive if v <= 0.0 => Some("must be positive"),
+            _ => None,
+        };
+        if let Some(why) = bad {
+            return Err(Error::data(
+                self.path,
+                self.line,
+                format!("column '{name}': {why} (got {text})"),
+            ));
+        }
+        Ok(Some(v))
+    }
+
+    fn num(&self, col: usize, name: &str, range: Range) -> Result<f64> {
+        self.opt_num(col, name, range)?.ok_or_else(|| {
+            Error::data(
+                self.path,
+                self.line,
+                format!("column '{name}': empty cell, a number is required"),
+            )
+        })
+    }
+
+    fn opt_text(&self, col: Option<usize>) -> Option<String> {
+        col.map(|c| self.text(c))
+            .filter(|s| !s.is_empty())
+            .map(str::to_string)
+    }
+}
+
+/// Read the curves file: rows grouped into curves by (temperature, stress[, specimen]) in
+/// order of first appearance, each sorted by time (stable), exact duplicate points (same
+/// time and same strain) dropped with a warning. Strain is converted to a fraction.
+///
+/// Errors: missing file or column, unparsable or non-finite number, negative time or strain,
+/// non-positive stress, a curve with fewer than [`MIN_POINTS`] points.
+pub fn read_curves(path: &Path) -> Result<(Vec<RawCurve>, Vec<String>)> {
+    let mut table = Table::open(path, CURVE_COLUMNS)?;
+    let ct = table.col("temperature_C").unwrap();
+    let cs = table.col("stress_MPa").unwrap();
+    let cti = table.col("time_h").unwrap();
+    let ce = table.col("strain_pct").unwrap();
+    let csp = table.col("specimen");
+
+    let mut curves: Vec<RawCurve> = Vec::new();
+    let mut index: HashMap<(u64, u64, Option<String>), usize> = HashMap::new();
+    for (line, rec) in table.rows()? {
+        let f = Field {
+            path,
+            line,
+            rec: &rec,
+        };
+        let t = f.num(ct, "temperature_C", Range::Any)?;
+        let s = f.num(cs, "stress_MPa", Range::Positive)?;
+        let time = f.num(cti, "time_h", Range::NonNegative)?;
+        let e = f.num(ce, "strain_pct", Range::NonNegative)?;
+        let sp = f.opt_text(csp);
+        let key = (key_bits(t), key_bits(s), sp.clone());
+        let k = *index.entry(key).or_insert_with(|| {
+            curves.push(RawCurve {
+                temperature_c: t,
+                stress_mpa: s,
+                specimen: sp,
+                times_h: Vec::new(),
+                strains: Vec::new(),
+                lines: Vec::new(),
+                first_line: line,
+            });
+            curves.len() - 1
+        });
+        let c = &mut curves[k];
+        c.times_h.push(time);
+        c.strains.push(e / 100.0);
+        c.lines.push(line);
+    }
+    if curves.is_empty() {
+        return Err(Error::data(path, 0, "no data rows"));
+    }
+
+    let mut warnings = Vec::new();
+    for c in &mut curves {
+        sort_and_dedup(c, path, &mut warnings);
+        if c.times_h.len() < MIN_POINTS {
+            return Err(Error::data(
+                path,
+                c.first_line,
+                format!(
+                    "curve at temperature_C = {}, stress_MPa = {}{} has {} distinct point(s); at least {} are needed",
+                    c.temperature_c,
+                    c.stress_mpa,
+                    c.specimen
+                        .as_ref()
+                        .map(|s| format!(", specimen = {s}"))
+                        .unwrap_or_default(),
+                    c.times_h.len(),
+                    MIN_POINTS
+                ),
+            ));
+        }
+    }
+    Ok((curves, warnings))
+}
+
+/// Bits of a key value with -0.0 folded onto 0.0, so that equal numbers group together.
+fn key_bits(v: f64) -> u64 {
+    if v == 0.0 {
+        0.0f64.to_bits()
+    } else {
+        v.to_bits()
+    }
+}
+
+fn sort_and_dedup(c: &mut RawCurve, path: &Path, warnings: &mut Vec<String>) {
+    let mut idx: Vec<usize> = (0..c.times_h.len()).collect();
+    idx.sort_by(|&a, &b| c.times_h[a].total_cmp(&c.times_h[b])); // stable
+    let (mut t, mut e, mut l) = (Vec::new(), Vec::new(), Vec::new());
+    let mut run_start = 0; // first kept point with the current time
+    for &i in &idx {
+        let (ti, ei, li) = (c.times_h[i], c.strains[i], c.lines[i]);
+        if t.last() != Some(&ti) {
+            run_start = t.len();
+        }
+        if let Some(k) = (run_start..t.len()).find(|&k| e[k] == ei) {
+            warnings.push(format!(
+                "{}:{}: duplicate point (time_h = {}, strain_pct = {}) of line {} dropped",
+                path.display(),
+                li,
+                ti,
+                ei * 100.0,
+                l[k]
+            ));
+            continue;
+        }
+        t.push(ti);
+        e.push(ei);
+        l.push(li);
+    }
+    c.times_h = t;
+    c.strains = e;
+    c.lines = l;
+}
+
+/// Read the ruptures file. Rupture strain (percent) and minimum rate (percent per hour) are
+/// optional columns, and empty cells mean "not given"; both are converted to fractions.
+///
+/// Errors: missing file or column, unparsable or non-finite number, non-positive stress or
+/// rupture time, non-positive rupture strain or minimum rate when given.
+pub fn read_ruptures(path: &Path) -> Result<Vec<RuptureRecord>> {
+    let mut table = Table::open(path, RUPTURE_COLUMNS)?;
+    let ct = table.col("temperature_C").unwrap();
+    let cs = table.col("stress_MPa").unwrap();
+    let ctf = table.col("rupture_time_h").unwrap();
+    let cef = table.col("rupture_strain_pct");
+    let cmr = table.col("min_rate_pct_per_h");
+    let csp = table.col("specimen");
+    let mut out = Vec::new();
+    for (line, rec) in table.rows()? {
+        let f = Field {
+            path,
+            line,
+            rec: &rec,
+        };
+        let rupture_strain = match cef {
+            Some(c) => f.opt_num(c, "rupture_strain_pct", Range::Positive)?,
+            None => None,
+        };
+        let min_rate = match cmr {
+            Some(c) => f.opt_num(c, "min_rate_pct_per_h", Range::Positive)?,
+            None => None,
+        };
+        out.push(RuptureRecord {
+            temperature_c: f.num(ct, "temperature_C", Range::Any)?,
+            stress_mpa: f.num(cs, "stress_MPa", Range::Positive)?,
+            rupture_time_h: f.num(ctf, "rupture_time_h", Range::Positive)?,
+            rupture_strain: rupture_strain.map(|v| v / 100.0),
+            min_rate: min_rate.map(|v| v / 100.0),
+            specimen: f.opt_text(csp),
+            line,
+        });
+    }
+    Ok(out)
+}
+
+/// Estimate the minimum creep rate (1/h when `strains` are fractions) of a digitized curve.
+///
+/// Method: from every start point, a window of consecutive points is grown until it spans at
+/// least [`MIN_RATE_WINDOW_FRACTION`] × `life_h` in time **and** holds at least 3 points; a
+/// least-squares line strain-vs-time is fitted to each such window, and the estimate is the
+/// smallest positive slope over all windows. Fitting over a fixed fraction of the life
+/// averages out digitizing noise (single points that fall back would make point-to-point
+/// slopes zero or negative), while windows short against the life still resolve the
+/// secondary stage. The estimate is biased slightly high on a curved secondary stage (a
+/// window's mean slope exceeds its minimum).
+///
+/// Fallback, when no window qualifies (curve shorter than the window) or no window has a
+/// positive slope: the overall secant slope (last − first point) of the curve; 0 when the
+/// points span no time. A non-finite or non-positive `life_h` is replaced by the time span of
+/// the points. `times_h` must be sorted ascending (as [`Curve::times_h`] is).
+pub fn estimate_min_rate(times_h: &[f64], strains: &[f64], life_h: f64) -> f64 {
+    let n = times_h.len().min(strains.len());
+    if n < 2 {
+        return 0.0;
+    }
+    let (t, e) = (&times_h[..n], &strains[..n]);
+    let span = t[n - 1] - t[0];
+    let life = if life_h.is_finite() && life_h > 0.0 {
+        life_h
+    } else {
+        span
+    };
+    let width = MIN_RATE_WINDOW_FRACTION * life;
+    let mut best = f64::INFINITY;
+    for i in 0..n {
+        let mut j = i + 2;
+        while j < n && t[j] - t[i] < width {
+            j += 1;
+        }
+        if j >= n {
+            break; // later starts cannot qualify either
+        }
+        if let Some(slope) = ls_slope(&t[i..=j], &e[i..=j]) {
+            if slope > 0.0 && slope < best {
+                best = slope;
+            }
+        }
+    }
+    if best.is_finite() {
+        best
+    } else if span > 0.0 {
+        (e[n - 1] - e[0]) / span
+    } else {
+        0.0
+    }
+}
+
+/// Least-squares slope of y against x (centred sums); `None` when x has no spread.
+fn ls_slope(x: &[f64], y: &[f64]) -> Option<f64> {
+    let m = x.len() as f64;
+    let mx = x.iter().sum::<f64>() / m;
+    let my = y.iter().sum::<f64>() / m;
+    let (mut sxx, mut sxy) = (0.0, 0.0);
+    for (a, b) in x.iter().zip(y) {
+        let dx = a - mx;
+        sxx += dx * dx;
+        sxy += dx * (b - my);
+    }
+    (sxx > 0.0).then(|| sxy / sxx)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::io::Write;
+
+    fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+        let p = dir.join(name);
+        let mut f = File::create(&p).unwrap();
+        f.write_all(text.as_bytes()).unwrap();
+        p
+    }
+
+    /// Deterministic pseudo-random numbers in [0, 1) (xorshift), no dependency needed.
+    struct Rng(u64);
+    impl Rng {
+        fn next(&mut self) -> f64 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 7;
+            self.0 ^= self.0 << 17;
+            (self.0 >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
+    #[test]
+    fn min_rate_linear_exact() {
+        let t = [0.0, 3.0, 10.0, 11.0, 40.0, 41.0, 77.0, 100.0];
+        let e: Vec<f64> = t.iter().map(|t| 0.01 + 2.5e-4 * t).collect();
+        let r = estimate_min_rate(&t, &e, 100.0);
+        assert!((r - 2.5e-4).abs() < 1e-12, "{r}");
+    }
+
+    #[test]
+    fn min_rate_three_stage_curve() {
+        // ε = a t + b (1 − e^(−t/τ)) + c t^4 on a life of 10 000 h.
+        let (a, b, tau, c) = (1e-6, 2e-3, 300.0, 2.5e-18);
+        let life = 10_000.0;
+        let eps = |t: f64| a * t + b * (1.0 - (-t / tau).exp()) + c * t.powi(4);
+        let rate = |t: f64| a + b / tau * (-t / tau).exp() + 4.0 * c * t.powi(3);
+        let true_min = (0..=100_000)
+            .map(|k| rate(k as f64 * life / 100_000.0))
+            .fold(f64::INFINITY, f64::min);
+        let mut rng = Rng(0x9e3779b97f4a7c15);
+        let mut t = vec![0.0];
+        while *t.last().unwrap() < life * 0.97 {
+            let dt = 60.0 + 200.0 * rng.next();
+            t.push(t.last().unwrap() + dt);
+        }
+        let e: Vec<f64> = t
+            .iter()
+            .map(|&t| eps(t) + 2e-5 * (rng.next() - 0.5))
+            .collect();
+        let r = estimate_min_rate(&t, &e, life);
+        let rel = (r - true_min) / true_min;
+        assert!(rel.abs() < 0.05, "estimate {r}, true {true_min}, rel {rel}");
+    }
+
+    #[test]
+    fn min_rate_ignores_single_fallback_point() {
+        let mut t: Vec<f64> = (0..30).map(|k| k as f64 * 10.0).collect();
+        let mut e: Vec<f64> = t.iter().map(|t| 1e-3 * t).collect();
+        e[12] -= 0.02; // a point that falls back
+        t[29] = 290.0;
+        let r = estimate_min_rate(&t, &e, 300.0);
+        assert!(r > 0.0 && (r - 1e-3).abs() / 1e-3 < 0.5, "{r}");
+    }
+
+    #[test]
+    fn min_rate_fallback_secant() {
+        // Curve much shorter than the window: secant slope.
+        let t = [0.0, 1.0, 2.0];
+        let e = [0.0, 0.5, 1.0];
+        assert_eq!(estimate_min_rate(&t, &e, 1000.0), 0.5);
+        assert_eq!(estimate_min_rate(&[1.0, 1.0, 1.0], &e, 10.0), 0.0);
+    }
+
+    #[test]
+    fn sorting_duplicates_and_specimens() {
+        let dir = tempfile::tempdir().unwrap();
+        let c = write(
+            dir.path(),
+            "c.csv",
+            "specimen,strain_pct,time_h,stress_MPa,temperature_C,note\n\
+             S1,0,0,100,600,x\n\
+             S1,1,10,100,600,x\n\
+             S1,0.5,5,100,600,x\n\
+             S1,1,10,100,600,x\n\
+             S1,1.2,10,100,600,x\n\
+             S2,0,0,100,600,x\n\
+             S2,1,5,100,600,x\n\
+             S2,2,10,100,600,x\n",
+        );
+        let r = write(
+            dir.path(),
+            "r.csv",
+            "temperature_C,stress_MPa,rupture_time_h,rupture_strain_pct,min_rate_pct_per_h,specimen\n\
+             600,100,20,,,S1\n\
+             600,100,30,3,0.05,S2\n\
+             600,90,30,3,,\n\
+             700,90,30,3,,\n",
+        );
+        let ds = load(&c, &r, &LoadOptions::default()).unwrap();
+        assert_eq!(ds.curves.len(), 2);
+        let s1 = &ds.curves[0];
+        assert_eq!(s1.specimen.as_deref(), Some("S1"));
+        assert_eq!(s1.times_h, vec![0.0, 5.0, 10.0, 10.0]);
+        assert_eq!(s1.strains, vec![0.0, 0.005, 0.01, 0.012]);
+        assert_eq!(s1.rupture_time_h, Some(20.0));
+        assert_eq!(s1.rupture_strain, 0.012);
+        assert_eq!(s1.min_rate_measured, None);
+        let s2 = &ds.curves[1];
+        assert_eq!(s2.rupture_time_h, Some(30.0));
+        assert_eq!(s2.rupture_strain, 0.03);
+        assert_eq!(s2.min_rate_measured, Some(0.0005));
+        // one duplicate, one unused record at 600 °C (the 700 °C one is silent)
+        assert_eq!(ds.warnings.len(), 2, "{:?}", ds.warnings);
+        assert!(ds.warnings[0].contains("c.csv:5: duplicate point"));
+        assert!(ds.warnings[1].contains("r.csv:4:"));
+    }
+
+    #[test]
+    fn interrupted_and_filter() {
+        let dir = tempfile::tempdir().unwrap();
+        let c = write(
+            dir.path(),
+            "c.csv",
+            "temperature_C,stress_MPa,time_h,strain_pct\n\
+             600,100,0,0\n600,100,5,1\n600,100,10,2\n\
+             600,80,0,0\n600,80,5,1\n600,80,10,2\n\
+             650,80,0,0\n650,80,5,1\n650,80,10,2\n",
+        );
+        let r = write(
+            dir.path(),
+            "r.csv",
+            "temperature_C,stress_MPa,rupture_time_h\n600,100,20\n",
+        );
+        let opts = LoadOptions {
+            temperature_c: Some(600.0),
+            interrupted: vec![80.0],
+        };
+        let ds = load(&c, &r, &opts).unwrap();
+        assert_eq!(ds.curves.len(), 2);
+        assert_eq!(ds.curves[0].stress_mpa, 80.0);
+        assert_eq!(ds.curves[0].rupture_time_h, None);
+        assert_eq!(ds.curves[0].rupture_strain, 0.02);
+        assert_eq!(ds.curves[1].stress_mpa, 100.0);
+        let err = load(
+            &c,
+            &r,
+            &LoadOptions {
+                temperature_c: Some(700.0),
+                interrupted: vec![],
+            },
+        )
+        .unwrap_err();
+        assert!(err.to_string().contains("no curves at temperature_C = 700"));
+        let err = load(&c, &r, &LoadOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("c.csv:5:") && err.contains("no rupture record"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn ragged_row_and_empty_cell() {
+        let dir = tempfile::tempdir().unwrap();
+        let c = write(
+            dir.path(),
+            "c.csv",
+            "temperature_C,stress_MPa,time_h,strain_pct\n600,100,0,0\n600,100,5\n",
+        );
+        let e = read_curves(&c).unwrap_err().to_string();
+        assert!(e.contains("c.csv:3:") && e.contains("3 fields"), "{e}");
+        let c = write(
+            dir.path(),
+            "c2.csv",
+            "temperature_C,stress_MPa,time_h,strain_pct\n600,100,0,0\n600,100,,1\n",
+        );
+        let e = read_curves(&c).unwrap_err().to_string();
+        assert!(e.contains("c2.csv:3:") && e.contains("'time_h'"), "{e}");
+        let r = write(
+            dir.path(),
+            "r.csv",
+            "temperature_C,stress_MPa,rupture_time_h\n600,100,0\n",
+        );
+        let e = read_ruptures(&r).unwrap_err().to_string();
+        assert!(
+            e.contains("r.csv:2:") && e.contains("rupture_time_h"),
+            "{e}"
+        );
+    }
+}
