@@ -88,7 +88,12 @@ fn fit(config: &Path, out: Option<PathBuf>) -> Result<()> {
     ensure_dir(&out)?;
     let best = &run.fits[run.best];
     let curves = &data.curves;
-    tables::write_constants(&out.join("constants.csv"), run.model.as_ref(), &run.space, &best.params)?;
+    tables::write_constants(
+        &out.join("constants.csv"),
+        run.model.as_ref(),
+        &run.space,
+        &best.params,
+    )?;
     let rows = tables::error_rows(best, curves);
     tables::write_errors(&out.join("errors.csv"), &rows)?;
     tables::write_fit_curves(&out.join("curves.csv"), best, curves)?;
@@ -122,14 +127,27 @@ fn fit(config: &Path, out: Option<PathBuf>) -> Result<()> {
             .at_bound(j, best.params[j], 1e-6)
             .map(|s| format!("  (at {s} bound)"))
             .unwrap_or_default();
-        println!("  {:>6} = {:<12.6e} {}{}", c.name, best.params[j], c.unit, pin);
+        println!(
+            "  {:>6} = {:<12.6e} {}{}",
+            c.name, best.params[j], c.unit, pin
+        );
     }
     print!("{}", tables::error_table(&rows, run.used_min_rate));
 
     // Plot last: a plotting failure never loses the numeric outputs above.
     let plot_path = out.join("fit.png");
-    let plots = curve_plots(&cfg, &data, &best.params, &run.settings.ode, run.model.as_ref());
-    match plot_creep_curves(&plot_path, &format!("{} — measured (points) and fitted (lines)", cfg.name), &plots) {
+    let plots = curve_plots(
+        &cfg,
+        &data,
+        &best.params,
+        &run.settings.ode,
+        run.model.as_ref(),
+    );
+    match plot_creep_curves(
+        &plot_path,
+        &format!("{} — measured (points) and fitted (lines)", cfg.name),
+        &plots,
+    ) {
         Ok(()) => println!("wrote {}", out.display()),
         Err(e) => {
             eprintln!("warning: plot not written: {e}");
@@ -154,7 +172,10 @@ fn curve_plots(
                 stress_mpa: c.stress_mpa,
                 omega_f: cfg.objective.omega_f,
             };
-            let span = c.rupture_time_h.unwrap_or(0.0).max(*c.times_h.last().unwrap_or(&0.0));
+            let span = c
+                .rupture_time_h
+                .unwrap_or(0.0)
+                .max(*c.times_h.last().unwrap_or(&0.0));
             let o = OdeOptions {
                 t_end: crate::objective::HORIZON_FACTOR * span,
                 ..*ode
@@ -207,7 +228,10 @@ fn simulate(config: &Path, constants: Option<PathBuf>, out: Option<PathBuf>) -> 
             stress_mpa: c.stress_mpa,
             omega_f: cfg.objective.omega_f,
         };
-        let span = c.rupture_time_h.unwrap_or(0.0).max(*c.times_h.last().unwrap_or(&0.0));
+        let span = c
+            .rupture_time_h
+            .unwrap_or(0.0)
+            .max(*c.times_h.last().unwrap_or(&0.0));
         let o = OdeOptions {
             t_end: crate::objective::HORIZON_FACTOR * span,
             ..ode
@@ -233,8 +257,16 @@ fn simulate(config: &Path, constants: Option<PathBuf>, out: Option<PathBuf>) -> 
         rupture_rows.push(vec![
             num(c.temperature_c),
             num(c.stress_mpa),
-            if res.ruptured() { num(res.t_end) } else { String::new() },
-            if res.ruptured() { num(100.0 * res.strain_end) } else { String::new() },
+            if res.ruptured() {
+                num(res.t_end)
+            } else {
+                String::new()
+            },
+            if res.ruptured() {
+                num(100.0 * res.strain_end)
+            } else {
+                String::new()
+            },
             num(100.0 * res.min_rate),
         ]);
         println!(
@@ -249,16 +281,34 @@ fn simulate(config: &Path, constants: Option<PathBuf>, out: Option<PathBuf>) -> 
     }
     write_csv(
         &out.join("curves.csv"),
-        &["temperature_C", "stress_MPa", "time_h", "strain_pct", "H", "Phi", "omega"],
+        &[
+            "temperature_C",
+            "stress_MPa",
+            "time_h",
+            "strain_pct",
+            "H",
+            "Phi",
+            "omega",
+        ],
         &curve_rows,
     )?;
     write_csv(
         &out.join("ruptures.csv"),
-        &["temperature_C", "stress_MPa", "rupture_time_h", "rupture_strain_pct", "min_rate_pct_per_h"],
+        &[
+            "temperature_C",
+            "stress_MPa",
+            "rupture_time_h",
+            "rupture_strain_pct",
+            "min_rate_pct_per_h",
+        ],
         &rupture_rows,
     )?;
     let plots = curve_plots(&cfg, &data, &params, &ode, model.as_ref());
-    if let Err(e) = plot_creep_curves(&out.join("simulate.png"), &format!("{} — simulated", cfg.name), &plots) {
+    if let Err(e) = plot_creep_curves(
+        &out.join("simulate.png"),
+        &format!("{} — simulated", cfg.name),
+        &plots,
+    ) {
         eprintln!("warning: plot not written: {e}");
     }
     println!("wrote {}", out.display());

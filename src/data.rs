@@ -19,6 +19,9 @@ pub const CURVE_COLUMNS: &[&str] = &["temperature_C", "stress_MPa", "time_h", "s
 pub const RUPTURE_COLUMNS: &[&str] = &["temperature_C", "stress_MPa", "rupture_time_h"];
 /// Fraction of the life a window of [`estimate_min_rate`] must span at least.
 pub const MIN_RATE_WINDOW_FRACTION: f64 = 0.15;
+/// Fewest points in a window of [`estimate_min_rate`]: with 3, one digitized point that
+/// falls back (560 °C, 110 MPa at 10239 h) pulls the slope below that of a lower stress.
+pub const MIN_RATE_WINDOW_POINTS: usize = 5;
 /// Fewest points a curve may have (after exact duplicates are dropped).
 pub const MIN_POINTS: usize = 3;
 
@@ -649,7 +652,8 @@ pub fn read_ruptures(path: &Path) -> Result<Vec<RuptureRecord>> {
 /// Estimate the minimum creep rate (1/h when `strains` are fractions) of a digitized curve.
 ///
 /// Method: from every start point, a window of consecutive points is grown until it spans at
-/// least [`MIN_RATE_WINDOW_FRACTION`] × `life_h` in time **and** holds at least 3 points; a
+/// least [`MIN_RATE_WINDOW_FRACTION`] × `life_h` in time **and** holds at least
+/// [`MIN_RATE_WINDOW_POINTS`] points; a
 /// least-squares line strain-vs-time is fitted to each such window, and the estimate is the
 /// smallest positive slope over all windows. Fitting over a fixed fraction of the life
 /// averages out digitizing noise (single points that fall back would make point-to-point
@@ -676,7 +680,7 @@ pub fn estimate_min_rate(times_h: &[f64], strains: &[f64], life_h: f64) -> f64 {
     let width = MIN_RATE_WINDOW_FRACTION * life;
     let mut best = f64::INFINITY;
     for i in 0..n {
-        let mut j = i + 2;
+        let mut j = i + MIN_RATE_WINDOW_POINTS.min(n) - 1;
         while j < n && t[j] - t[i] < width {
             j += 1;
         }

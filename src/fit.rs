@@ -172,12 +172,10 @@ pub fn choose_best(fits: &[LocalFit], use_min_rate: bool) -> Option<usize> {
     if ok.is_empty() {
         return None;
     }
-    let mut crits: Vec<Box<dyn Fn(&LocalFit) -> f64>> = vec![
-        Box::new(|f: &LocalFit| f.eval.norm_residual),
-        Box::new(|f: &LocalFit| f.mean_lifetime_err()),
-    ];
+    type Criterion = fn(&LocalFit) -> f64;
+    let mut crits: Vec<Criterion> = vec![|f| f.eval.norm_residual, |f| f.mean_lifetime_err()];
     if use_min_rate {
-        crits.push(Box::new(|f: &LocalFit| f.mean_min_rate_err()));
+        crits.push(|f| f.mean_min_rate_err());
     }
     let mut score = vec![0.0; ok.len()];
     for crit in &crits {
@@ -236,14 +234,20 @@ pub fn run_fit(cfg: &RunConfig, data: &Dataset) -> Result<FitRun> {
     let space = param_space(cfg);
     let settings = FitSettings::from_config(cfg);
     let curves = &data.curves;
-    let guess = initial_guess(model.as_ref(), curves, &space, settings.omega_f, &settings.ode);
+    let guess = initial_guess(
+        model.as_ref(),
+        curves,
+        &space,
+        settings.omega_f,
+        &settings.ode,
+    );
     let mut starts: Vec<(String, Vec<f64>)> = Vec::new();
     if let Some(s) = cfg.starts_all_given() {
         starts.push(("config".to_string(), s));
     }
     starts.push(("guess".to_string(), guess.params.clone()));
     let ws = weight_candidates(cfg, curves.len())?;
-    let jobs: Vec<(&(String, Vec<f64>), &Vec<f64>)> = starts
+    let jobs: Vec<_> = starts
         .iter()
         .flat_map(|s| ws.iter().map(move |w| (s, w)))
         .collect();
@@ -259,7 +263,11 @@ pub fn run_fit(cfg: &RunConfig, data: &Dataset) -> Result<FitRun> {
             "none of the {} local fits converged (first: {})",
             fits.len(),
             fits.first()
-                .map(|f| f.lm.failure.clone().unwrap_or_else(|| f.lm.termination.as_str().into()))
+                .map(|f| f
+                    .lm
+                    .failure
+                    .clone()
+                    .unwrap_or_else(|| f.lm.termination.as_str().into()))
                 .unwrap_or_default()
         ))
     })?;

@@ -84,7 +84,7 @@ pub fn fit_min_rates(stress: &[f64], rates: &[f64]) -> (f64, f64) {
 /// ln sinh(x) without overflow for large x.
 fn ln_sinh(x: f64) -> f64 {
     if x > 20.0 {
-        x - std::f64::consts::LN_2 + (-2.0 * x).exp_m1().ln_1p()
+        x - std::f64::consts::LN_2 + (-(-2.0 * x).exp()).ln_1p()
     } else {
         x.sinh().ln()
     }
@@ -152,7 +152,9 @@ pub fn initial_guess(
     let primary: Vec<Curve> = curves
         .iter()
         .map(|c| {
-            let t_f = c.rupture_time_h.unwrap_or_else(|| *c.times_h.last().unwrap());
+            let t_f = c
+                .rupture_time_h
+                .unwrap_or_else(|| *c.times_h.last().unwrap());
             let keep = c
                 .times_h
                 .iter()
@@ -168,7 +170,10 @@ pub fn initial_guess(
             }
         })
         .collect();
-    let mut best_u = [space.to_unit_one(IHS, mid(IHS)), space.to_unit_one(IH, mid(IH))];
+    let mut best_u = [
+        space.to_unit_one(IHS, mid(IHS)),
+        space.to_unit_one(IH, mid(IH)),
+    ];
     let prob = PrimaryProblem {
         objective: Objective {
             model,
@@ -210,7 +215,7 @@ pub fn initial_guess(
     // Clamp before the Kc fit so that it runs inside the box.
     let mut clamped = Vec::new();
     let names = model.constants();
-    let mut clamp = |x: &mut Vec<f64>, clamped: &mut Vec<String>| {
+    let clamp = |x: &mut Vec<f64>, clamped: &mut Vec<String>| {
         for j in 0..n {
             let v = x[j].clamp(space.lb[j], space.ub[j]);
             if v != x[j] || !x[j].is_finite() {
@@ -265,7 +270,7 @@ mod tests {
 
     #[test]
     fn min_rate_regression_recovers_sinh_law() {
-        let (a, s) = (3e-10, 0.07);
+        let (a, s): (f64, f64) = (3e-10, 0.07);
         let stress = [85.0, 100.0, 110.0, 130.0];
         let rates: Vec<f64> = stress.iter().map(|sig| a * (s * sig).sinh()).collect();
         let (a2, s2) = fit_min_rates(&stress, &rates);
@@ -275,9 +280,16 @@ mod tests {
 
     #[test]
     fn ln_sinh_is_accurate_for_large_arguments() {
-        for x in [0.5, 5.0, 19.9, 20.1, 50.0, 700.0] {
-            let exact = if x < 300.0 { x.sinh().ln() } else { x - std::f64::consts::LN_2 };
-            assert!((ln_sinh(x) - exact).abs() < 1e-12 * exact.abs().max(1.0), "{x}");
+        for x in [0.5f64, 5.0, 19.9, 20.1, 50.0, 700.0] {
+            let exact = if x < 300.0 {
+                x.sinh().ln()
+            } else {
+                x - std::f64::consts::LN_2
+            };
+            assert!(
+                (ln_sinh(x) - exact).abs() < 1e-12 * exact.abs().max(1.0),
+                "{x}"
+            );
         }
     }
 }

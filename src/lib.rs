@@ -3,11 +3,21 @@
 //!
 //! Units throughout: time in h, stress in MPa, strain as a fraction (files use percent).
 
+// `!(x > 0.0)` is deliberate throughout: it is true for NaN, which must take the failure path.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+// Numerical loops index several arrays with one index; iterator chains would obscure them.
+#![allow(clippy::needless_range_loop)]
+
+pub mod cli;
 pub mod config;
 pub mod data;
 pub mod error;
-pub mod model;
+pub mod fit;
+pub mod guess;
 pub mod lsq;
+pub mod model;
+pub mod objective;
 pub mod ode;
+pub mod report;
 
 pub use error::{Error, Result};

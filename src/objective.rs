@@ -190,7 +190,11 @@ impl Evaluation {
 
 /// Mean of absolute values, skipping NaN (NaN if none).
 pub fn mean_abs(v: &[f64]) -> f64 {
-    let f: Vec<f64> = v.iter().filter(|x| x.is_finite()).map(|x| x.abs()).collect();
+    let f: Vec<f64> = v
+        .iter()
+        .filter(|x| x.is_finite())
+        .map(|x| x.abs())
+        .collect();
     if f.is_empty() {
         f64::NAN
     } else {

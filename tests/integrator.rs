@@ -23,7 +23,12 @@ fn rel(a: f64, b: f64) -> f64 {
     (a - b).abs() / b.abs().max(1e-300)
 }
 
-fn run4(params: &[f64], load: &Load, times: &[f64], o: &OdeOptions) -> (creepfit::ode::SimResult, Vec<[f64; 4]>) {
+fn run4(
+    params: &[f64],
+    load: &Load,
+    times: &[f64],
+    o: &OdeOptions,
+) -> (creepfit::ode::SimResult, Vec<[f64; 4]>) {
     let p = Khd.prepare(params, load);
     let mut states = vec![[0.0; 4]; times.len()];
     let res = integrate(&Khd, &p, times, o, |k, _t, y| states[k] = *y);
@@ -54,7 +59,12 @@ fn damage_is_c_times_strain_and_hardening_is_a_function_of_strain() {
     let (_, states) = run4(&P560, &LOAD, &times, &opts(1e-10));
     let [_, _, hstar, h, _, c] = P560;
     for y in states.iter().skip(1) {
-        assert!(rel(y[3], c * y[0]) < 1e-12, "omega {} vs C eps {}", y[3], c * y[0]);
+        assert!(
+            rel(y[3], c * y[0]) < 1e-12,
+            "omega {} vs C eps {}",
+            y[3],
+            c * y[0]
+        );
         let h_exact = hstar * (1.0 - (-h * y[0] / (LOAD.stress_mpa * hstar)).exp());
         assert!(rel(y[1], h_exact) < 1e-8, "H {} vs {h_exact}", y[1]);
     }
@@ -77,13 +87,24 @@ fn four_state_matches_one_state_reduction() {
         let r1 = integrate(&KhdReduced, &p1, &[], &o, |_, _, _| {});
         assert_eq!(r4.outcome, Outcome::Ruptured);
         assert_eq!(r1.outcome, Outcome::Ruptured);
-        assert!(rel(r4.t_end, r1.t_end) < 1e-8, "{} vs {}", r4.t_end, r1.t_end);
+        assert!(
+            rel(r4.t_end, r1.t_end) < 1e-8,
+            "{} vs {}",
+            r4.t_end,
+            r1.t_end
+        );
         let times = grid(r4.t_end * 0.999, 60);
         let (_, s4) = run4(&params, &load, &times, &o);
         let mut s1 = vec![0.0; times.len()];
         integrate(&KhdReduced, &p1, &times, &o, |k, _, y| s1[k] = y[0]);
         for k in 1..times.len() {
-            assert!(rel(s4[k][0], s1[k]) < 1e-8, "t={} {} vs {}", times[k], s4[k][0], s1[k]);
+            assert!(
+                rel(s4[k][0], s1[k]) < 1e-8,
+                "t={} {} vs {}",
+                times[k],
+                s4[k][0],
+                s1[k]
+            );
         }
     }
 }
@@ -145,7 +166,12 @@ fn rupture_time_matches_tight_reference_at_default_tolerance() {
         };
         let (tight, _) = run4(&P560, &load, &[], &opts(1e-13));
         let (dflt, _) = run4(&P560, &load, &[], &OdeOptions::default());
-        assert!(rel(dflt.t_end, tight.t_end) < 1e-9, "{sigma}: {} vs {}", dflt.t_end, tight.t_end);
+        assert!(
+            rel(dflt.t_end, tight.t_end) < 1e-9,
+            "{sigma}: {} vs {}",
+            dflt.t_end,
+            tight.t_end
+        );
         // The rupture is where ω reaches ω_f: ε = ω_f / C.
         assert!(rel(dflt.strain_end, load.omega_f / P560[5]) < 1e-12);
     }
@@ -174,9 +200,15 @@ fn convergence_order_is_five_on_fixed_steps() {
     }
     let orders: Vec<f64> = errs.windows(2).map(|w| (w[0] / w[1]).log2()).collect();
     for o in &orders {
-        assert!((4.8..6.6).contains(o), "observed orders {orders:?} from {errs:?}");
+        assert!(
+            (4.8..6.6).contains(o),
+            "observed orders {orders:?} from {errs:?}"
+        );
     }
-    assert!(orders.windows(2).all(|w| w[1] < w[0]), "not approaching 5: {orders:?}");
+    assert!(
+        orders.windows(2).all(|w| w[1] < w[0]),
+        "not approaching 5: {orders:?}"
+    );
     assert!(*orders.last().unwrap() < 6.0, "finest order {orders:?}");
 }
 
@@ -205,7 +237,11 @@ fn overshooting_trial_steps_are_rejected_not_nan() {
     };
     let (res, _) = run4(&harsh, &load, &[], &OdeOptions::default());
     assert!(res.t_end.is_finite());
-    assert!(matches!(res.outcome, Outcome::Ruptured), "{:?}", res.outcome);
+    assert!(
+        matches!(res.outcome, Outcome::Ruptured),
+        "{:?}",
+        res.outcome
+    );
 }
 
 #[test]
@@ -216,7 +252,10 @@ fn no_rupture_within_horizon_is_reported() {
     };
     let (res, _) = run4(&P560, &LOAD, &[10.0, 500.0, 2000.0], &o);
     assert_eq!(res.outcome, Outcome::Horizon);
-    assert_eq!(res.n_out, 2, "only the times before the horizon are written");
+    assert_eq!(
+        res.n_out, 2,
+        "only the times before the horizon are written"
+    );
     assert_eq!(res.t_end, 1000.0);
 }
 
@@ -250,6 +289,11 @@ fn dense_output_at_measurement_times_matches_stepping_to_them() {
             ..opts(1e-12)
         };
         let (r, _) = run4(&P560, &LOAD, &[], &o);
-        assert!(rel(dense[k][0], r.strain_end) < 1e-9, "t={t}: {} vs {}", dense[k][0], r.strain_end);
+        assert!(
+            rel(dense[k][0], r.strain_end) < 1e-9,
+            "t={t}: {} vs {}",
+            dense[k][0],
+            r.strain_end
+        );
     }
 }

@@ -46,7 +46,11 @@ fn rosenbrock_unbounded() {
     let (lb, ub) = free(2);
     let rep = minimize(&rosenbrock(), &[-1.2, 1.0], &lb, &ub, &LmOptions::default());
     assert!(rep.termination.converged(), "{:?}", rep.termination);
-    assert!((rep.x[0] - 1.0).abs() < 1e-8 && (rep.x[1] - 1.0).abs() < 1e-8, "{:?}", rep.x);
+    assert!(
+        (rep.x[0] - 1.0).abs() < 1e-8 && (rep.x[1] - 1.0).abs() < 1e-8,
+        "{:?}",
+        rep.x
+    );
     assert!(rep.objective < 1e-20);
 }
 
@@ -80,7 +84,11 @@ fn beale() {
     };
     let (lb, ub) = free(2);
     let rep = minimize(&p, &[1.0, 1.0], &lb, &ub, &LmOptions::default());
-    assert!((rep.x[0] - 3.0).abs() < 1e-8 && (rep.x[1] - 0.5).abs() < 1e-8, "{:?}", rep.x);
+    assert!(
+        (rep.x[0] - 3.0).abs() < 1e-8 && (rep.x[1] - 0.5).abs() < 1e-8,
+        "{:?}",
+        rep.x
+    );
 }
 
 #[test]
@@ -102,7 +110,12 @@ fn powell_singular() {
         ..LmOptions::default()
     };
     let rep = minimize(&p, &[3.0, -1.0, 0.0, 1.0], &lb, &ub, &opts);
-    assert!(rep.objective < 1e-16, "{} {:?}", rep.objective, rep.termination);
+    assert!(
+        rep.objective < 1e-16,
+        "{} {:?}",
+        rep.objective,
+        rep.termination
+    );
     assert!(rep.x.iter().all(|v| v.abs() < 1e-3), "{:?}", rep.x);
 }
 
@@ -124,7 +137,11 @@ fn freudenstein_roth_reaches_one_of_its_known_minima() {
     assert!(global || local, "{} at {:?}", rep.objective, rep.x);
     // From a start in the global basin it must find the zero residual.
     let rep = minimize(&p, &[6.0, 3.0], &lb, &ub, &LmOptions::default());
-    assert!(rep.objective < 1e-16 && (rep.x[1] - 4.0).abs() < 1e-8, "{:?}", rep.x);
+    assert!(
+        rep.objective < 1e-16 && (rep.x[1] - 4.0).abs() < 1e-8,
+        "{:?}",
+        rep.x
+    );
 }
 
 fn box3d() -> Fun<impl Fn(&[f64], &mut [f64]) + Sync> {
@@ -134,7 +151,8 @@ fn box3d() -> Fun<impl Fn(&[f64], &mut [f64]) + Sync> {
         f: |x: &[f64], r: &mut [f64]| {
             for (i, ri) in r.iter_mut().enumerate() {
                 let t = 0.1 * (i + 1) as f64;
-                *ri = (-t * x[0]).exp() - (-t * x[1]).exp() - x[2] * ((-t).exp() - (-10.0 * t).exp());
+                *ri =
+                    (-t * x[0]).exp() - (-t * x[1]).exp() - x[2] * ((-t).exp() - (-10.0 * t).exp());
             }
         },
     }
@@ -143,9 +161,21 @@ fn box3d() -> Fun<impl Fn(&[f64], &mut [f64]) + Sync> {
 #[test]
 fn box_3d() {
     let (lb, ub) = free(3);
-    let rep = minimize(&box3d(), &[0.0, 10.0, 20.0], &lb, &ub, &LmOptions::default());
+    let rep = minimize(
+        &box3d(),
+        &[0.0, 10.0, 20.0],
+        &lb,
+        &ub,
+        &LmOptions::default(),
+    );
     assert!(rep.objective < 1e-20, "{}", rep.objective);
-    assert!((rep.x[0] - 1.0).abs() < 1e-6 && (rep.x[1] - 10.0).abs() < 1e-5 && (rep.x[2] - 1.0).abs() < 1e-6, "{:?}", rep.x);
+    assert!(
+        (rep.x[0] - 1.0).abs() < 1e-6
+            && (rep.x[1] - 10.0).abs() < 1e-5
+            && (rep.x[2] - 1.0).abs() < 1e-6,
+        "{:?}",
+        rep.x
+    );
 }
 
 #[test]
@@ -167,7 +197,11 @@ fn bard() {
     };
     let (lb, ub) = free(3);
     let rep = minimize(&p, &[1.0, 1.0, 1.0], &lb, &ub, &LmOptions::default());
-    assert!((rep.objective - 8.21487730657e-3).abs() < 1e-12, "{}", rep.objective);
+    assert!(
+        (rep.objective - 8.21487730657e-3).abs() < 1e-12,
+        "{}",
+        rep.objective
+    );
 }
 
 /// Wraps a problem and records every point at which residuals were requested.
@@ -204,7 +238,10 @@ fn no_iterate_or_finite_difference_step_leaves_the_box() {
     assert!(seen.len() > 10);
     for x in &seen {
         for j in 0..3 {
-            assert!(x[j] >= lb[j] && x[j] <= ub[j], "evaluated outside the box: {x:?}");
+            assert!(
+                x[j] >= lb[j] && x[j] <= ub[j],
+                "evaluated outside the box: {x:?}"
+            );
         }
     }
     assert!(rep.termination.converged(), "{:?}", rep.termination);
@@ -230,7 +267,10 @@ fn no_iterate_or_finite_difference_step_leaves_the_box() {
             active += 1;
         } else {
             // Forward differences (step 1e-6) limit the gradient's accuracy to about 1e-7.
-            assert!(g.abs() < 1e-6, "free variable {j} with gradient {g}: {rep:?}");
+            assert!(
+                g.abs() < 1e-6,
+                "free variable {j} with gradient {g}: {rep:?}"
+            );
         }
     }
     assert!(active >= 1, "the box should bind: {:?}", rep.x);

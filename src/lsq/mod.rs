@@ -183,7 +183,9 @@ pub fn fd_jacobian<P: LeastSquaresProblem + ?Sized>(
         xp[j] = x[j];
         if !ok {
             return Err(last_err.unwrap_or_else(|| {
-                EvalFailure(format!("no room for a finite-difference step in parameter {j}"))
+                EvalFailure(format!(
+                    "no room for a finite-difference step in parameter {j}"
+                ))
             }));
         }
     }
@@ -201,7 +203,10 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
     let n = problem.n_params();
     let m = problem.n_residuals();
     assert_eq!(x0.len(), n, "start has the wrong length");
-    assert!(lb.len() == n && ub.len() == n, "bounds have the wrong length");
+    assert!(
+        lb.len() == n && ub.len() == n,
+        "bounds have the wrong length"
+    );
     let mut x: Vec<f64> = (0..n).map(|j| x0[j].clamp(lb[j], ub[j])).collect();
     let mut r = vec![0.0; m];
     let mut evaluations = 1;
@@ -236,7 +241,16 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
     for iter in 1..=opts.max_iterations {
         let jac_result = match problem.jacobian(&x, &r, &mut jac) {
             Some(res) => res,
-            None => fd_jacobian(problem, &x, &r, lb, ub, opts.fd_step, &mut jac, &mut evaluations),
+            None => fd_jacobian(
+                problem,
+                &x,
+                &r,
+                lb,
+                ub,
+                opts.fd_step,
+                &mut jac,
+                &mut evaluations,
+            ),
         };
         if let Err(e) = jac_result {
             return fail(x, iter, evaluations, e, f, r);
@@ -257,7 +271,10 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
         if pg <= opts.gtol * f.max(1.0) || free.is_empty() {
             return done(x, f, r, iter, evaluations, Termination::ConvergedGradient);
         }
-        let diag_max = (0..n).map(|j| jtj[(j, j)]).fold(0.0, f64::max).max(f64::MIN_POSITIVE);
+        let diag_max = (0..n)
+            .map(|j| jtj[(j, j)])
+            .fold(0.0, f64::max)
+            .max(f64::MIN_POSITIVE);
         if lambda < 0.0 {
             lambda = opts.lambda0 * diag_max;
         }
@@ -301,9 +318,17 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
             let predicted = f - pred_f;
             evaluations += 1;
             let trial_ok = problem.residuals(&x_trial, &mut r_trial).is_ok();
-            let f_trial = if trial_ok { sumsq(&r_trial) } else { f64::INFINITY };
+            let f_trial = if trial_ok {
+                sumsq(&r_trial)
+            } else {
+                f64::INFINITY
+            };
             let actual = f - f_trial;
-            let rho = if predicted > 0.0 { actual / predicted } else { -1.0 };
+            let rho = if predicted > 0.0 {
+                actual / predicted
+            } else {
+                -1.0
+            };
             if trial_ok && f_trial.is_finite() && actual > 0.0 && rho > 1e-4 {
                 let f_old = f;
                 std::mem::swap(&mut x, &mut x_trial);

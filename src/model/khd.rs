@@ -110,7 +110,12 @@ fn prepare(params: &[f64], load: &Load) -> KhdPrepared {
 
 /// Strain rate A·sinh(Bσ(1−H)/((1−Φ)(1−ω))), or `None` outside the model's domain.
 #[inline(always)]
-pub fn khd_rate(p: &KhdPrepared, hard: f64, one_minus_phi: f64, one_minus_omega: f64) -> Option<f64> {
+pub fn khd_rate(
+    p: &KhdPrepared,
+    hard: f64,
+    one_minus_phi: f64,
+    one_minus_omega: f64,
+) -> Option<f64> {
     let denom = one_minus_phi * one_minus_omega;
     if !(denom > 0.0) {
         return None;

@@ -179,6 +179,9 @@ pub fn registry(name: &str) -> Result<Box<dyn Model>> {
             KhdReduced,
             khd::constants(),
         ))),
-        _ => Err(Error::UnknownModel(name.to_string(), MODEL_NAMES.join(", "))),
+        _ => Err(Error::UnknownModel(
+            name.to_string(),
+            MODEL_NAMES.join(", "),
+        )),
     }
 }

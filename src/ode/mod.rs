@@ -176,8 +176,8 @@ impl<const N: usize> Dense<N> {
             r[1][i] = ydiff;
             r[2][i] = bspl;
             r[3][i] = ydiff - h * k7[i] - bspl;
-            r[4][i] = h
-                * (D1 * k1[i] + D3 * k3[i] + D4 * k4[i] + D5 * k5[i] + D6 * k6[i] + D7 * k7[i]);
+            r[4][i] =
+                h * (D1 * k1[i] + D3 * k3[i] + D4 * k4[i] + D5 * k5[i] + D6 * k6[i] + D7 * k7[i]);
         }
         Dense { r }
     }
@@ -311,10 +311,26 @@ where
 
     loop {
         if stats.steps + stats.rejected >= opts.max_steps {
-            return result(Outcome::MaxSteps, t, &y, model.strain_rate(p, &y, &k1), &mr, next, stats);
+            return result(
+                Outcome::MaxSteps,
+                t,
+                &y,
+                model.strain_rate(p, &y, &k1),
+                &mr,
+                next,
+                stats,
+            );
         }
         if h.abs() <= 16.0 * f64::EPSILON * t.abs().max(1.0) {
-            return result(Outcome::StepUnderflow, t, &y, model.strain_rate(p, &y, &k1), &mr, next, stats);
+            return result(
+                Outcome::StepUnderflow,
+                t,
+                &y,
+                model.strain_rate(p, &y, &k1),
+                &mr,
+                next,
+                stats,
+            );
         }
         if t + h > t_end {
             h = t_end - t;
@@ -340,7 +356,8 @@ where
         stage!(k6, 1.0, A61, k1, A62, k2, A63, k3, A64, k4, A65, k5);
         if ok {
             for i in 0..N {
-                y1[i] = y[i] + h * (A71 * k1[i] + A73 * k3[i] + A74 * k4[i] + A75 * k5[i] + A76 * k6[i]);
+                y1[i] = y[i]
+                    + h * (A71 * k1[i] + A73 * k3[i] + A74 * k4[i] + A75 * k5[i] + A76 * k6[i]);
             }
             stats.evals += 1;
             ok = model.rhs(p, t + h, &y1, &mut k7) && y1.iter().all(|v| v.is_finite());

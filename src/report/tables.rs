@@ -25,7 +25,8 @@ pub fn write_text(path: &Path, text: &str) -> Result<()> {
 /// Write a CSV file from a header and rows of already formatted cells.
 pub fn write_csv(path: &Path, header: &[&str], rows: &[Vec<String>]) -> Result<()> {
     let mut w = csv::Writer::from_path(path).map_err(|e| Error::io(path, csv_io(e)))?;
-    w.write_record(header).map_err(|e| Error::io(path, csv_io(e)))?;
+    w.write_record(header)
+        .map_err(|e| Error::io(path, csv_io(e)))?;
     for r in rows {
         w.write_record(r).map_err(|e| Error::io(path, csv_io(e)))?;
     }
@@ -55,7 +56,12 @@ pub fn jnum(v: f64) -> Value {
 }
 
 /// `constants.csv`: name,value,unit,lb,ub
-pub fn write_constants(path: &Path, model: &dyn Model, space: &ParamSpace, params: &[f64]) -> Result<()> {
+pub fn write_constants(
+    path: &Path,
+    model: &dyn Model,
+    space: &ParamSpace,
+    params: &[f64],
+) -> Result<()> {
     let rows: Vec<Vec<String>> = model
         .constants()
         .iter()
@@ -105,10 +111,18 @@ pub fn read_constants(path: &Path, model: &dyn Model) -> Result<Vec<f64>> {
         let name = rec.get(ci).unwrap_or("").trim();
         let text = rec.get(cv).unwrap_or("").trim();
         let v: f64 = text.parse().map_err(|_| {
-            Error::data(path, line, format!("field 'value': cannot parse '{text}' as a number"))
+            Error::data(
+                path,
+                line,
+                format!("field 'value': cannot parse '{text}' as a number"),
+            )
         })?;
         if !v.is_finite() {
-            return Err(Error::data(path, line, format!("field 'value': '{text}' is not finite")));
+            return Err(Error::data(
+                path,
+                line,
+                format!("field 'value': '{text}' is not finite"),
+            ));
         }
         match specs.iter().position(|s| s.name == name) {
             Some(j) => values[j] = v,
@@ -116,13 +130,20 @@ pub fn read_constants(path: &Path, model: &dyn Model) -> Result<Vec<f64>> {
                 return Err(Error::data(
                     path,
                     line,
-                    format!("field 'name': '{name}' is not a constant of model {}", model.name()),
+                    format!(
+                        "field 'name': '{name}' is not a constant of model {}",
+                        model.name()
+                    ),
                 ))
             }
         }
     }
     if let Some(j) = values.iter().position(|v| v.is_nan()) {
-        return Err(Error::data(path, 0, format!("constant '{}' is missing", specs[j].name)));
+        return Err(Error::data(
+            path,
+            0,
+            format!("constant '{}' is missing", specs[j].name),
+        ));
     }
     Ok(values)
 }
@@ -217,7 +238,13 @@ pub fn write_fit_curves(path: &Path, fit: &LocalFit, curves: &[Curve]) -> Result
     }
     write_csv(
         path,
-        &["temperature_C", "stress_MPa", "time_h", "strain_exp_pct", "strain_pred_pct"],
+        &[
+            "temperature_C",
+            "stress_MPa",
+            "time_h",
+            "strain_exp_pct",
+            "strain_pred_pct",
+        ],
         &rows,
     )
 }
@@ -225,11 +252,24 @@ pub fn write_fit_curves(path: &Path, fit: &LocalFit, curves: &[Curve]) -> Result
 /// The paper-style table (Tables 6/7): lifetime and minimum-rate errors per stress.
 pub fn error_table(rows: &[ErrorRow], min_rate_measured: bool) -> String {
     let mut s = String::new();
-    let rate_note = if min_rate_measured { "measured" } else { "estimated from the curve" };
+    let rate_note = if min_rate_measured {
+        "measured"
+    } else {
+        "estimated from the curve"
+    };
     let _ = writeln!(
         s,
         "{:>6} {:>7} | {:>10} {:>10} {:>8} | {:>11} {:>11} {:>8} | {:>7} {:>7}",
-        "T(C)", "MPa", "t_f exp h", "t_f pred h", "err %", "rate exp", "rate pred", "err %", "e_f exp", "e_f pred"
+        "T(C)",
+        "MPa",
+        "t_f exp h",
+        "t_f pred h",
+        "err %",
+        "rate exp",
+        "rate pred",
+        "err %",
+        "e_f exp",
+        "e_f pred"
     );
     for r in rows {
         let _ = writeln!(
@@ -248,7 +288,12 @@ pub fn error_table(rows: &[ErrorRow], min_rate_measured: bool) -> String {
         );
     }
     let mean = |f: &dyn Fn(&ErrorRow) -> f64| {
-        let v: Vec<f64> = rows.iter().map(f).filter(|x| x.is_finite()).map(f64::abs).collect();
+        let v: Vec<f64> = rows
+            .iter()
+            .map(f)
+            .filter(|x| x.is_finite())
+            .map(f64::abs)
+            .collect();
         v.iter().sum::<f64>() / v.len().max(1) as f64
     };
     let _ = writeln!(

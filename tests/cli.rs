@@ -1,0 +1,324 @@
+//! The binary: the paper's calibration on the bundled data, `simulate`, and bad input giving
+//! a one-line `error:` and a non-zero exit status (never a panic).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use tempfile::TempDir;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_creepfit"))
+}
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn run(args: &[&str]) -> Output {
+    bin()
+        .args(args)
+        .current_dir(root())
+        .output()
+        .expect("binary runs")
+}
+
+fn read_csv(path: &Path) -> Vec<std::collections::HashMap<String, String>> {
+    let mut rdr = csv::Reader::from_path(path).unwrap();
+    let h = rdr.headers().unwrap().clone();
+    rdr.records()
+        .map(|r| {
+            let r = r.unwrap();
+            h.iter()
+                .zip(r.iter())
+                .map(|(a, b)| (a.to_string(), b.to_string()))
+                .collect()
+        })
+        .collect()
+}
+
+fn f(row: &std::collections::HashMap<String, String>, k: &str) -> f64 {
+    row[k]
+        .parse()
+        .unwrap_or_else(|_| panic!("{k} = {:?}", row[k]))
+}
+
+/// `fit` on the bundled data reaches the paper's average lifetime error (Tables 6 and 7).
+fn fit_reproduces_paper(config: &str, paper_mean_lifetime_err: f64) {
+    let out = TempDir::new().unwrap();
+    let o = run(&["fit", config, "--out", out.path().to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for file in [
+        "constants.csv",
+        "errors.csv",
+        "curves.csv",
+        "summary.json",
+        "fit.png",
+    ] {
+        assert!(out.path().join(file).is_file(), "{file} missing");
+    }
+    let errors = read_csv(&out.path().join("errors.csv"));
+    assert_eq!(errors.len(), 3);
+    let mean = errors
+        .iter()
+        .map(|r| f(r, "lifetime_err_pct").abs())
+        .sum::<f64>()
+        / 3.0;
+    assert!(
+        mean <= paper_mean_lifetime_err,
+        "mean lifetime error {mean} %"
+    );
+    for r in &errors {
+        let (exp, pred) = (f(r, "rupture_time_exp_h"), f(r, "rupture_time_pred_h"));
+        assert!((100.0 * (pred - exp) / exp - f(r, "lifetime_err_pct")).abs() < 1e-6);
+    }
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.path().join("summary.json")).unwrap())
+            .unwrap();
+    for key in [
+        "objective",
+        "norm_residual",
+        "w",
+        "iterations",
+        "evaluations",
+        "wall_s",
+        "termination",
+    ] {
+        assert!(!summary[key].is_null(), "summary lacks {key}");
+    }
+    assert!(
+        summary["norm_residual"].as_f64().unwrap()
+            <= summary["objective"].as_f64().unwrap() + 1e-12
+    );
+    let curves = read_csv(&out.path().join("curves.csv"));
+    let n_points: usize = curves.len();
+    let sumsq: f64 = {
+        // The normalised residual recomputed from curves.csv and the rupture strains.
+        let ef: std::collections::HashMap<String, f64> = errors
+            .iter()
+            .map(|r| (r["stress_MPa"].clone(), f(r, "rupture_strain_exp_pct")))
+            .collect();
+        curves
+            .iter()
+            .map(|r| {
+                ((f(r, "strain_pred_pct") - f(r, "strain_exp_pct")) / ef[&r["stress_MPa"]]).powi(2)
+            })
+            .sum()
+    };
+    assert!(n_points > 100);
+    let nr = summary["norm_residual"].as_f64().unwrap();
+    assert!((sumsq - nr).abs() < 1e-9 * nr.max(1.0), "{sumsq} vs {nr}");
+    let constants = read_csv(&out.path().join("constants.csv"));
+    assert_eq!(
+        constants
+            .iter()
+            .map(|r| r["name"].as_str())
+            .collect::<Vec<_>>(),
+        ["A", "B", "Hstar", "h", "Kc", "C"]
+    );
+    for r in &constants {
+        assert!(f(r, "value") >= f(r, "lb") && f(r, "value") <= f(r, "ub"));
+    }
+
+    // simulate with the fitted constants reproduces the fit's rupture times.
+    let sim = TempDir::new().unwrap();
+    let o = run(&[
+        "simulate",
+        config,
+        "--constants",
+        out.path().join("constants.csv").to_str().unwrap(),
+        "--out",
+        sim.path().to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let ruptures = read_csv(&sim.path().join("ruptures.csv"));
+    for (a, b) in ruptures.iter().zip(&errors) {
+        let (t1, t2) = (f(a, "rupture_time_h"), f(b, "rupture_time_pred_h"));
+        assert!((t1 - t2).abs() < 1e-9 * t2, "{t1} vs {t2}");
+    }
+    let dense = read_csv(&sim.path().join("curves.csv"));
+    assert!(dense.len() > 300);
+    for r in &dense {
+        // ω = Cε along the whole simulated curve
+        let c = f(&constants[5], "value");
+        let (eps, omega) = (f(r, "strain_pct") / 100.0, f(r, "omega"));
+        assert!((omega - c * eps).abs() < 1e-9, "{omega} vs {}", c * eps);
+    }
+}
+
+#[test]
+fn fit_560c_reaches_paper_lifetime_error() {
+    fit_reproduces_paper("configs/560C.toml", 2.45);
+}
+
+#[test]
+fn fit_590c_reaches_paper_lifetime_error() {
+    fit_reproduces_paper("configs/590C.toml", 1.59);
+}
+
+// ---- bad input through the binary --------------------------------------------------------
+
+const CURVES: &str = "temperature_C,stress_MPa,time_h,strain_pct\n\
+                      600,100,0,0\n600,100,10,1\n600,100,20,2\n600,100,24,4\n\
+                      600,120,0,0\n600,120,5,1\n600,120,10,2\n600,120,12,4\n";
+const RUPTURES: &str = "temperature_C,stress_MPa,rupture_time_h\n600,100,25\n600,120,12.5\n";
+const CONFIG: &str = "name = \"bad\"\ncurves = \"curves.csv\"\nruptures = \"ruptures.csv\"\n";
+
+/// Run `fit` on a folder with the given files; return stderr, asserting the contract.
+fn fails(files: &[(&str, &str)], config_extra: &str) -> String {
+    let dir = TempDir::new().unwrap();
+    std::fs::write(dir.path().join("curves.csv"), CURVES).unwrap();
+    std::fs::write(dir.path().join("ruptures.csv"), RUPTURES).unwrap();
+    std::fs::write(
+        dir.path().join("run.toml"),
+        format!("{CONFIG}{config_extra}"),
+    )
+    .unwrap();
+    for (name, text) in files {
+        std::fs::write(dir.path().join(name), text).unwrap();
+    }
+    let o = bin()
+        .args(["fit", "run.toml", "--out", "out"])
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr).to_string();
+    assert!(!o.status.success(), "should fail: {err}");
+    assert_ne!(o.status.code(), Some(101), "panicked: {err}");
+    assert!(!err.contains("panicked"), "panicked: {err}");
+    let lines: Vec<&str> = err.lines().filter(|l| !l.starts_with("warning:")).collect();
+    assert_eq!(lines.len(), 1, "not one line: {err}");
+    assert!(lines[0].starts_with("error: "), "{err}");
+    lines[0].to_string()
+}
+
+fn has(e: &str, parts: &[&str]) {
+    for p in parts {
+        assert!(e.contains(p), "{e:?} lacks {p:?}");
+    }
+}
+
+#[test]
+fn missing_config_file() {
+    let o = run(&["fit", "configs/does_not_exist.toml"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert_eq!(err.lines().count(), 1, "{err}");
+    has(&err, &["error: ", "does_not_exist.toml"]);
+}
+
+#[test]
+fn missing_data_file() {
+    let e = fails(
+        &[(
+            "run.toml",
+            "curves = \"nope.csv\"\nruptures = \"ruptures.csv\"\n",
+        )],
+        "",
+    );
+    has(&e, &["nope.csv"]);
+}
+
+#[test]
+fn missing_column() {
+    let e = fails(
+        &[("curves.csv", "temperature_C,stress_MPa,time_h\n600,100,0\n")],
+        "",
+    );
+    has(&e, &["curves.csv", "strain_pct"]);
+}
+
+#[test]
+fn unparsable_number_names_file_and_line() {
+    let bad = CURVES.replace("600,100,10,1\n", "600,100,1o,1\n");
+    let e = fails(&[("curves.csv", &bad)], "");
+    has(&e, &["curves.csv:3", "time_h", "1o"]);
+}
+
+#[test]
+fn nan_strain() {
+    let bad = CURVES.replace("600,100,10,1\n", "600,100,10,NaN\n");
+    let e = fails(&[("curves.csv", &bad)], "");
+    has(&e, &["curves.csv:3", "strain_pct"]);
+}
+
+#[test]
+fn negative_strain_and_time() {
+    let bad = CURVES.replace("600,100,10,1\n", "600,100,10,-1\n");
+    has(
+        &fails(&[("curves.csv", &bad)], ""),
+        &["curves.csv:3", "strain_pct"],
+    );
+    let bad = CURVES.replace("600,100,10,1\n", "600,100,-10,1\n");
+    has(
+        &fails(&[("curves.csv", &bad)], ""),
+        &["curves.csv:3", "time_h"],
+    );
+}
+
+#[test]
+fn curve_with_fewer_than_three_points() {
+    let bad = "temperature_C,stress_MPa,time_h,strain_pct\n600,100,0,0\n600,100,10,1\n\
+               600,120,0,0\n600,120,5,1\n600,120,10,2\n";
+    let e = fails(&[("curves.csv", bad)], "");
+    has(&e, &["curves.csv", "100"]);
+}
+
+#[test]
+fn curve_without_rupture_record() {
+    let e = fails(
+        &[(
+            "ruptures.csv",
+            "temperature_C,stress_MPa,rupture_time_h\n600,100,25\n",
+        )],
+        "",
+    );
+    has(&e, &["120"]);
+}
+
+#[test]
+fn lower_bound_not_below_upper() {
+    let e = fails(&[], "[constants]\nB = { lb = 0.2, ub = 0.1 }\n");
+    has(&e, &["run.toml", "B"]);
+}
+
+#[test]
+fn start_outside_bounds() {
+    let e = fails(
+        &[],
+        "[constants]\nB = { lb = 0.1, ub = 0.2, start = 0.3 }\n",
+    );
+    has(&e, &["run.toml", "B", "start"]);
+}
+
+#[test]
+fn unknown_config_key() {
+    let e = fails(&[], "colour = \"red\"\n");
+    has(&e, &["run.toml", "colour"]);
+    let e = fails(&[], "[objective]\nweights = [1]\n");
+    has(&e, &["run.toml", "weights"]);
+}
+
+#[test]
+fn unknown_model_name() {
+    let e = fails(&[], "model = \"norton\"\n");
+    has(&e, &["run.toml", "norton"]);
+}
+
+#[test]
+fn bad_constants_file_for_simulate() {
+    let dir = TempDir::new().unwrap();
+    let c = dir.path().join("constants.csv");
+    std::fs::write(&c, "name,value\nA,1e-9\nB,zero\n").unwrap();
+    let o = run(&[
+        "simulate",
+        "configs/560C.toml",
+        "--constants",
+        c.to_str().unwrap(),
+        "--out",
+        dir.path().to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert_eq!(err.lines().count(), 1, "{err}");
+    has(&err, &["constants.csv:3", "zero"]);
+}
