@@ -8,7 +8,7 @@ use clap::{Parser, Subcommand};
 use crate::config::RunConfig;
 use crate::data::{self, Dataset};
 use crate::error::Result;
-use crate::fit::{param_space, run_fit};
+use crate::fit::{param_space, run_fit_with, FitRequest, StartChoice};
 use crate::model::{registry, Load};
 use crate::ode::OdeOptions;
 use crate::report::plot::{plot_creep_curves, CurvePlot};
@@ -32,6 +32,12 @@ pub enum Command {
         /// Output folder (default results/<name>/fit/).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Start points: the configuration's, the computed initial guess, or both.
+        #[arg(long, value_enum, default_value_t = StartChoice::Both)]
+        start: StartChoice,
+        /// One lifetime weight w for every curve instead of the configured w_grid/w_sets.
+        #[arg(long)]
+        w: Option<f64>,
     },
     /// Simulate the configured tests with given constants (dense curves, ruptures).
     Simulate {
@@ -59,7 +65,12 @@ pub fn load(config: &Path) -> Result<(RunConfig, Dataset)> {
 /// Run a parsed command line.
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Fit { config, out } => fit(&config, out),
+        Command::Fit {
+            config,
+            out,
+            start,
+            w,
+        } => fit(&config, out, &FitRequest { starts: start, w }),
         Command::Simulate {
             config,
             constants,
@@ -81,9 +92,9 @@ fn dense_grid(t_end: f64, n: usize) -> Vec<f64> {
     g
 }
 
-fn fit(config: &Path, out: Option<PathBuf>) -> Result<()> {
+fn fit(config: &Path, out: Option<PathBuf>, req: &FitRequest) -> Result<()> {
     let (cfg, data) = load(config)?;
-    let run = run_fit(&cfg, &data)?;
+    let run = run_fit_with(&cfg, &data, req)?;
     let out = out.unwrap_or_else(|| default_out(&cfg.name, "fit"));
     ensure_dir(&out)?;
     let best = &run.fits[run.best];

@@ -17,7 +17,7 @@ use crate::config::{LifetimeTerm, RunConfig};
 use crate::data::{Curve, Dataset};
 use crate::error::{Error, Result};
 use crate::guess::{initial_guess, Guess};
-use crate::lsq::{minimize, LmOptions, LmReport};
+use crate::lsq::{minimize, LmOptions, LmReport, Termination};
 use crate::model::{registry, Model};
 use crate::objective::{mean_abs, CreepProblem, Evaluation, Objective, ParamSpace};
 use crate::ode::OdeOptions;
@@ -166,7 +166,7 @@ pub fn weight_candidates(cfg: &RunConfig, n_curves: usize) -> Result<Vec<Vec<f64
     Ok(out)
 }
 
-/// Index of the best fit by the documented rule (module docs); `None` if none converged.
+/// Index of the best fit by the documented rule (module docs); `None` if no fit is usable.
 pub fn choose_best(fits: &[LocalFit], use_min_rate: bool) -> Option<usize> {
     let ok: Vec<usize> = (0..fits.len()).filter(|&i| fits[i].ok()).collect();
     if ok.is_empty() {
@@ -225,10 +225,36 @@ pub struct FitRun {
     pub wall_s: f64,
 }
 
+/// Which start points `fit` uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum StartChoice {
+    /// The configuration's start values (if all are given) and the computed initial guess.
+    #[default]
+    Both,
+    /// Only the configuration's start values (an error if one is missing).
+    Config,
+    /// Only the computed initial guess.
+    Guess,
+}
+
+/// What `fit` runs beyond the configuration.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct FitRequest {
+    /// Start points.
+    pub starts: StartChoice,
+    /// One w for every curve, replacing the configuration's `w_grid` and `w_sets`.
+    pub w: Option<f64>,
+}
+
 /// The paper's procedure on a configuration and its data: the initial guess, and — from the
 /// configured start (if every constant has one) and from the guess — a local fit for every
 /// weight vector; the best by [`choose_best`].
 pub fn run_fit(cfg: &RunConfig, data: &Dataset) -> Result<FitRun> {
+    run_fit_with(cfg, data, &FitRequest::default())
+}
+
+/// [`run_fit`] with a choice of starts and weights.
+pub fn run_fit_with(cfg: &RunConfig, data: &Dataset, req: &FitRequest) -> Result<FitRun> {
     let t0 = Instant::now();
     let model = registry(&cfg.model)?;
     let space = param_space(cfg);
@@ -242,11 +268,30 @@ pub fn run_fit(cfg: &RunConfig, data: &Dataset) -> Result<FitRun> {
         &settings.ode,
     );
     let mut starts: Vec<(String, Vec<f64>)> = Vec::new();
-    if let Some(s) = cfg.starts_all_given() {
-        starts.push(("config".to_string(), s));
+    if req.starts != StartChoice::Guess {
+        match cfg.starts_all_given() {
+            Some(s) => starts.push(("config".to_string(), s)),
+            None if req.starts == StartChoice::Config => {
+                return Err(Error::config(
+                    &cfg.path,
+                    "--start config needs a start value for every constant",
+                ))
+            }
+            None => {}
+        }
     }
-    starts.push(("guess".to_string(), guess.params.clone()));
-    let ws = weight_candidates(cfg, curves.len())?;
+    if req.starts != StartChoice::Config {
+        starts.push(("guess".to_string(), guess.params.clone()));
+    }
+    let ws = match req.w {
+        Some(w) if w >= 0.0 && w.is_finite() => vec![vec![w; curves.len()]],
+        Some(w) => {
+            return Err(Error::Invalid(format!(
+                "--w must be a finite weight >= 0, not {w}"
+            )))
+        }
+        None => weight_candidates(cfg, curves.len())?,
+    };
     let jobs: Vec<_> = starts
         .iter()
         .flat_map(|s| ws.iter().map(move |w| (s, w)))
@@ -260,7 +305,7 @@ pub fn run_fit(cfg: &RunConfig, data: &Dataset) -> Result<FitRun> {
     let used_min_rate = curves.iter().all(|c| c.min_rate_measured.is_some());
     let best = choose_best(&fits, used_min_rate).ok_or_else(|| {
         Error::Numerical(format!(
-            "none of the {} local fits converged (first: {})",
+            "none of the {} local fits reached an evaluable point (first: {})",
             fits.len(),
             fits.first()
                 .map(|f| f
