@@ -86,9 +86,11 @@ impl LocalFit {
     pub fn mean_min_rate_err(&self) -> f64 {
         mean_abs(&self.min_rate_err_pct)
     }
-    /// Whether the fit ended at a local minimum with finite results.
+    /// Whether the fit ended at an evaluable point: converged, or stopped by the iteration
+    /// limit or stalled on the long flat valleys of this objective (DESIGN.md §7), which
+    /// `termination` reports; not a simulation failure.
     pub fn ok(&self) -> bool {
-        self.lm.termination.converged() && self.eval.objective.is_finite()
+        self.lm.termination != Termination::SimulationFailure && self.eval.objective.is_finite()
     }
 }
 
