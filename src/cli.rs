@@ -13,6 +13,7 @@ use crate::model::{registry, Load};
 use crate::ode::OdeOptions;
 use crate::report::plot::{plot_creep_curves, CurvePlot};
 use crate::report::tables::{self, default_out, ensure_dir, num, write_csv, write_text};
+use crate::sweep::{self, SweepOptions};
 
 /// creepfit: calibrate creep-damage constitutive equations against measured creep curves.
 #[derive(Debug, Parser)]
@@ -38,6 +39,38 @@ pub enum Command {
         /// One lifetime weight w for every curve instead of the configured w_grid/w_sets.
         #[arg(long)]
         w: Option<f64>,
+    },
+    /// Multistart: Latin-hypercube starts × w candidates, a local fit from each, in parallel.
+    Sweep {
+        /// Run configuration (TOML).
+        config: PathBuf,
+        /// Latin-hypercube starts (default: the configuration's [sweep] starts).
+        #[arg(long)]
+        starts: Option<usize>,
+        /// Seed of the starts (default: the configuration's [sweep] seed).
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Worker threads (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Run the I-th of N disjoint parts of the start set, e.g. 2/3.
+        #[arg(long, value_parser = parse_shard)]
+        shard: Option<(usize, usize)>,
+        /// Output folder (default results/<name>/sweep/).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Stop after this many new fits, as if interrupted (for tests of resumption).
+        #[arg(long, hide = true)]
+        stop_after: Option<usize>,
+    },
+    /// Combine the journals of sweep shards into the unsharded result.
+    Merge {
+        /// Shard output folders.
+        #[arg(required = true)]
+        dirs: Vec<PathBuf>,
+        /// Output folder of the merged result.
+        #[arg(long)]
+        out: PathBuf,
     },
     /// Simulate the configured tests with given constants (dense curves, ruptures).
     Simulate {
@@ -76,6 +109,135 @@ pub fn run(cli: Cli) -> Result<()> {
             constants,
             out,
         } => simulate(&config, constants, out),
+        Command::Sweep {
+            config,
+            starts,
+            seed,
+            threads,
+            shard,
+            out,
+            stop_after,
+        } => {
+            let (cfg, data) = load(&config)?;
+            let opts = SweepOptions {
+                starts: starts.unwrap_or(cfg.sweep.starts),
+                seed: seed.unwrap_or(cfg.sweep.seed),
+                threads,
+                shard,
+                out: out.unwrap_or_else(|| default_out(&cfg.name, "sweep")),
+                stop_after,
+                progress: true,
+            };
+            sweep_cmd(&cfg, &data, &opts)
+        }
+        Command::Merge { dirs, out } => merge_cmd(&dirs, &out),
+    }
+}
+
+fn parse_shard(s: &str) -> std::result::Result<(usize, usize), String> {
+    let (i, n) = s.split_once('/').ok_or("expected I/N, e.g. 2/3")?;
+    let i: usize = i
+        .trim()
+        .parse()
+        .map_err(|_| format!("bad shard index '{i}'"))?;
+    let n: usize = n
+        .trim()
+        .parse()
+        .map_err(|_| format!("bad shard count '{n}'"))?;
+    if i == 0 || n == 0 || i > n {
+        return Err(format!("shard {i}/{n}: need 1 <= I <= N"));
+    }
+    Ok((i, n))
+}
+
+fn sweep_cmd(cfg: &RunConfig, data: &Dataset, opts: &SweepOptions) -> Result<()> {
+    sweep::install_sigint_handler();
+    let (plan, run) = sweep::run_sweep(cfg, data, opts)?;
+    let mut header = plan.header.clone();
+    header.shard = opts.shard.unwrap_or((1, 1));
+    let a = sweep::write_outputs(&header, &run.solutions, &opts.out, run.wall_s, run.threads)?;
+    print_sweep(&header, &a);
+    println!(
+        "{} fits computed now in {:.1} s on {} threads ({:.2} fits/s); {} in the folder",
+        run.computed,
+        run.wall_s,
+        run.threads,
+        run.computed as f64 / run.wall_s.max(1e-9),
+        run.solutions.len()
+    );
+    if run.missing > 0 {
+        return Err(crate::Error::Invalid(format!(
+            "interrupted: {} of {} fits missing; rerun the same command to resume ({})",
+            run.missing,
+            run.missing + run.solutions.len(),
+            opts.out.display()
+        )));
+    }
+    println!("wrote {}", opts.out.display());
+    Ok(())
+}
+
+fn merge_cmd(dirs: &[PathBuf], out: &Path) -> Result<()> {
+    let (header, sols) = sweep::merge(dirs)?;
+    ensure_dir(out)?;
+    let a = sweep::write_outputs(&header, &sols, out, 0.0, 0)?;
+    print_sweep(&header, &a);
+    println!("merged {} folders into {}", dirs.len(), out.display());
+    Ok(())
+}
+
+fn print_sweep(h: &sweep::Header, a: &sweep::Analysis) {
+    println!(
+        "{}: {} fits ({} starts × {} w), {} completed, {} failed, {} distinct minima",
+        h.name,
+        a.ranked.len(),
+        h.n_starts_total(),
+        h.w.len(),
+        a.completed,
+        a.failed,
+        a.clusters.len()
+    );
+    if a.completed == 0 {
+        return;
+    }
+    let b = &a.ranked[0];
+    println!(
+        "best: objective {:.6} at w = {:?} (start {}), normalised residual {:.6}, mean |lifetime err| {:.2} %, best basin holds {:.1} % of the fits",
+        b.objective,
+        h.w[b.w_idx],
+        b.start_id,
+        b.norm_residual,
+        b.lifetime_err_pct,
+        100.0 * a.clusters[0].fraction
+    );
+    for (n, side, v) in &a.pinned {
+        println!("  {n} = {v:.6e} on its {side} bound");
+    }
+    println!(
+        "within 1 % of the best objective: {} solutions; spread of the constants:",
+        a.near_best
+    );
+    for s in &a.spreads {
+        println!(
+            "  {:>6}: {:.4e} .. {:.4e}  (relative range {:.3}, {:.3} of the box)",
+            s.name, s.min, s.max, s.rel_range, s.unit_range
+        );
+    }
+    println!("Pareto set (normalised residual, mean |lifetime err| %, mean |min-rate err| %):");
+    for i in (0..a.ranked.len()).filter(|&i| a.pareto[i]).take(15) {
+        let s = &a.ranked[i];
+        println!(
+            "  rank {:>4}  F {:.5}  res {:.5}  life {:>6.2}  rate {:>7.2}  lifetime errors {:?}",
+            i + 1,
+            s.objective,
+            s.norm_residual,
+            s.lifetime_err_pct,
+            s.min_rate_err_pct,
+            s.lifetime_errs_pct
+                .iter()
+                .map(|v| (v * 100.0).round() / 100.0)
+                .collect::<Vec<_>>()
+        );
     }
 }
 

@@ -19,5 +19,6 @@ pub mod model;
 pub mod objective;
 pub mod ode;
 pub mod report;
+pub mod sweep;
 
 pub use error::{Error, Result};

@@ -1,0 +1,382 @@
+//! From a set of solutions to the sweep's answers: ranking, Pareto set, distinct minima
+//! (single-linkage clusters in the unit box), identifiability near the best, and the files.
+
+use std::path::Path;
+
+use serde_json::{json, Value};
+
+use super::journal::{Header, Solution};
+use crate::error::Result;
+use crate::report::plot::{plot_parameters, plot_waterfall};
+use crate::report::tables::{jnum, num, write_csv, write_text};
+
+/// Two solutions belong to one minimum when a chain of solutions links them with steps of
+/// at most this distance (max-norm in unit-box coordinates): long flat valleys stay one basin.
+pub const CLUSTER_LINK: f64 = 0.05;
+/// Solutions within this relative distance of the best objective enter the identifiability
+/// spread.
+pub const NEAR_BEST: f64 = 0.01;
+/// A constant is on a bound when its unit-box coordinate is within this of 0 or 1.
+pub const BOUND_TOL: f64 = 1e-6;
+/// How many of the best solutions the parameter plot shows.
+pub const PLOT_BEST_K: usize = 20;
+
+/// One distinct minimum.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Cluster {
+    /// 1-based, in order of the best objective.
+    pub id: usize,
+    /// Number of solutions in it.
+    pub size: usize,
+    /// Share of the successful solutions.
+    pub fraction: f64,
+    /// Index (into the ranked list) of its best solution.
+    pub best: usize,
+}
+
+/// Spread of one constant among the solutions near the best.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Spread {
+    pub name: String,
+    pub min: f64,
+    pub max: f64,
+    /// (max − min) / |value at the best solution|.
+    pub rel_range: f64,
+    /// (max − min) in unit-box coordinates.
+    pub unit_range: f64,
+}
+
+/// Everything the sweep's files say.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Analysis {
+    /// Solutions, best first (failed ones last, by start and w).
+    pub ranked: Vec<Solution>,
+    /// Cluster id per ranked solution (0 for a failed one).
+    pub cluster: Vec<usize>,
+    /// Pareto flag per ranked solution.
+    pub pareto: Vec<bool>,
+    /// The distinct minima, best first.
+    pub clusters: Vec<Cluster>,
+    /// Spreads of the constants among solutions within [`NEAR_BEST`] of the best.
+    pub spreads: Vec<Spread>,
+    /// How many solutions are within [`NEAR_BEST`].
+    pub near_best: usize,
+    /// Constants of the best solution on a bound: (name, "lower"/"upper", value).
+    pub pinned: Vec<(String, String, f64)>,
+    /// Successful and failed fits.
+    pub completed: usize,
+    pub failed: usize,
+}
+
+fn crit(v: f64) -> f64 {
+    if v.is_finite() {
+        v
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// Rank, cluster and summarise a set of solutions.
+pub fn analyse(header: &Header, solutions: &[Solution]) -> Analysis {
+    let mut ranked = solutions.to_vec();
+    ranked.sort_by(|a, b| {
+        let ka = (!a.ok(), if a.ok() { a.objective } else { 0.0 });
+        let kb = (!b.ok(), if b.ok() { b.objective } else { 0.0 });
+        ka.0.cmp(&kb.0)
+            .then(ka.1.total_cmp(&kb.1))
+            .then(a.start_id.cmp(&b.start_id))
+            .then(a.w_idx.cmp(&b.w_idx))
+    });
+    let n_ok = ranked.iter().filter(|s| s.ok()).count();
+    let k = header.names.len();
+    let unit: Vec<Vec<f64>> = ranked[..n_ok]
+        .iter()
+        .map(|s| (0..k).map(|j| header.to_unit(j, s.params[j])).collect())
+        .collect();
+
+    // Pareto set over (normalised residual, mean lifetime error, mean min-rate error).
+    let c: Vec<[f64; 3]> = ranked[..n_ok]
+        .iter()
+        .map(|s| {
+            [
+                crit(s.norm_residual),
+                crit(s.lifetime_err_pct),
+                crit(s.min_rate_err_pct),
+            ]
+        })
+        .collect();
+    let mut pareto = vec![false; ranked.len()];
+    for i in 0..n_ok {
+        pareto[i] = !(0..n_ok).any(|o| {
+            o != i && (0..3).all(|q| c[o][q] <= c[i][q]) && (0..3).any(|q| c[o][q] < c[i][q])
+        });
+    }
+
+    // Single-linkage clusters (union–find).
+    let mut parent: Vec<usize> = (0..n_ok).collect();
+    fn find(p: &mut [usize], mut i: usize) -> usize {
+        while p[i] != i {
+            p[i] = p[p[i]];
+            i = p[i];
+        }
+        i
+    }
+    for i in 0..n_ok {
+        for o in (i + 1)..n_ok {
+            let d = (0..k)
+                .map(|j| (unit[i][j] - unit[o][j]).abs())
+                .fold(0.0, f64::max);
+            if d <= CLUSTER_LINK {
+                let (a, b) = (find(&mut parent, i), find(&mut parent, o));
+                if a != b {
+                    parent[a.max(b)] = a.min(b);
+                }
+            }
+        }
+    }
+    let mut cluster = vec![0usize; ranked.len()];
+    let mut clusters: Vec<Cluster> = Vec::new();
+    let mut root_id = std::collections::HashMap::new();
+    for i in 0..n_ok {
+        let r = find(&mut parent, i);
+        let id = *root_id.entry(r).or_insert_with(|| {
+            clusters.push(Cluster {
+                id: clusters.len() + 1,
+                size: 0,
+                fraction: 0.0,
+                best: i,
+            });
+            clusters.len()
+        });
+        cluster[i] = id;
+        clusters[id - 1].size += 1;
+    }
+    for cl in &mut clusters {
+        cl.fraction = cl.size as f64 / n_ok.max(1) as f64;
+    }
+
+    // Identifiability near the best.
+    let mut spreads = Vec::new();
+    let mut near_best = 0;
+    let mut pinned = Vec::new();
+    if n_ok > 0 {
+        let best = &ranked[0];
+        let near: Vec<&Solution> = ranked[..n_ok]
+            .iter()
+            .filter(|s| s.objective <= best.objective * (1.0 + NEAR_BEST))
+            .collect();
+        near_best = near.len();
+        for j in 0..k {
+            let vals: Vec<f64> = near.iter().map(|s| s.params[j]).collect();
+            let (lo, hi) = vals
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+                    (a.min(*v), b.max(*v))
+                });
+            spreads.push(Spread {
+                name: header.names[j].clone(),
+                min: lo,
+                max: hi,
+                rel_range: (hi - lo) / best.params[j].abs(),
+                unit_range: header.to_unit(j, hi) - header.to_unit(j, lo),
+            });
+            let u = header.to_unit(j, best.params[j]);
+            if u <= BOUND_TOL {
+                pinned.push((header.names[j].clone(), "lower".into(), best.params[j]));
+            } else if u >= 1.0 - BOUND_TOL {
+                pinned.push((header.names[j].clone(), "upper".into(), best.params[j]));
+            }
+        }
+    }
+    Analysis {
+        completed: n_ok,
+        failed: ranked.len() - n_ok,
+        ranked,
+        cluster,
+        pareto,
+        clusters,
+        spreads,
+        near_best,
+        pinned,
+    }
+}
+
+fn w_text(w: &[f64]) -> String {
+    w.iter().map(|v| num(*v)).collect::<Vec<_>>().join(";")
+}
+
+/// Write `ranked.csv`, `minima.csv`, `summary.json` and the plots.
+pub fn write(header: &Header, a: &Analysis, out: &Path, wall_s: f64, threads: usize) -> Result<()> {
+    let mut head: Vec<&str> = vec![
+        "rank",
+        "start_id",
+        "w",
+        "objective",
+        "norm_residual",
+        "lifetime_err_pct",
+        "min_rate_err_pct",
+        "status",
+        "iterations",
+        "evaluations",
+        "cluster",
+        "pareto",
+    ];
+    head.extend(header.names.iter().map(|s| s.as_str()));
+    let rows: Vec<Vec<String>> = a
+        .ranked
+        .iter()
+        .enumerate()
+        .map(|(i, s)| {
+            let mut r = vec![
+                (i + 1).to_string(),
+                s.start_id.to_string(),
+                w_text(&header.w[s.w_idx]),
+                num(s.objective),
+                num(s.norm_residual),
+                num(s.lifetime_err_pct),
+                num(s.min_rate_err_pct),
+                s.status.clone(),
+                s.iterations.to_string(),
+                s.evaluations.to_string(),
+                a.cluster[i].to_string(),
+                u8::from(a.pareto[i]).to_string(),
+            ];
+            r.extend(s.params.iter().map(|v| num(*v)));
+            r
+        })
+        .collect();
+    write_csv(&out.join("ranked.csv"), &head, &rows)?;
+
+    let mut mhead: Vec<&str> = vec!["cluster", "size", "fraction", "best_objective"];
+    mhead.extend(header.names.iter().map(|s| s.as_str()));
+    let mrows: Vec<Vec<String>> = a
+        .clusters
+        .iter()
+        .map(|c| {
+            let best = &a.ranked[c.best];
+            let mut r = vec![
+                c.id.to_string(),
+                c.size.to_string(),
+                num(c.fraction),
+                num(best.objective),
+            ];
+            r.extend(best.params.iter().map(|v| num(*v)));
+            r
+        })
+        .collect();
+    write_csv(&out.join("minima.csv"), &mhead, &mrows)?;
+
+    write_text(
+        &out.join("summary.json"),
+        &serde_json::to_string_pretty(&summary(header, a, wall_s, threads)).expect("plain JSON"),
+    )?;
+
+    // Plots last: a failure is reported but loses nothing.
+    let objs: Vec<f64> = a
+        .ranked
+        .iter()
+        .filter(|s| s.ok())
+        .map(|s| s.objective)
+        .collect();
+    let scaled: Vec<Vec<f64>> = a
+        .ranked
+        .iter()
+        .filter(|s| s.ok())
+        .take(PLOT_BEST_K)
+        .map(|s| {
+            (0..header.names.len())
+                .map(|j| header.to_unit(j, s.params[j]))
+                .collect()
+        })
+        .collect();
+    let title = &header.name;
+    if let Err(e) = plot_waterfall(
+        &out.join("waterfall.png"),
+        &format!("{title}: sorted local minima"),
+        &objs,
+    ) {
+        eprintln!("warning: plot not written: {e}");
+    }
+    if let Err(e) = plot_parameters(
+        &out.join("parameters.png"),
+        &format!("{title}: best {} solutions within the bounds", scaled.len()),
+        &header.names,
+        &scaled,
+    ) {
+        eprintln!("warning: plot not written: {e}");
+    }
+    Ok(())
+}
+
+fn constants_json(header: &Header, p: &[f64]) -> Value {
+    let mut m = serde_json::Map::new();
+    for (n, v) in header.names.iter().zip(p) {
+        m.insert(n.clone(), jnum(*v));
+    }
+    Value::Object(m)
+}
+
+/// `summary.json` of a sweep.
+pub fn summary(header: &Header, a: &Analysis, wall_s: f64, threads: usize) -> Value {
+    let sol_json = |i: usize| {
+        let s = &a.ranked[i];
+        json!({
+            "rank": i + 1,
+            "start_id": s.start_id,
+            "w": header.w[s.w_idx],
+            "objective": jnum(s.objective),
+            "norm_residual": jnum(s.norm_residual),
+            "lifetime_err_pct": jnum(s.lifetime_err_pct),
+            "min_rate_err_pct": jnum(s.min_rate_err_pct),
+            "lifetime_errs_pct": s.lifetime_errs_pct.iter().map(|v| jnum(*v)).collect::<Vec<_>>(),
+            "cluster": a.cluster[i],
+            "status": s.status,
+            "constants": constants_json(header, &s.params),
+        })
+    };
+    let best_by_w: Vec<Value> = (0..header.w.len())
+        .filter_map(|wi| {
+            a.ranked
+                .iter()
+                .position(|s| s.ok() && s.w_idx == wi)
+                .map(sol_json)
+        })
+        .collect();
+    let pareto: Vec<Value> = (0..a.ranked.len())
+        .filter(|&i| a.pareto[i])
+        .map(sol_json)
+        .collect();
+    json!({
+        "name": header.name,
+        "model": header.model,
+        "starts": header.n_starts_total(),
+        "lhs_starts": header.n_starts,
+        "extra_start": header.extra_start,
+        "seed": header.seed,
+        "w_candidates": header.w.len(),
+        "fits": a.ranked.len(),
+        "completed": a.completed,
+        "failed": a.failed,
+        "distinct_minima": a.clusters.len(),
+        "best_basin_fraction": a.clusters.first().map(|c| c.fraction),
+        "best": if a.completed > 0 { sol_json(0) } else { Value::Null },
+        "best_by_w": best_by_w,
+        "pareto": pareto,
+        "pinned_at_bounds": a.pinned.iter().map(|(n, s, v)| json!({"name": n, "bound": s, "value": v})).collect::<Vec<_>>(),
+        "identifiability": {
+            "within_pct_of_best": 100.0 * NEAR_BEST,
+            "solutions": a.near_best,
+            "constants": a.spreads.iter().map(|s| json!({
+                "name": s.name, "min": jnum(s.min), "max": jnum(s.max),
+                "rel_range": jnum(s.rel_range), "unit_range": jnum(s.unit_range)
+            })).collect::<Vec<_>>(),
+        },
+        "minima": a.clusters.iter().map(|c| json!({
+            "cluster": c.id, "size": c.size, "fraction": c.fraction,
+            "best_objective": jnum(a.ranked[c.best].objective),
+            "constants": constants_json(header, &a.ranked[c.best].params),
+        })).collect::<Vec<_>>(),
+        "wall_s": wall_s,
+        "threads": threads,
+    })
+}

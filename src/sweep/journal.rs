@@ -1,0 +1,269 @@
+//! The sweep journal `journal.jsonl`: one header line that identifies the sweep, then one
+//! line per finished fit, appended and flushed as fits complete. Numbers are written in
+//! shortest round-trip form, so a resumed or merged sweep reproduces them bit for bit.
+
+use std::fs::{File, OpenOptions};
+use std::io::{BufRead, BufReader, Write};
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use crate::config::RunConfig;
+use crate::data::Dataset;
+use crate::error::{Error, Result};
+use crate::model::Scale;
+use crate::objective::ParamSpace;
+
+/// File name of the journal in a sweep folder.
+pub const FILE: &str = "journal.jsonl";
+
+/// What identifies a sweep, and what its final files need besides the solutions.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Header {
+    /// Hash of everything that determines the solutions (configuration, data, starts).
+    pub fingerprint: String,
+    /// Configuration name.
+    pub name: String,
+    /// Model name.
+    pub model: String,
+    /// Constant names, units, bounds and scales.
+    pub names: Vec<String>,
+    pub units: Vec<String>,
+    pub lb: Vec<f64>,
+    pub ub: Vec<f64>,
+    pub log_scale: Vec<bool>,
+    /// Latin-hypercube starts.
+    pub n_starts: usize,
+    /// Seed of the starts.
+    pub seed: u64,
+    /// Label of the extra start (`config` or `guess`), if any; its start_id is `n_starts`.
+    pub extra_start: Option<String>,
+    /// The w candidates, indexed by `w_idx`.
+    pub w: Vec<Vec<f64>>,
+    /// Stresses of the curves (ascending), MPa.
+    pub stresses: Vec<f64>,
+    /// (I, N) of the part this journal holds.
+    pub shard: (usize, usize),
+}
+
+impl Header {
+    /// Build the header (and its fingerprint) of a sweep.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        cfg: &RunConfig,
+        data: &Dataset,
+        names: &[String],
+        space: &ParamSpace,
+        n_starts: usize,
+        seed: u64,
+        extra_start: Option<String>,
+        w: &[Vec<f64>],
+        starts: &[Vec<f64>],
+    ) -> Header {
+        let mut h = Header {
+            fingerprint: String::new(),
+            name: cfg.name.clone(),
+            model: cfg.model.clone(),
+            names: names.to_vec(),
+            units: cfg.constants.iter().map(|c| c.unit.to_string()).collect(),
+            lb: space.lb.clone(),
+            ub: space.ub.clone(),
+            log_scale: space.scale.iter().map(|s| *s == Scale::Log).collect(),
+            n_starts,
+            seed,
+            extra_start,
+            w: w.to_vec(),
+            stresses: data.curves.iter().map(|c| c.stress_mpa).collect(),
+            shard: (1, 1),
+        };
+        let identity = serde_json::json!({
+            "header": &h,
+            "starts": starts,
+            "data": data.curves.iter().map(|c| (c.temperature_c, c.stress_mpa, &c.times_h, &c.strains, c.rupture_time_h, c.rupture_strain, c.min_rate_measured)).collect::<Vec<_>>(),
+            "objective": [cfg.objective.omega_f, if matches!(cfg.objective.lifetime_term, crate::config::LifetimeTerm::Late) { 0.0 } else { 1.0 }],
+            "solver": [cfg.solver.rtol, cfg.solver.atol, cfg.solver.max_iterations as f64],
+            "version": env!("CARGO_PKG_VERSION"),
+        });
+        h.fingerprint = format!("{:016x}", fnv1a(identity.to_string().as_bytes()));
+        h
+    }
+    /// Number of starts including the extra one.
+    pub fn n_starts_total(&self) -> usize {
+        self.n_starts + usize::from(self.extra_start.is_some())
+    }
+    /// Unit-box coordinate of constant `j` at `x`.
+    pub fn to_unit(&self, j: usize, x: f64) -> f64 {
+        if self.log_scale[j] {
+            (x.ln() - self.lb[j].ln()) / (self.ub[j].ln() - self.lb[j].ln())
+        } else {
+            (x - self.lb[j]) / (self.ub[j] - self.lb[j])
+        }
+    }
+}
+
+fn fnv1a(bytes: &[u8]) -> u64 {
+    let mut h: u64 = 0xcbf29ce484222325;
+    for b in bytes {
+        h ^= *b as u64;
+        h = h.wrapping_mul(0x100000001b3);
+    }
+    h
+}
+
+/// One finished local fit.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Solution {
+    /// Start index (`n_starts` is the extra start).
+    pub start_id: usize,
+    /// Index into the header's w candidates.
+    pub w_idx: usize,
+    /// Eq. 8 at the fitted constants (NaN: simulation failed).
+    #[serde(with = "nan_null")]
+    pub objective: f64,
+    /// Strain term alone.
+    #[serde(with = "nan_null")]
+    pub norm_residual: f64,
+    /// Mean absolute lifetime error, %.
+    #[serde(with = "nan_null")]
+    pub lifetime_err_pct: f64,
+    /// Mean absolute minimum-rate error, %.
+    #[serde(with = "nan_null")]
+    pub min_rate_err_pct: f64,
+    /// Signed lifetime error per curve, %.
+    #[serde(with = "nan_null_vec")]
+    pub lifetime_errs_pct: Vec<f64>,
+    /// LM termination, or `simulation_failure`.
+    pub status: String,
+    /// LM iterations.
+    pub iterations: usize,
+    /// Residual evaluations.
+    pub evaluations: usize,
+    /// Fitted constants (physical).
+    #[serde(with = "nan_null_vec")]
+    pub params: Vec<f64>,
+}
+
+impl Solution {
+    /// Whether the fit produced a finite objective.
+    pub fn ok(&self) -> bool {
+        self.objective.is_finite()
+    }
+}
+
+mod nan_null {
+    use serde::{Deserialize, Deserializer, Serializer};
+    pub fn serialize<S: Serializer>(v: &f64, s: S) -> Result<S::Ok, S::Error> {
+        if v.is_finite() {
+            s.serialize_f64(*v)
+        } else {
+            s.serialize_none()
+        }
+    }
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+        Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
+    }
+}
+
+mod nan_null_vec {
+    use serde::{Deserialize, Deserializer, Serializer};
+    pub fn serialize<S: Serializer>(v: &[f64], s: S) -> Result<S::Ok, S::Error> {
+        s.collect_seq(
+            v.iter()
+                .map(|x| if x.is_finite() { Some(*x) } else { None }),
+        )
+    }
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<f64>, D::Error> {
+        Ok(Vec::<Option<f64>>::deserialize(d)?
+            .into_iter()
+            .map(|x| x.unwrap_or(f64::NAN))
+            .collect())
+    }
+}
+
+#[derive(Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+enum Line {
+    Header(Header),
+    Solution(Solution),
+}
+
+/// Start a new journal with its header.
+pub fn create(path: &Path, header: &Header) -> Result<()> {
+    let mut f = File::create(path).map_err(|e| Error::io(path, e))?;
+    let line = serde_json::to_string(&Line::Header(header.clone())).expect("header serialises");
+    writeln!(f, "{line}")
+        .and_then(|_| f.sync_data())
+        .map_err(|e| Error::io(path, e))
+}
+
+/// Read a journal: `None` if it does not exist. A last line cut short by an interruption is
+/// ignored (its fit is simply computed again).
+pub fn read(path: &Path) -> Result<Option<(Header, Vec<Solution>)>> {
+    let f = match File::open(path) {
+        Ok(f) => f,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(e) => return Err(Error::io(path, e)),
+    };
+    let lines: Vec<String> = BufReader::new(f)
+        .lines()
+        .collect::<std::io::Result<_>>()
+        .map_err(|e| Error::io(path, e))?;
+    let mut header = None;
+    let mut sols = Vec::new();
+    let n = lines.len();
+    for (i, l) in lines.iter().enumerate() {
+        if l.trim().is_empty() {
+            continue;
+        }
+        match serde_json::from_str::<Line>(l) {
+            Ok(Line::Header(h)) if i == 0 => header = Some(h),
+            Ok(Line::Solution(s)) if header.is_some() => sols.push(s),
+            Err(_) if i + 1 == n && header.is_some() => {} // torn last line
+            _ => return Err(Error::data(path, i + 1, "not a sweep journal line")),
+        }
+    }
+    let header = header.ok_or_else(|| Error::data(path, 1, "missing journal header"))?;
+    let mut seen = std::collections::HashSet::new();
+    sols.retain(|s: &Solution| seen.insert((s.start_id, s.w_idx)));
+    Ok(Some((header, sols)))
+}
+
+/// Appends solutions to a journal, one flushed line each.
+pub struct Appender {
+    file: File,
+    path: std::path::PathBuf,
+}
+
+impl Appender {
+    /// Open an existing journal for appending; a torn last line (an interrupted write) is cut
+    /// off first, so that the next record starts on a line of its own.
+    pub fn open(path: &Path) -> Result<Appender> {
+        let text = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        let keep = text.iter().rposition(|b| *b == b'\n').map_or(0, |p| p + 1);
+        if keep < text.len() {
+            let f = OpenOptions::new()
+                .write(true)
+                .open(path)
+                .map_err(|e| Error::io(path, e))?;
+            f.set_len(keep as u64).map_err(|e| Error::io(path, e))?;
+        }
+        let file = OpenOptions::new()
+            .append(true)
+            .open(path)
+            .map_err(|e| Error::io(path, e))?;
+        Ok(Appender {
+            file,
+            path: path.to_path_buf(),
+        })
+    }
+    /// Append one solution and flush it to the file.
+    pub fn append(&mut self, s: &Solution) -> Result<()> {
+        let mut line =
+            serde_json::to_string(&Line::Solution(s.clone())).expect("solution serialises");
+        line.push('\n');
+        self.file
+            .write_all(line.as_bytes())
+            .and_then(|_| self.file.flush())
+            .map_err(|e| Error::io(&self.path, e))
+    }
+}

@@ -1,0 +1,212 @@
+//! The multistart sweep through the binary: identical results for any thread count, shards
+//! that merge into the unsharded result, interruption (hidden stop and a real SIGINT) that
+//! resumes to the same files, and failed starts kept as rows.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+use tempfile::TempDir;
+
+const CONFIG: &str = "tests/data/sweep_small.toml";
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn sweep(out: &Path, extra: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_creepfit"))
+        .arg("sweep")
+        .arg(CONFIG)
+        .arg("--out")
+        .arg(out)
+        .args(extra)
+        .current_dir(root())
+        .output()
+        .expect("binary runs")
+}
+
+fn ok(o: &Output) {
+    assert!(
+        o.status.success(),
+        "{}\n{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
+fn read(p: &Path) -> String {
+    std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
+}
+
+/// The reference: one uninterrupted, unsharded run on 2 threads.
+fn reference() -> (TempDir, String, String) {
+    let d = TempDir::new().unwrap();
+    ok(&sweep(d.path(), &["--threads", "2"]));
+    let ranked = read(&d.path().join("ranked.csv"));
+    let minima = read(&d.path().join("minima.csv"));
+    (d, ranked, minima)
+}
+
+#[test]
+fn outputs_and_failed_starts() {
+    let (d, ranked, minima) = reference();
+    let lines: Vec<&str> = ranked.lines().collect();
+    assert!(lines[0].starts_with(
+        "rank,start_id,w,objective,norm_residual,lifetime_err_pct,min_rate_err_pct,status,iterations,evaluations,cluster,pareto,A,B,Hstar,h,Kc,C"
+    ));
+    // 8 LHS starts + the configured start, × 2 weights: every pair is a row.
+    assert_eq!(lines.len(), 1 + 9 * 2);
+    let failed = lines
+        .iter()
+        .filter(|l| l.contains("simulation_failure"))
+        .count();
+    assert!(
+        failed > 0,
+        "the low A bound should make some starts fail:\n{ranked}"
+    );
+    // Failed rows come last and have no objective.
+    let first_fail = lines
+        .iter()
+        .position(|l| l.contains("simulation_failure"))
+        .unwrap();
+    assert!(lines[first_fail..]
+        .iter()
+        .all(|l| l.contains("simulation_failure")));
+    // Objectives ascend over the successful rows; ranks are 1..n.
+    let obj: Vec<f64> = lines[1..first_fail]
+        .iter()
+        .map(|l| l.split(',').nth(3).unwrap().parse().unwrap())
+        .collect();
+    assert!(obj.windows(2).all(|w| w[0] <= w[1]));
+    for (i, l) in lines[1..].iter().enumerate() {
+        assert!(l.starts_with(&format!("{},", i + 1)));
+    }
+    assert!(minima.starts_with("cluster,size,fraction,best_objective,A,B,Hstar,h,Kc,C"));
+    let summary: serde_json::Value =
+        serde_json::from_str(&read(&d.path().join("summary.json"))).unwrap();
+    assert_eq!(summary["fits"], 18);
+    assert_eq!(summary["failed"].as_u64().unwrap() as usize, failed);
+    assert!(summary["distinct_minima"].as_u64().unwrap() >= 1);
+    assert!(!summary["pareto"].as_array().unwrap().is_empty());
+    assert!(summary["best_basin_fraction"].as_f64().unwrap() > 0.0);
+    // Every Pareto member lists its per-curve lifetime errors.
+    for p in summary["pareto"].as_array().unwrap() {
+        assert_eq!(p["lifetime_errs_pct"].as_array().unwrap().len(), 3);
+    }
+}
+
+#[test]
+fn identical_for_one_and_two_threads() {
+    let (_d, ranked, minima) = reference();
+    let d1 = TempDir::new().unwrap();
+    ok(&sweep(d1.path(), &["--threads", "1"]));
+    assert_eq!(read(&d1.path().join("ranked.csv")), ranked);
+    assert_eq!(read(&d1.path().join("minima.csv")), minima);
+}
+
+#[test]
+fn three_shards_merge_into_the_unsharded_result() {
+    let (_d, ranked, minima) = reference();
+    let parts: Vec<TempDir> = (1..=3).map(|_| TempDir::new().unwrap()).collect();
+    for (i, p) in parts.iter().enumerate() {
+        ok(&sweep(
+            p.path(),
+            &["--shard", &format!("{}/3", i + 1), "--threads", "1"],
+        ));
+    }
+    let merged = TempDir::new().unwrap();
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_creepfit"));
+    cmd.arg("merge");
+    for p in &parts {
+        cmd.arg(p.path());
+    }
+    let o = cmd.arg("--out").arg(merged.path()).output().unwrap();
+    ok(&o);
+    assert_eq!(read(&merged.path().join("ranked.csv")), ranked);
+    assert_eq!(read(&merged.path().join("minima.csv")), minima);
+    // A missing shard is an error, not a silently smaller result.
+    let o = Command::new(env!("CARGO_BIN_EXE_creepfit"))
+        .arg("merge")
+        .arg(parts[0].path())
+        .arg(parts[1].path())
+        .arg("--out")
+        .arg(merged.path().join("x"))
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).starts_with("error: "));
+}
+
+#[test]
+fn stopped_sweep_resumes_to_the_same_files() {
+    let (_d, ranked, minima) = reference();
+    let d = TempDir::new().unwrap();
+    let o = sweep(d.path(), &["--threads", "2", "--stop-after", "5"]);
+    assert!(!o.status.success(), "an interrupted sweep reports it");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("interrupted"), "{err}");
+    let journal = read(&d.path().join("journal.jsonl"));
+    assert_eq!(journal.lines().count(), 1 + 5, "header + 5 solutions");
+    let o = sweep(d.path(), &["--threads", "1"]);
+    ok(&o);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        out.contains("13 fits computed now"),
+        "only the missing fits run: {out}"
+    );
+    assert_eq!(read(&d.path().join("ranked.csv")), ranked);
+    assert_eq!(read(&d.path().join("minima.csv")), minima);
+}
+
+#[test]
+fn sigint_stops_cleanly_and_resumes() {
+    let (_d, ranked, _) = reference();
+    let d = TempDir::new().unwrap();
+    let child = Command::new(env!("CARGO_BIN_EXE_creepfit"))
+        .arg("sweep")
+        .arg(CONFIG)
+        .arg("--out")
+        .arg(d.path())
+        .args(["--threads", "1"])
+        .current_dir(root())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let journal = d.path().join("journal.jsonl");
+    let t0 = Instant::now();
+    loop {
+        let n = std::fs::read_to_string(&journal)
+            .map(|s| s.lines().count())
+            .unwrap_or(0);
+        if n >= 3 || t0.elapsed() > Duration::from_secs(60) {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    let status = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let out = child.wait_with_output().unwrap();
+    let n = read(&journal).lines().count() - 1;
+    if n < 18 {
+        assert!(!out.status.success(), "an interrupted sweep exits non-zero");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("interrupted"), "{err}");
+    }
+    let o = sweep(d.path(), &["--threads", "2"]);
+    ok(&o);
+    assert_eq!(read(&d.path().join("ranked.csv")), ranked);
+}
+
+#[test]
+fn a_different_sweep_in_the_same_folder_is_refused() {
+    let d = TempDir::new().unwrap();
+    ok(&sweep(d.path(), &["--threads", "2", "--starts", "2"]));
+    let o = sweep(d.path(), &["--threads", "2", "--starts", "3"]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("different sweep"));
+}
