@@ -8,7 +8,7 @@ use clap::{Parser, Subcommand};
 use crate::config::RunConfig;
 use crate::data::{self, Dataset};
 use crate::error::Result;
-use crate::fit::{param_space, run_fit_with, FitRequest, StartChoice};
+use crate::fit::{run_fit_with, FitRequest, StartChoice};
 use crate::model::{registry, Load};
 use crate::ode::OdeOptions;
 use crate::report::plot::{plot_creep_curves, CurvePlot};
@@ -82,6 +82,9 @@ pub enum Command {
         /// Output folder (default results/<name>/simulate/).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Also print the eq. 8 objective with this lifetime weight w on every curve.
+        #[arg(long)]
+        w: Option<f64>,
     },
 }
 
@@ -108,7 +111,8 @@ pub fn run(cli: Cli) -> Result<()> {
             config,
             constants,
             out,
-        } => simulate(&config, constants, out),
+            w,
+        } => simulate(&config, constants, out, w),
         Command::Sweep {
             config,
             starts,
@@ -370,7 +374,12 @@ fn curve_plots(
         .collect()
 }
 
-fn simulate(config: &Path, constants: Option<PathBuf>, out: Option<PathBuf>) -> Result<()> {
+fn simulate(
+    config: &Path,
+    constants: Option<PathBuf>,
+    out: Option<PathBuf>,
+    w: Option<f64>,
+) -> Result<()> {
     let (cfg, data) = load(config)?;
     let model = registry(&cfg.model)?;
     let params = match constants {
@@ -382,8 +391,6 @@ fn simulate(config: &Path, constants: Option<PathBuf>, out: Option<PathBuf>) -> 
             )
         })?,
     };
-    let space = param_space(&cfg);
-    let _ = &space;
     let out = out.unwrap_or_else(|| default_out(&cfg.name, "simulate"));
     ensure_dir(&out)?;
     let ode = OdeOptions {
@@ -476,6 +483,31 @@ fn simulate(config: &Path, constants: Option<PathBuf>, out: Option<PathBuf>) -> 
         ],
         &rupture_rows,
     )?;
+    if let Some(w) = w {
+        let objective = crate::objective::Objective {
+            model: model.as_ref(),
+            curves: &data.curves,
+            w: vec![w; data.curves.len()],
+            lifetime: cfg.objective.lifetime_term,
+            omega_f: cfg.objective.omega_f,
+            ode,
+        };
+        let e = objective.evaluate(&params);
+        println!(
+            "objective {:.12e} at w = {w} (normalised residual {:.12e})",
+            e.objective, e.norm_residual
+        );
+        let json = serde_json::json!({
+            "w": w,
+            "objective": e.objective,
+            "norm_residual": e.norm_residual,
+            "lifetime_errors_pct": e.lifetime_errors_pct(&data.curves),
+        });
+        write_text(
+            &out.join("objective.json"),
+            &serde_json::to_string_pretty(&json).expect("JSON of plain values"),
+        )?;
+    }
     let plots = curve_plots(&cfg, &data, &params, &ode, model.as_ref());
     if let Err(e) = plot_creep_curves(
         &out.join("simulate.png"),

@@ -31,6 +31,10 @@ pub enum Error {
     /// A numerical failure that makes a requested result impossible.
     #[error("numerical failure: {0}")]
     Numerical(String),
+    /// A plot could not be drawn or written (includes panics caught inside the plotting
+    /// library).
+    #[error("plot {}: {message}", path.display())]
+    Plot { path: PathBuf, message: String },
     /// Anything else that is the caller's fault (bad arguments).
     #[error("{0}")]
     Invalid(String),
@@ -52,6 +56,13 @@ impl Error {
         Error::Data {
             path: path.into(),
             line,
+            message: message.into(),
+        }
+    }
+    /// A plotting error for the image at `path`.
+    pub fn plot(path: impl Into<PathBuf>, message: impl Into<String>) -> Self {
+        Error::Plot {
+            path: path.into(),
             message: message.into(),
         }
     }
