@@ -18,6 +18,11 @@ pub const CLUSTER_LINK: f64 = 0.05;
 pub const NEAR_BEST: f64 = 0.01;
 /// A constant is on a bound when its unit-box coordinate is within this of 0 or 1.
 pub const BOUND_TOL: f64 = 1e-6;
+/// Relative resolution of the normalised residual in the Pareto comparison.
+pub const PARETO_TOL_REL_RESIDUAL: f64 = 1e-3;
+/// Resolution of the mean lifetime and min-rate errors in the Pareto comparison, percentage
+/// points.
+pub const PARETO_TOL_PCT: f64 = 0.1;
 /// How many of the best solutions the parameter plot shows.
 pub const PLOT_BEST_K: usize = 20;
 
@@ -76,6 +81,38 @@ fn crit(v: f64) -> f64 {
     }
 }
 
+/// Pareto flags for criteria rows (all minimised), given in rank order.
+///
+/// Criteria are compared at a resolution (`PARETO_TOL_*`): each is quantised to bins of that
+/// width (the residual on a log scale); a row is dominated by one that is no worse in every bin
+/// and better in one, or equal in all bins and ranked higher. Quantising keeps dominance
+/// transitive (the front is never empty); without it the flat valleys put hundreds of
+/// copies of one basin on the front.
+pub fn pareto_front(c: &[[f64; 3]]) -> Vec<bool> {
+    let bin = |q: usize, v: f64| -> f64 {
+        if !v.is_finite() {
+            return f64::INFINITY;
+        }
+        match q {
+            0 => (v.max(f64::MIN_POSITIVE).ln() / PARETO_TOL_REL_RESIDUAL.ln_1p()).floor(),
+            _ => (v / PARETO_TOL_PCT).floor(),
+        }
+    };
+    let qc: Vec<[f64; 3]> = c
+        .iter()
+        .map(|v| [bin(0, v[0]), bin(1, v[1]), bin(2, v[2])])
+        .collect();
+    (0..qc.len())
+        .map(|i| {
+            !(0..qc.len()).any(|o| {
+                o != i
+                    && (0..3).all(|q| qc[o][q] <= qc[i][q])
+                    && ((0..3).any(|q| qc[o][q] < qc[i][q]) || o < i)
+            })
+        })
+        .collect()
+}
+
 /// Rank, cluster and summarise a set of solutions.
 pub fn analyse(header: &Header, solutions: &[Solution]) -> Analysis {
     let mut ranked = solutions.to_vec();
@@ -105,12 +142,8 @@ pub fn analyse(header: &Header, solutions: &[Solution]) -> Analysis {
             ]
         })
         .collect();
-    let mut pareto = vec![false; ranked.len()];
-    for i in 0..n_ok {
-        pareto[i] = !(0..n_ok).any(|o| {
-            o != i && (0..3).all(|q| c[o][q] <= c[i][q]) && (0..3).any(|q| c[o][q] < c[i][q])
-        });
-    }
+    let mut pareto = pareto_front(&c);
+    pareto.resize(ranked.len(), false);
 
     // Single-linkage clusters (union–find).
     let mut parent: Vec<usize> = (0..n_ok).collect();
@@ -379,4 +412,30 @@ pub fn summary(header: &Header, a: &Analysis, wall_s: f64, threads: usize) -> Va
         "wall_s": wall_s,
         "threads": threads,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pareto_front_keeps_trade_offs_and_drops_dominated_and_near_copies() {
+        let c = [
+            [0.25, 9.45, 44.05],    // best residual, poor lifetime
+            [0.38, 2.1, 21.0],      // worse residual, better lifetime and rate: a trade-off
+            [0.39, 2.5, 22.0],      // dominated by row 1 on all three
+            [0.25001, 9.46, 44.06], // same bins as row 0 within tolerance, ranked lower: a copy
+            [0.50, 1.0, 60.0],      // best lifetime: on the front
+            [f64::NAN, 0.5, 10.0],  // unknown residual counts as worst, but best on the others
+        ];
+        let f = pareto_front(&c);
+        assert_eq!(f, vec![true, true, false, false, true, true]);
+    }
+
+    #[test]
+    fn pareto_front_is_never_empty_and_keeps_one_of_identical_rows() {
+        let c = [[1.0, 1.0, 1.0]; 4];
+        assert_eq!(pareto_front(&c), vec![true, false, false, false]);
+        assert!(pareto_front(&[]).is_empty());
+    }
 }
