@@ -357,7 +357,7 @@ fn curve_plots(
                 t_end: crate::objective::HORIZON_FACTOR * span,
                 ..*ode
             };
-            let (res, _) = model.trajectory(params, &load, &[], &o);
+            let res = model.simulate(params, &load, &[], &mut [], &o);
             let grid = dense_grid(res.t_end, 400);
             let (_, traj) = model.trajectory(params, &load, &grid, &o);
             CurvePlot {
@@ -416,7 +416,7 @@ fn simulate(
             t_end: crate::objective::HORIZON_FACTOR * span,
             ..ode
         };
-        let (res, _) = model.trajectory(&params, &load, &[], &o);
+        let res = model.simulate(&params, &load, &[], &mut [], &o);
         let mut grid = dense_grid(res.t_end, 200);
         grid.extend(c.times_h.iter().copied().filter(|t| *t <= res.t_end));
         grid.sort_by(|a, b| a.total_cmp(b));

@@ -3,10 +3,9 @@
 //! gradient with respect to up to `K` constants).
 //!
 //! Integrating a model in `Dual` numbers is integrating the forward sensitivity equations
-//! alongside the state with the same steps: the gradient part of every Runge–Kutta stage is
-//! f_y·S + f_p, so the result is the exact derivative of the discrete solution at the
-//! accepted step sizes (which depend on the value part only). The value part follows exactly
-//! the floating-point operations of the `f64` run.
+//! alongside the state: the gradient part of every Runge–Kutta stage is f_y·S + f_p, so the
+//! result is the exact derivative of the discrete solution at the accepted step sizes. Every
+//! arithmetic operation's value part is the `f64` operation.
 
 use std::fmt::Debug;
 use std::ops::{Add, Div, Mul, Neg, Sub};
@@ -28,6 +27,10 @@ pub trait Scalar:
     + Mul<f64, Output = Self>
     + Div<f64, Output = Self>
 {
+    /// Number of gradient components (0 for `f64`).
+    const N_GRAD: usize;
+    /// Gradient component `k` (< [`Scalar::N_GRAD`]).
+    fn grad(&self, k: usize) -> f64;
     /// A constant (zero gradient).
     fn cst(v: f64) -> Self;
     /// The value part.
@@ -44,6 +47,11 @@ pub trait Scalar:
 }
 
 impl Scalar for f64 {
+    const N_GRAD: usize = 0;
+    #[inline(always)]
+    fn grad(&self, _k: usize) -> f64 {
+        0.0
+    }
     #[inline(always)]
     fn cst(v: f64) -> Self {
         v
@@ -224,6 +232,11 @@ impl<const K: usize> Div<f64> for Dual<K> {
 }
 
 impl<const K: usize> Scalar for Dual<K> {
+    const N_GRAD: usize = K;
+    #[inline(always)]
+    fn grad(&self, k: usize) -> f64 {
+        self.d[k]
+    }
     #[inline(always)]
     fn cst(v: f64) -> Self {
         Dual { v, d: [0.0; K] }

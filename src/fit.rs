@@ -4,10 +4,13 @@
 //! **Best-w rule.** Objective values at different w are not comparable. Every converged
 //! local fit is scored on the paper's criteria — the normalised strain residual, the mean
 //! absolute lifetime error and, where the ruptures file gives measured minimum rates, the mean
-//! absolute minimum-rate error. Each criterion is min–max normalised over the candidates
-//! (0 = best candidate, 1 = worst) and the candidate with the smallest sum wins: the
-//! compromise closest to the ideal point, which is Pareto-optimal by construction. Ties go
-//! to the earlier candidate.
+//! absolute minimum-rate error. Each criterion is normalised over the candidates
+//! (0 = best candidate, 1 = worst), with a floor on the range — [`RESOLUTION_REL`] of the
+//! residual, [`RESOLUTION_PCT`] percentage points of the errors — so that differences below
+//! what the data resolve do not decide; the smallest sum wins: the compromise closest to
+//! the ideal point. Candidates within [`TIE_SCORE`] of the best score are ties; among ties
+//! the largest lifetime weight wins (the paper's own choice at 560 °C was w = 1: weight the
+//! lifetime as much as it costs nothing), then the earlier candidate.
 
 use std::time::Instant;
 
@@ -19,7 +22,7 @@ use crate::error::{Error, Result};
 use crate::guess::{initial_guess, Guess};
 use crate::lsq::{minimize, LmOptions, LmReport, Termination};
 use crate::model::{registry, Model};
-use crate::objective::{mean_abs, CreepProblem, Evaluation, Objective, ParamSpace};
+use crate::objective::{mean_abs, CreepProblem, Evaluation, JacobianMethod, Objective, ParamSpace};
 use crate::ode::OdeOptions;
 
 /// Numerical settings of a fit.
@@ -33,6 +36,8 @@ pub struct FitSettings {
     pub omega_f: f64,
     /// Lifetime term of eq. 8.
     pub lifetime: LifetimeTerm,
+    /// How the local fits' Jacobian is computed.
+    pub jacobian: JacobianMethod,
 }
 
 impl FitSettings {
@@ -50,6 +55,7 @@ impl FitSettings {
             },
             omega_f: cfg.objective.omega_f,
             lifetime: cfg.objective.lifetime_term,
+            jacobian: cfg.solver.jacobian,
         }
     }
 }
@@ -124,6 +130,7 @@ pub fn local_fit(
             ode: settings.ode,
         },
         space: space.clone(),
+        jacobian: settings.jacobian,
     };
     let u0 = space.to_unit(start);
     let k = u0.len();
@@ -168,6 +175,13 @@ pub fn weight_candidates(cfg: &RunConfig, n_curves: usize) -> Result<Vec<Vec<f64
     Ok(out)
 }
 
+/// Resolution of the normalised residual in the best-w rule, relative.
+pub const RESOLUTION_REL: f64 = 1e-3;
+/// Resolution of the lifetime and min-rate errors in the best-w rule, percentage points.
+pub const RESOLUTION_PCT: f64 = 0.1;
+/// Scores closer than this to the best are ties in the best-w rule.
+pub const TIE_SCORE: f64 = 0.05;
+
 /// Index of the best fit by the documented rule (module docs); `None` if no fit is usable.
 pub fn choose_best(fits: &[LocalFit], use_min_rate: bool) -> Option<usize> {
     let ok: Vec<usize> = (0..fits.len()).filter(|&i| fits[i].ok()).collect();
@@ -175,12 +189,15 @@ pub fn choose_best(fits: &[LocalFit], use_min_rate: bool) -> Option<usize> {
         return None;
     }
     type Criterion = fn(&LocalFit) -> f64;
-    let mut crits: Vec<Criterion> = vec![|f| f.eval.norm_residual, |f| f.mean_lifetime_err()];
+    let mut crits: Vec<(Criterion, bool)> = vec![
+        (|f| f.eval.norm_residual, true),
+        (|f| f.mean_lifetime_err(), false),
+    ];
     if use_min_rate {
-        crits.push(|f| f.mean_min_rate_err());
+        crits.push((|f| f.mean_min_rate_err(), false));
     }
     let mut score = vec![0.0; ok.len()];
-    for crit in &crits {
+    for (crit, relative) in &crits {
         let vals: Vec<f64> = ok.iter().map(|&i| crit(&fits[i])).collect();
         let finite: Vec<f64> = vals.iter().cloned().filter(|v| v.is_finite()).collect();
         if finite.is_empty() {
@@ -188,23 +205,29 @@ pub fn choose_best(fits: &[LocalFit], use_min_rate: bool) -> Option<usize> {
         }
         let lo = finite.iter().cloned().fold(f64::INFINITY, f64::min);
         let hi = finite.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+        let floor = if *relative {
+            RESOLUTION_REL * lo.abs()
+        } else {
+            RESOLUTION_PCT
+        };
+        let range = (hi - lo).max(floor).max(f64::MIN_POSITIVE);
         for (s, v) in score.iter_mut().zip(&vals) {
-            *s += if !v.is_finite() {
-                1.0
-            } else if hi > lo {
-                (v - lo) / (hi - lo)
-            } else {
-                0.0
-            };
+            *s += if v.is_finite() { (v - lo) / range } else { 1.0 };
         }
     }
-    let mut best = 0;
-    for k in 1..ok.len() {
-        if score[k] < score[best] {
-            best = k;
+    let min_score = score.iter().cloned().fold(f64::INFINITY, f64::min);
+    let mean_w = |i: usize| fits[i].w.iter().sum::<f64>() / fits[i].w.len().max(1) as f64;
+    let mut best: Option<usize> = None;
+    for k in 0..ok.len() {
+        if score[k] > min_score + TIE_SCORE {
+            continue;
         }
+        best = match best {
+            Some(b) if mean_w(ok[k]) <= mean_w(ok[b]) => Some(b),
+            _ => Some(k),
+        };
     }
-    Some(ok[best])
+    best.map(|b| ok[b])
 }
 
 /// Everything `creepfit fit` computed.
@@ -328,4 +351,58 @@ pub fn run_fit_with(cfg: &RunConfig, data: &Dataset, req: &FitRequest) -> Result
         settings,
         wall_s: t0.elapsed().as_secs_f64(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cand(w: f64, norm: f64, life: f64) -> LocalFit {
+        LocalFit {
+            start_label: "t".into(),
+            start: vec![],
+            w: vec![w; 3],
+            params: vec![],
+            lm: LmReport {
+                x: vec![],
+                objective: norm,
+                residuals: vec![],
+                iterations: 1,
+                evaluations: 1,
+                termination: Termination::ConvergedStep,
+                failure: None,
+            },
+            eval: Evaluation {
+                objective: norm,
+                norm_residual: norm,
+                curves: vec![],
+            },
+            lifetime_err_pct: vec![life; 3],
+            min_rate_err_pct: vec![10.0; 3],
+            wall_s: 0.0,
+        }
+    }
+
+    #[test]
+    fn best_w_takes_the_compromise_and_ignores_differences_below_resolution() {
+        // A clear compromise: candidate 1 is near-best on both criteria.
+        let fits = [
+            cand(0.1, 0.30, 9.0),
+            cand(0.5, 0.31, 2.5),
+            cand(1.0, 0.45, 2.0),
+        ];
+        assert_eq!(choose_best(&fits, false), Some(1));
+        // Equivalent candidates (differences far below 0.1 % and 0.1 pp): the largest w,
+        // whatever the rounding-level order.
+        let fits = [
+            cand(0.4, 0.380931, 2.1090),
+            cand(0.9, 0.380932, 2.1081),
+            cand(0.6, 0.380930, 2.1085),
+        ];
+        assert_eq!(choose_best(&fits, false), Some(1));
+        // A failed fit is never chosen.
+        let mut bad = cand(1.0, f64::NAN, 0.0);
+        bad.lm.termination = Termination::SimulationFailure;
+        assert_eq!(choose_best(&[bad, cand(0.2, 0.4, 3.0)], false), Some(1));
+    }
 }

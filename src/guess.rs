@@ -15,7 +15,7 @@ use crate::config::LifetimeTerm;
 use crate::data::Curve;
 use crate::lsq::{minimize, EvalFailure, LeastSquaresProblem, LmOptions};
 use crate::model::Model;
-use crate::objective::{CreepProblem, Objective, ParamSpace, MAX_PARAMS};
+use crate::objective::{CreepProblem, JacobianMethod, Objective, ParamSpace, MAX_PARAMS};
 use crate::ode::OdeOptions;
 
 /// Fraction of the rupture life taken as the primary stage for fitting H* and h.
@@ -246,6 +246,7 @@ pub fn initial_guess(
             ode: *ode,
         },
         space: kc_space.clone(),
+        jacobian: JacobianMethod::default(),
     };
     let mut best = (f64::INFINITY, x[IKC]);
     for u0 in [0.1, 0.5, 0.9] {

@@ -13,11 +13,14 @@
 //! problem. It also penalises early rupture through the strain term, which the "late"
 //! lifetime term does not.
 
+use nalgebra::DMatrix;
+
 use crate::config::LifetimeTerm;
 use crate::data::Curve;
+use crate::dual::{Dual, Scalar, SENS};
 use crate::lsq::{EvalFailure, LeastSquaresProblem};
 use crate::model::{Load, Model, Scale};
-use crate::ode::{OdeOptions, Outcome};
+use crate::ode::{OdeOptions, Outcome, SimResult};
 
 /// Integration horizon as a multiple of the longest measured time of a curve (rupture time
 /// or last point): a prediction that has not ruptured by then is a failed simulation.
@@ -108,6 +111,14 @@ impl ParamSpace {
             }
         }
     }
+    /// Derivative dx/du of constant `j` at physical value `x` (h per unit coordinate).
+    pub fn dx_du(&self, j: usize, x: f64) -> f64 {
+        let (lb, ub) = (self.lb[j], self.ub[j]);
+        match self.scale[j] {
+            Scale::Linear => ub - lb,
+            Scale::Log => x * (ub.ln() - lb.ln()),
+        }
+    }
     /// Whether physical constant `j` sits on a bound (within `tol` in unit coordinates).
     pub fn at_bound(&self, j: usize, x: f64, tol: f64) -> Option<&'static str> {
         let u = self.to_unit_one(j, x);
@@ -118,6 +129,57 @@ impl ParamSpace {
         } else {
             None
         }
+    }
+}
+
+/// How the least-squares Jacobian of eq. 8 is computed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum JacobianMethod {
+    /// Forward sensitivities: one simulation per curve in dual numbers carries ∂r/∂u for up
+    /// to [`SENS`] free constants (finite differences beyond that).
+    #[default]
+    Sensitivity,
+    /// Forward differences in the unit box, one extra simulation per free constant.
+    FiniteDifference,
+}
+
+/// Number types eq. 8 can be evaluated in: `f64`, and dual numbers for the Jacobian.
+pub trait SimScalar: Scalar {
+    /// Simulate through the object-safe model in this number type.
+    fn simulate(
+        model: &dyn Model,
+        params: &[Self],
+        load: &Load,
+        times: &[f64],
+        out: &mut [Self],
+        opts: &OdeOptions,
+    ) -> SimResult<Self>;
+}
+
+impl SimScalar for f64 {
+    fn simulate(
+        model: &dyn Model,
+        params: &[f64],
+        load: &Load,
+        times: &[f64],
+        out: &mut [f64],
+        opts: &OdeOptions,
+    ) -> SimResult {
+        model.simulate(params, load, times, out, opts)
+    }
+}
+
+impl SimScalar for Dual<SENS> {
+    fn simulate(
+        model: &dyn Model,
+        params: &[Self],
+        load: &Load,
+        times: &[f64],
+        out: &mut [Self],
+        opts: &OdeOptions,
+    ) -> SimResult<Self> {
+        model.simulate_sens(params, load, times, out, opts)
     }
 }
 
@@ -226,27 +288,35 @@ impl<'a> Objective<'a> {
 
     /// Simulate curve `i` at `params`, writing the predicted strain (with continuation) into
     /// `strain`. Returns (outcome, rupture time, rupture strain, min rate).
-    fn predict(
+    fn predict<S: SimScalar>(
         &self,
         i: usize,
-        params: &[f64],
-        strain: &mut [f64],
-    ) -> Result<(Outcome, f64, f64, f64), EvalFailure> {
+        params: &[S],
+        strain: &mut [S],
+    ) -> Result<(Outcome, S, S, f64), EvalFailure> {
         let c = &self.curves[i];
-        let res = self
-            .model
-            .simulate(params, &self.load(c), &c.times_h, strain, &self.ode_for(c));
+        let res = S::simulate(
+            self.model,
+            params,
+            &self.load(c),
+            &c.times_h,
+            strain,
+            &self.ode_for(c),
+        );
         let n = c.times_h.len();
         match res.outcome {
             Outcome::Ruptured => {
                 for k in res.n_out..n {
-                    strain[k] = res.strain_end + res.rate_end * (c.times_h[k] - res.t_end);
+                    strain[k] = res.strain_end + res.rate_end * (-res.t_end + c.times_h[k]);
                 }
                 Ok((res.outcome, res.t_end, res.strain_end, res.min_rate))
             }
-            Outcome::Horizon if c.rupture_time_h.is_none() && res.n_out == n => {
-                Ok((res.outcome, f64::NAN, f64::NAN, res.min_rate))
-            }
+            Outcome::Horizon if c.rupture_time_h.is_none() && res.n_out == n => Ok((
+                res.outcome,
+                S::cst(f64::NAN),
+                S::cst(f64::NAN),
+                res.min_rate,
+            )),
             other => Err(EvalFailure(format!(
                 "{} °C {} MPa: {}",
                 c.temperature_c,
@@ -258,6 +328,12 @@ impl<'a> Objective<'a> {
 
     /// Fill `r` (length [`Objective::n_residuals`]) at the physical constants `params`.
     pub fn residuals(&self, params: &[f64], r: &mut [f64]) -> Result<(), EvalFailure> {
+        self.residuals_in(params, r)
+    }
+
+    /// [`Objective::residuals`] in any [`SimScalar`]: with dual-number constants the residuals
+    /// carry their derivatives.
+    pub fn residuals_in<S: SimScalar>(&self, params: &[S], r: &mut [S]) -> Result<(), EvalFailure> {
         let mut off = 0;
         for (i, c) in self.curves.iter().enumerate() {
             let n = c.times_h.len();
@@ -270,12 +346,12 @@ impl<'a> Objective<'a> {
                 Some(t_exp) => {
                     let rel = (t_r - t_exp) / t_exp;
                     let rel = match self.lifetime {
-                        LifetimeTerm::Late => rel.max(0.0),
-                        LifetimeTerm::Both => rel,
+                        LifetimeTerm::Late if !(rel.re() > 0.0) => S::cst(0.0),
+                        _ => rel,
                     };
-                    self.w[i].sqrt() * rel
+                    rel * self.w[i].sqrt()
                 }
-                None => 0.0,
+                None => S::cst(0.0),
             };
             off += n + 1;
         }
@@ -347,6 +423,8 @@ pub struct CreepProblem<'a> {
     pub objective: Objective<'a>,
     /// The mapping to the unit box.
     pub space: ParamSpace,
+    /// How the Jacobian is computed.
+    pub jacobian: JacobianMethod,
 }
 
 impl LeastSquaresProblem for CreepProblem<'_> {
@@ -361,5 +439,40 @@ impl LeastSquaresProblem for CreepProblem<'_> {
         let n = self.space.len();
         self.space.from_unit(u, &mut x[..n]);
         self.objective.residuals(&x[..n], r)
+    }
+    fn jacobian(
+        &self,
+        u: &[f64],
+        _r: &[f64],
+        jac: &mut DMatrix<f64>,
+    ) -> Option<Result<(), EvalFailure>> {
+        let n_free = self.space.n_free();
+        if self.jacobian != JacobianMethod::Sensitivity || n_free > SENS {
+            return None;
+        }
+        let n = self.space.len();
+        let mut x = [0.0; MAX_PARAMS];
+        self.space.from_unit(u, &mut x[..n]);
+        let mut xd = [Dual::<SENS>::cst(0.0); MAX_PARAMS];
+        let mut k = 0;
+        for j in 0..n {
+            xd[j] = if self.space.free[j] {
+                let d = Dual::var(x[j], k, self.space.dx_du(j, x[j]));
+                k += 1;
+                d
+            } else {
+                Dual::cst(x[j])
+            };
+        }
+        let mut rd = vec![Dual::<SENS>::cst(0.0); self.objective.n_residuals()];
+        if let Err(e) = self.objective.residuals_in(&xd[..n], &mut rd) {
+            return Some(Err(e));
+        }
+        for (i, ri) in rd.iter().enumerate() {
+            for k in 0..n_free {
+                jac[(i, k)] = ri.d[k];
+            }
+        }
+        Some(Ok(()))
     }
 }

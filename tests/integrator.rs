@@ -88,7 +88,7 @@ fn four_state_matches_one_state_reduction() {
         assert_eq!(r4.outcome, Outcome::Ruptured);
         assert_eq!(r1.outcome, Outcome::Ruptured);
         assert!(
-            rel(r4.t_end, r1.t_end) < 1e-8,
+            rel(r4.t_end, r1.t_end) < 1e-9,
             "{} vs {}",
             r4.t_end,
             r1.t_end
@@ -99,7 +99,7 @@ fn four_state_matches_one_state_reduction() {
         integrate(&KhdReduced, &p1, &times, &o, |k, _, y| s1[k] = y[0]);
         for k in 1..times.len() {
             assert!(
-                rel(s4[k][0], s1[k]) < 1e-8,
+                rel(s4[k][0], s1[k]) < 1e-9,
                 "t={} {} vs {}",
                 times[k],
                 s4[k][0],

@@ -278,32 +278,56 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
         if lambda < 0.0 {
             lambda = opts.lambda0 * diag_max;
         }
-        let nf = free.len();
         // Inner loop: increase damping until a step reduces the objective.
         loop {
-            let mut a = DMatrix::<f64>::zeros(nf, nf);
-            let mut b = DVector::<f64>::zeros(nf);
-            for (p, &jp) in free.iter().enumerate() {
-                b[p] = -g[jp];
-                for (q, &jq) in free.iter().enumerate() {
-                    a[(p, q)] = jtj[(jp, jq)];
-                }
-                let d = jtj[(jp, jp)].max(1e-12 * diag_max);
-                a[(p, p)] += lambda * d;
-            }
-            let step = match a.cholesky() {
-                Some(ch) => ch.solve(&b),
-                None => {
-                    lambda *= nu;
-                    nu *= 2.0;
-                    if lambda > opts.lambda_max * diag_max {
-                        return done(x, f, r, iter, evaluations, Termination::Stalled);
+            // Solve on the free set; a free variable at a bound whose step points outward
+            // would be cut to zero by the projection, leaving a step that is not a descent
+            // step of the remaining variables: hold it and solve again.
+            let mut held = free.clone();
+            let step = loop {
+                let nf = held.len();
+                let mut a = DMatrix::<f64>::zeros(nf, nf);
+                let mut b = DVector::<f64>::zeros(nf);
+                for (p, &jp) in held.iter().enumerate() {
+                    b[p] = -g[jp];
+                    for (q, &jq) in held.iter().enumerate() {
+                        a[(p, q)] = jtj[(jp, jq)];
                     }
-                    continue;
+                    let d = jtj[(jp, jp)].max(1e-12 * diag_max);
+                    a[(p, p)] += lambda * d;
                 }
+                let Some(ch) = a.cholesky() else {
+                    break None;
+                };
+                let step = ch.solve(&b);
+                let blocked: Vec<usize> = held
+                    .iter()
+                    .enumerate()
+                    .filter(|&(p, &jp)| {
+                        (at_lb(jp) && step[p] < 0.0) || (at_ub(jp) && step[p] > 0.0)
+                    })
+                    .map(|(p, _)| p)
+                    .collect();
+                if blocked.is_empty() || blocked.len() == held.len() {
+                    break Some((held, step));
+                }
+                held = held
+                    .iter()
+                    .enumerate()
+                    .filter(|(p, _)| !blocked.contains(p))
+                    .map(|(_, &jp)| jp)
+                    .collect();
+            };
+            let Some((held, step)) = step else {
+                lambda *= nu;
+                nu *= 2.0;
+                if lambda > opts.lambda_max * diag_max {
+                    return done(x, f, r, iter, evaluations, Termination::Stalled);
+                }
+                continue;
             };
             x_trial.copy_from_slice(&x);
-            for (p, &jp) in free.iter().enumerate() {
+            for (p, &jp) in held.iter().enumerate() {
                 x_trial[jp] = (x[jp] + step[p]).clamp(lb[jp], ub[jp]);
             }
             let dx = DVector::from_iterator(n, (0..n).map(|j| x_trial[j] - x[j]));

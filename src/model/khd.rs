@@ -2,6 +2,7 @@
 //! four-state form and in its exact one-state reduction.
 
 use super::{ConstantSpec, CreepModel, Load, Scale};
+use crate::dual::Scalar;
 
 /// Largest sinh argument accepted as physical: beyond it the rate is absurd (A·e^200) and
 /// the state can only come from a trial step past rupture.
@@ -68,37 +69,38 @@ pub fn constants() -> Vec<ConstantSpec> {
     ]
 }
 
-/// Per-simulation constants of the KHD model.
+/// Per-simulation constants of the KHD model (in the number type `S` of the simulation).
 #[derive(Debug, Clone, Copy)]
-pub struct KhdPrepared {
+pub struct KhdPrepared<S> {
     /// A, 1/h
-    pub a: f64,
+    pub a: S,
     /// B·σ, dimensionless
-    pub b_sigma: f64,
+    pub b_sigma: S,
     /// 1/H*
-    pub inv_hstar: f64,
+    pub inv_hstar: S,
     /// H*
-    pub hstar: f64,
+    pub hstar: S,
     /// h/σ
-    pub h_over_sigma: f64,
+    pub h_over_sigma: S,
     /// Kc/3, 1/h
-    pub kc3: f64,
+    pub kc3: S,
     /// Kc, 1/h
-    pub kc: f64,
+    pub kc: S,
     /// C
-    pub c: f64,
+    pub c: S,
     /// ω_f
     pub omega_f: f64,
 }
 
-fn prepare(params: &[f64], load: &Load) -> KhdPrepared {
+/// Derive the per-simulation constants from b = [A, B, H*, h, Kc, C] and the load.
+pub fn prepare<S: Scalar>(params: &[S], load: &Load) -> KhdPrepared<S> {
     let (a, b, hstar, h, kc, c) = (
         params[0], params[1], params[2], params[3], params[4], params[5],
     );
     KhdPrepared {
         a,
         b_sigma: b * load.stress_mpa,
-        inv_hstar: 1.0 / hstar,
+        inv_hstar: S::cst(1.0) / hstar,
         hstar,
         h_over_sigma: h / load.stress_mpa,
         kc3: kc / 3.0,
@@ -110,18 +112,18 @@ fn prepare(params: &[f64], load: &Load) -> KhdPrepared {
 
 /// Strain rate A·sinh(Bσ(1−H)/((1−Φ)(1−ω))), or `None` outside the model's domain.
 #[inline(always)]
-pub fn khd_rate(
-    p: &KhdPrepared,
-    hard: f64,
-    one_minus_phi: f64,
-    one_minus_omega: f64,
-) -> Option<f64> {
+pub fn khd_rate<S: Scalar>(
+    p: &KhdPrepared<S>,
+    hard: S,
+    one_minus_phi: S,
+    one_minus_omega: S,
+) -> Option<S> {
     let denom = one_minus_phi * one_minus_omega;
-    if !(denom > 0.0) {
+    if !(denom.re() > 0.0) {
         return None;
     }
-    let arg = p.b_sigma * (1.0 - hard) / denom;
-    if !(arg.abs() <= MAX_SINH_ARG) {
+    let arg = p.b_sigma * (S::cst(1.0) - hard) / denom;
+    if !(arg.re().abs() <= MAX_SINH_ARG) {
         return None;
     }
     Some(p.a * arg.sinh())
@@ -132,37 +134,41 @@ pub fn khd_rate(
 pub struct Khd;
 
 impl CreepModel<4> for Khd {
-    type Prepared = KhdPrepared;
-    fn prepare(&self, params: &[f64], load: &Load) -> KhdPrepared {
+    type Prepared<S: Scalar> = KhdPrepared<S>;
+    fn prepare<S: Scalar>(&self, params: &[S], load: &Load) -> KhdPrepared<S> {
         prepare(params, load)
     }
-    fn init(&self, _p: &KhdPrepared) -> [f64; 4] {
-        [0.0; 4]
+    fn init<S: Scalar>(&self, _p: &KhdPrepared<S>) -> [S; 4] {
+        [S::cst(0.0); 4]
     }
     #[inline(always)]
-    fn rhs(&self, p: &KhdPrepared, _t: f64, y: &[f64; 4], dy: &mut [f64; 4]) -> bool {
+    fn rhs<S: Scalar>(&self, p: &KhdPrepared<S>, _t: S, y: &[S; 4], dy: &mut [S; 4]) -> bool {
         let [_, hard, phi, omega] = *y;
-        let one_minus_phi = 1.0 - phi;
-        let Some(rate) = khd_rate(p, hard, one_minus_phi, 1.0 - omega) else {
+        let one_minus_phi = S::cst(1.0) - phi;
+        let Some(rate) = khd_rate(p, hard, one_minus_phi, S::cst(1.0) - omega) else {
             return false;
         };
         let sq = one_minus_phi * one_minus_phi;
         dy[0] = rate;
-        dy[1] = p.h_over_sigma * rate * (1.0 - hard * p.inv_hstar);
+        dy[1] = p.h_over_sigma * rate * (S::cst(1.0) - hard * p.inv_hstar);
         dy[2] = p.kc3 * sq * sq;
         dy[3] = p.c * rate;
         true
     }
     #[inline(always)]
-    fn event(&self, p: &KhdPrepared, y: &[f64; 4]) -> f64 {
+    fn event<S: Scalar>(&self, p: &KhdPrepared<S>, y: &[S; 4]) -> S {
         y[3] - p.omega_f
     }
     #[inline(always)]
-    fn strain(&self, _p: &KhdPrepared, y: &[f64; 4]) -> f64 {
+    fn event_rate<S: Scalar>(&self, _p: &KhdPrepared<S>, _y: &[S; 4], dy: &[S; 4]) -> S {
+        dy[3]
+    }
+    #[inline(always)]
+    fn strain<S: Scalar>(&self, _p: &KhdPrepared<S>, y: &[S; 4]) -> S {
         y[0]
     }
     #[inline(always)]
-    fn strain_rate(&self, _p: &KhdPrepared, _y: &[f64; 4], dy: &[f64; 4]) -> f64 {
+    fn strain_rate<S: Scalar>(&self, _p: &KhdPrepared<S>, _y: &[S; 4], dy: &[S; 4]) -> S {
         dy[0]
     }
     fn state_names(&self) -> [&'static str; 4] {
@@ -176,19 +182,19 @@ impl CreepModel<4> for Khd {
 pub struct KhdReduced;
 
 impl CreepModel<1> for KhdReduced {
-    type Prepared = KhdPrepared;
-    fn prepare(&self, params: &[f64], load: &Load) -> KhdPrepared {
+    type Prepared<S: Scalar> = KhdPrepared<S>;
+    fn prepare<S: Scalar>(&self, params: &[S], load: &Load) -> KhdPrepared<S> {
         prepare(params, load)
     }
-    fn init(&self, _p: &KhdPrepared) -> [f64; 1] {
-        [0.0]
+    fn init<S: Scalar>(&self, _p: &KhdPrepared<S>) -> [S; 1] {
+        [S::cst(0.0)]
     }
     #[inline(always)]
-    fn rhs(&self, p: &KhdPrepared, t: f64, y: &[f64; 1], dy: &mut [f64; 1]) -> bool {
+    fn rhs<S: Scalar>(&self, p: &KhdPrepared<S>, t: S, y: &[S; 1], dy: &mut [S; 1]) -> bool {
         let eps = y[0];
-        let hard = p.hstar * (1.0 - (-p.h_over_sigma * eps * p.inv_hstar).exp());
-        let one_minus_phi = (1.0 + p.kc * t).powf(-1.0 / 3.0);
-        match khd_rate(p, hard, one_minus_phi, 1.0 - p.c * eps) {
+        let hard = p.hstar * (S::cst(1.0) - (-(p.h_over_sigma * eps * p.inv_hstar)).exp());
+        let one_minus_phi = (p.kc * t + 1.0).powf(-1.0 / 3.0);
+        match khd_rate(p, hard, one_minus_phi, S::cst(1.0) - p.c * eps) {
             Some(rate) => {
                 dy[0] = rate;
                 true
@@ -197,15 +203,19 @@ impl CreepModel<1> for KhdReduced {
         }
     }
     #[inline(always)]
-    fn event(&self, p: &KhdPrepared, y: &[f64; 1]) -> f64 {
+    fn event<S: Scalar>(&self, p: &KhdPrepared<S>, y: &[S; 1]) -> S {
         p.c * y[0] - p.omega_f
     }
     #[inline(always)]
-    fn strain(&self, _p: &KhdPrepared, y: &[f64; 1]) -> f64 {
+    fn event_rate<S: Scalar>(&self, p: &KhdPrepared<S>, _y: &[S; 1], dy: &[S; 1]) -> S {
+        p.c * dy[0]
+    }
+    #[inline(always)]
+    fn strain<S: Scalar>(&self, _p: &KhdPrepared<S>, y: &[S; 1]) -> S {
         y[0]
     }
     #[inline(always)]
-    fn strain_rate(&self, _p: &KhdPrepared, _y: &[f64; 1], dy: &[f64; 1]) -> f64 {
+    fn strain_rate<S: Scalar>(&self, _p: &KhdPrepared<S>, _y: &[S; 1], dy: &[S; 1]) -> S {
         dy[0]
     }
     fn state_names(&self) -> [&'static str; 1] {

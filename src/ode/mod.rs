@@ -2,6 +2,7 @@
 //! measurement times, the rupture event located by root finding on the dense output, and
 //! step statistics. Fixed-size state (`[f64; N]`): no heap allocation per step.
 
+use crate::dual::Scalar;
 use crate::model::CreepModel;
 
 /// Integration options; times in h.
@@ -71,17 +72,18 @@ pub struct Stats {
     pub evals: usize,
 }
 
-/// Result of one integration.
+/// Result of one integration; `S` is the simulation's number type (with [`crate::dual::Dual`]
+/// the rupture time, strain and rate carry their sensitivities).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SimResult {
+pub struct SimResult<S = f64> {
     /// How it ended.
     pub outcome: Outcome,
     /// Time reached, h: the rupture time when `outcome` is `Ruptured`.
-    pub t_end: f64,
+    pub t_end: S,
     /// Strain (fraction) at `t_end`.
-    pub strain_end: f64,
+    pub strain_end: S,
     /// Strain rate (1/h) at `t_end`.
-    pub rate_end: f64,
+    pub rate_end: S,
     /// Minimum strain rate over the integration (1/h), refined by a parabola through the
     /// three step points around the smallest rate.
     pub min_rate: f64,
@@ -93,7 +95,7 @@ pub struct SimResult {
     pub stats: Stats,
 }
 
-impl SimResult {
+impl<S> SimResult<S> {
     /// Whether the rupture was reached.
     pub fn ruptured(&self) -> bool {
         self.outcome == Outcome::Ruptured
@@ -150,47 +152,46 @@ const DOMAIN_SHRINK: f64 = 0.25;
 const EVENT_TOL: f64 = 1e-15;
 
 /// Hairer's continuous extension of one accepted step.
-struct Dense<const N: usize> {
-    r: [[f64; N]; 5],
+struct Dense<S, const N: usize> {
+    r: [[S; N]; 5],
 }
 
-impl<const N: usize> Dense<N> {
+impl<S: Scalar, const N: usize> Dense<S, N> {
     #[allow(clippy::too_many_arguments)]
     #[inline]
     fn new(
         h: f64,
-        y: &[f64; N],
-        y1: &[f64; N],
-        k1: &[f64; N],
-        k3: &[f64; N],
-        k4: &[f64; N],
-        k5: &[f64; N],
-        k6: &[f64; N],
-        k7: &[f64; N],
+        y: &[S; N],
+        y1: &[S; N],
+        k1: &[S; N],
+        k3: &[S; N],
+        k4: &[S; N],
+        k5: &[S; N],
+        k6: &[S; N],
+        k7: &[S; N],
     ) -> Self {
-        let mut r = [[0.0; N]; 5];
+        let mut r = [[S::cst(0.0); N]; 5];
         for i in 0..N {
             let ydiff = y1[i] - y[i];
-            let bspl = h * k1[i] - ydiff;
+            let bspl = k1[i] * h - ydiff;
             r[0][i] = y[i];
             r[1][i] = ydiff;
             r[2][i] = bspl;
-            r[3][i] = ydiff - h * k7[i] - bspl;
+            r[3][i] = ydiff - k7[i] * h - bspl;
             r[4][i] =
-                h * (D1 * k1[i] + D3 * k3[i] + D4 * k4[i] + D5 * k5[i] + D6 * k6[i] + D7 * k7[i]);
+                (k1[i] * D1 + k3[i] * D3 + k4[i] * D4 + k5[i] * D5 + k6[i] * D6 + k7[i] * D7) * h;
         }
         Dense { r }
     }
     /// State at fraction θ ∈ [0, 1] of the step.
     #[inline]
-    fn at(&self, theta: f64) -> [f64; N] {
+    fn at(&self, theta: f64) -> [S; N] {
         let t1 = 1.0 - theta;
-        let mut out = [0.0; N];
+        let mut out = [S::cst(0.0); N];
         for (i, o) in out.iter_mut().enumerate() {
             *o = self.r[0][i]
-                + theta
-                    * (self.r[1][i]
-                        + t1 * (self.r[2][i] + theta * (self.r[3][i] + t1 * self.r[4][i])));
+                + (self.r[1][i] + (self.r[2][i] + (self.r[3][i] + self.r[4][i] * t1) * theta) * t1)
+                    * theta;
         }
         out
     }
@@ -256,28 +257,33 @@ fn parabola_min(p0: (f64, f64), p1: (f64, f64), p2: (f64, f64)) -> Option<(f64, 
 /// Integrate `model` from its initial state until rupture, the horizon or a failure.
 ///
 /// `times` must be sorted ascending and non-negative; `out(k, t_k, y(t_k))` is called for
-/// every output time up to the end of the integration, in order.
-pub fn integrate<const N: usize, M, F>(
+/// every output time up to the end of the integration, in order. Event location and the
+/// minimum-rate search use value parts; the step-size control also includes the gradient
+/// parts of a [`crate::dual::Dual`] run (so it may take more steps than the `f64` run).
+pub fn integrate<S, const N: usize, M, F>(
     model: &M,
-    p: &M::Prepared,
+    p: &M::Prepared<S>,
     times: &[f64],
     opts: &OdeOptions,
     mut out: F,
-) -> SimResult
+) -> SimResult<S>
 where
+    S: Scalar,
     M: CreepModel<N>,
-    F: FnMut(usize, f64, &[f64; N]),
+    F: FnMut(usize, f64, &[S; N]),
 {
+    let zero = S::cst(0.0);
+    let nan = S::cst(f64::NAN);
     let mut stats = Stats::default();
     let mut t = 0.0_f64;
     let mut y = model.init(p);
-    let mut k1 = [0.0; N];
-    let result = |outcome, t: f64, y: &[f64; N], rate: f64, mr: &MinRate, n_out, stats| {
+    let mut k1 = [zero; N];
+    let result = |outcome, t: S, strain: S, rate: S, mr: &MinRate, n_out, stats| {
         let (t_min, min_rate) = mr.finish();
         SimResult {
             outcome,
             t_end: t,
-            strain_end: model.strain(p, y),
+            strain_end: strain,
             rate_end: rate,
             min_rate,
             t_min_rate: t_min,
@@ -286,11 +292,12 @@ where
         }
     };
     stats.evals += 1;
-    if !model.rhs(p, t, &y, &mut k1) {
+    if !model.rhs(p, S::cst(t), &y, &mut k1) {
         let mr = MinRate::new(0.0, f64::NAN);
-        return result(Outcome::InvalidStart, t, &y, f64::NAN, &mr, 0, stats);
+        let e0 = model.strain(p, &y);
+        return result(Outcome::InvalidStart, S::cst(t), e0, nan, &mr, 0, stats);
     }
-    let mut mr = MinRate::new(t, model.strain_rate(p, &y, &k1));
+    let mut mr = MinRate::new(t, model.strain_rate(p, &y, &k1).re());
     let mut next = 0;
     while next < times.len() && times[next] <= t {
         out(next, times[next], &y);
@@ -304,33 +311,23 @@ where
     };
     let mut facold = 1e-4_f64;
     let mut last_rejected = false;
-    let (mut k2, mut k3, mut k4, mut k5, mut k6, mut k7) =
-        ([0.0; N], [0.0; N], [0.0; N], [0.0; N], [0.0; N], [0.0; N]);
-    let mut yt = [0.0; N];
-    let mut y1 = [0.0; N];
+    let (mut k2, mut k3, mut k4, mut k5, mut k6, mut k7) = (
+        [zero; N], [zero; N], [zero; N], [zero; N], [zero; N], [zero; N],
+    );
+    let mut yt = [zero; N];
+    let mut y1 = [zero; N];
 
     loop {
-        if stats.steps + stats.rejected >= opts.max_steps {
-            return result(
-                Outcome::MaxSteps,
-                t,
-                &y,
-                model.strain_rate(p, &y, &k1),
-                &mr,
-                next,
-                stats,
-            );
-        }
-        if h.abs() <= 16.0 * f64::EPSILON * t.abs().max(1.0) {
-            return result(
-                Outcome::StepUnderflow,
-                t,
-                &y,
-                model.strain_rate(p, &y, &k1),
-                &mr,
-                next,
-                stats,
-            );
+        let stop = if stats.steps + stats.rejected >= opts.max_steps {
+            Some(Outcome::MaxSteps)
+        } else if h.abs() <= 16.0 * f64::EPSILON * t.abs().max(1.0) {
+            Some(Outcome::StepUnderflow)
+        } else {
+            None
+        };
+        if let Some(outcome) = stop {
+            let (e, r) = (model.strain(p, &y), model.strain_rate(p, &y, &k1));
+            return result(outcome, S::cst(t), e, r, &mr, next, stats);
         }
         if t + h > t_end {
             h = t_end - t;
@@ -342,10 +339,10 @@ where
             ($k:ident, $c:expr, $($a:expr, $kk:ident),+) => {
                 if ok {
                     for i in 0..N {
-                        yt[i] = y[i] + h * (0.0 $(+ $a * $kk[i])+);
+                        yt[i] = y[i] + (zero $(+ $kk[i] * $a)+) * h;
                     }
                     stats.evals += 1;
-                    ok = model.rhs(p, t + $c * h, &yt, &mut $k);
+                    ok = model.rhs(p, S::cst(t + $c * h), &yt, &mut $k);
                 }
             };
         }
@@ -357,10 +354,10 @@ where
         if ok {
             for i in 0..N {
                 y1[i] = y[i]
-                    + h * (A71 * k1[i] + A73 * k3[i] + A74 * k4[i] + A75 * k5[i] + A76 * k6[i]);
+                    + (k1[i] * A71 + k3[i] * A73 + k4[i] * A74 + k5[i] * A75 + k6[i] * A76) * h;
             }
             stats.evals += 1;
-            ok = model.rhs(p, t + h, &y1, &mut k7) && y1.iter().all(|v| v.is_finite());
+            ok = model.rhs(p, S::cst(t + h), &y1, &mut k7) && y1.iter().all(|v| v.re().is_finite());
         }
         if !ok {
             stats.rejected += 1;
@@ -374,12 +371,40 @@ where
         } else {
             let mut s = 0.0;
             for i in 0..N {
-                let sk = opts.atol + opts.rtol * y[i].abs().max(y1[i].abs());
+                let sk = opts.atol + opts.rtol * y[i].re().abs().max(y1[i].re().abs());
                 let e = h
-                    * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] + E7 * k7[i]);
+                    * (E1 * k1[i].re()
+                        + E3 * k3[i].re()
+                        + E4 * k4[i].re()
+                        + E5 * k5[i].re()
+                        + E6 * k6[i].re()
+                        + E7 * k7[i].re());
                 s += (e / sk) * (e / sk);
             }
-            (s / N as f64).sqrt()
+            let err = (s / N as f64).sqrt();
+            if S::N_GRAD > 0 {
+                // Sensitivities are error-controlled too: a quasi-static component (H at its
+                // saturation) can make the sensitivity equations stiff where the value shows
+                // no error at all, and an uncontrolled step then lets them blow up.
+                let mut s = 0.0;
+                for i in 0..N {
+                    for k in 0..S::N_GRAD {
+                        let sk =
+                            opts.atol + opts.rtol * y[i].grad(k).abs().max(y1[i].grad(k).abs());
+                        let e = h
+                            * (E1 * k1[i].grad(k)
+                                + E3 * k3[i].grad(k)
+                                + E4 * k4[i].grad(k)
+                                + E5 * k5[i].grad(k)
+                                + E6 * k6[i].grad(k)
+                                + E7 * k7[i].grad(k));
+                        s += (e / sk) * (e / sk);
+                    }
+                }
+                err.max((s / (N * S::N_GRAD) as f64).sqrt())
+            } else {
+                err
+            }
         };
         if !err.is_finite() {
             stats.rejected += 1;
@@ -398,7 +423,7 @@ where
 
         // Accepted.
         stats.steps += 1;
-        let g1 = model.event(p, &y1);
+        let g1 = model.event(p, &y1).re();
         let dense_needed = g1 >= 0.0 || (next < times.len() && times[next] <= t + h);
         let dense = if dense_needed {
             Some(Dense::new(h, &y, &y1, &k1, &k3, &k4, &k5, &k6, &k7))
@@ -407,8 +432,8 @@ where
         };
         if g1 >= 0.0 {
             let d = dense.as_ref().expect("dense built when the event fires");
-            let g0 = model.event(p, &y);
-            let theta = locate_event(|th| model.event(p, &d.at(th)), g0, g1);
+            let g0 = model.event(p, &y).re();
+            let theta = locate_event(|th| model.event(p, &d.at(th)).re(), g0, g1);
             let tr = t + theta * h;
             let yr = d.at(theta);
             while next < times.len() && times[next] <= tr {
@@ -416,19 +441,15 @@ where
                 out(next, times[next], &d.at(th));
                 next += 1;
             }
-            let mut kr = [0.0; N];
-            stats.evals += 1;
-            let rate_r = if model.rhs(p, tr, &yr, &mut kr) {
-                model.strain_rate(p, &yr, &kr)
-            } else {
+            let (t_r, e_r, rate_r) = rupture(model, p, tr, &yr, &mut stats).unwrap_or_else(|| {
                 // The rupture state is on the domain's edge only for ω_f → 1; fall back to
                 // the interpolated rate between the step ends.
                 let r0 = model.strain_rate(p, &y, &k1);
                 let r1 = model.strain_rate(p, &y1, &k7);
-                r0 + theta * (r1 - r0)
-            };
-            mr.push(tr, rate_r);
-            return result(Outcome::Ruptured, tr, &yr, rate_r, &mr, next, stats);
+                (S::cst(tr), model.strain(p, &yr), r0 + (r1 - r0) * theta)
+            });
+            mr.push(tr, rate_r.re());
+            return result(Outcome::Ruptured, t_r, e_r, rate_r, &mr, next, stats);
         }
         if let Some(d) = dense.as_ref() {
             while next < times.len() && times[next] <= t + h {
@@ -438,12 +459,20 @@ where
             }
         }
         let r1 = model.strain_rate(p, &y1, &k7);
-        mr.push(t + h, r1);
+        mr.push(t + h, r1.re());
         t += h;
         y = y1;
         k1 = k7;
         if t >= t_end {
-            return result(Outcome::Horizon, t, &y, r1, &mr, next, stats);
+            return result(
+                Outcome::Horizon,
+                S::cst(t),
+                model.strain(p, &y),
+                r1,
+                &mr,
+                next,
+                stats,
+            );
         }
         if opts.fixed_step.is_none() {
             let mut fac = fac11 / facold.powf(BETA);
@@ -457,6 +486,40 @@ where
             h = hnew;
         }
     }
+}
+
+/// Rupture time, strain and strain rate from the located event (tr, yr): one Newton step
+/// dt = −g/ġ on the event function. Its value is a rounding-level correction; in dual numbers
+/// it carries the rupture time's sensitivity, dt_r/db = −(∂g/∂b)/ġ, and the state moves along
+/// the solution with it. `None` if the right-hand side is undefined there.
+fn rupture<S: Scalar, const N: usize, M: CreepModel<N>>(
+    model: &M,
+    p: &M::Prepared<S>,
+    tr: f64,
+    yr: &[S; N],
+    stats: &mut Stats,
+) -> Option<(S, S, S)> {
+    let mut kr = [S::cst(0.0); N];
+    stats.evals += 1;
+    if !model.rhs(p, S::cst(tr), yr, &mut kr) {
+        return None;
+    }
+    let gdot = model.event_rate(p, yr, &kr);
+    if !(gdot.re() > 0.0) {
+        return None;
+    }
+    let dt = -(model.event(p, yr) / gdot);
+    let t_r = dt + tr;
+    let mut y_r = *yr;
+    for i in 0..N {
+        y_r[i] = yr[i] + kr[i] * dt;
+    }
+    stats.evals += 1;
+    let mut k_r = kr;
+    if !model.rhs(p, t_r, &y_r, &mut k_r) {
+        return None;
+    }
+    Some((t_r, model.strain(p, &y_r), model.strain_rate(p, &y_r, &k_r)))
 }
 
 /// Find θ ∈ (0, 1] where `g` changes sign, given g(0) = g0 < 0 ≤ g1 = g(1)
@@ -502,21 +565,21 @@ fn locate_event(g: impl Fn(f64) -> f64, g0: f64, g1: f64) -> f64 {
     b
 }
 
-/// Hairer's starting step-size heuristic.
-fn initial_step<const N: usize, M: CreepModel<N>>(
+/// Hairer's starting step-size heuristic (on value parts).
+fn initial_step<S: Scalar, const N: usize, M: CreepModel<N>>(
     model: &M,
-    p: &M::Prepared,
-    y0: &[f64; N],
-    f0: &[f64; N],
+    p: &M::Prepared<S>,
+    y0: &[S; N],
+    f0: &[S; N],
     opts: &OdeOptions,
     stats: &mut Stats,
 ) -> f64 {
     let hmax = opts.t_end;
     let (mut dnf, mut dny) = (0.0, 0.0);
     for i in 0..N {
-        let sk = opts.atol + opts.rtol * y0[i].abs();
-        dnf += (f0[i] / sk).powi(2);
-        dny += (y0[i] / sk).powi(2);
+        let sk = opts.atol + opts.rtol * y0[i].re().abs();
+        dnf += (f0[i].re() / sk).powi(2);
+        dny += (y0[i].re() / sk).powi(2);
     }
     let mut h = if dnf <= 1e-10 || dny <= 1e-10 {
         1e-6
@@ -524,19 +587,19 @@ fn initial_step<const N: usize, M: CreepModel<N>>(
         (dny / dnf).sqrt() * 0.01
     };
     h = h.min(hmax);
-    let mut y1 = [0.0; N];
+    let mut y1 = *y0;
     for i in 0..N {
-        y1[i] = y0[i] + h * f0[i];
+        y1[i] = y0[i] + f0[i] * h;
     }
-    let mut f1 = [0.0; N];
+    let mut f1 = *f0;
     stats.evals += 1;
-    if !model.rhs(p, h, &y1, &mut f1) {
+    if !model.rhs(p, S::cst(h), &y1, &mut f1) {
         return h;
     }
     let mut der2 = 0.0;
     for i in 0..N {
-        let sk = opts.atol + opts.rtol * y0[i].abs();
-        der2 += ((f1[i] - f0[i]) / sk).powi(2);
+        let sk = opts.atol + opts.rtol * y0[i].re().abs();
+        der2 += ((f1[i].re() - f0[i].re()) / sk).powi(2);
     }
     let der2 = der2.sqrt() / h;
     let der12 = der2.abs().max(dnf.sqrt());

@@ -370,7 +370,7 @@ pub fn fit_summary(run: &FitRun, curves: &[Curve]) -> Value {
         "min_rate_err_pct": best.min_rate_err_pct.iter().map(|v| jnum(*v)).collect::<Vec<_>>(),
         "stresses_MPa": curves.iter().map(|c| c.stress_mpa).collect::<Vec<_>>(),
         "min_rate_source": if run.used_min_rate { "measured" } else { "estimated_from_curve" },
-        "best_w_rule": "min-max normalised sum of norm_residual, mean |lifetime error| and (if measured) mean |min-rate error| over converged fits",
+        "best_w_rule": "sum of norm_residual, mean |lifetime error| and (if measured) mean |min-rate error|, each normalised over the converged fits with a floor of 0.1 % resp. 0.1 pp on its range; scores within 0.05 of the best are ties, won by the largest w",
         "initial_guess": {
             "constants": consts(&run.guess.params),
             "min_rates_pct_per_h": run.guess.min_rates.iter().map(|r| 100.0 * r).collect::<Vec<_>>(),
