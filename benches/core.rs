@@ -1,16 +1,21 @@
-//! Criterion benchmarks of the core: one simulation of one measured curve (560 °C, 100 MPa,
-//! the paper's start), one eq. 8 residual evaluation (three curves) and one local fit (560 °C,
-//! w = 1, from the paper's start).
+//! Criterion benchmarks of the core: one right-hand-side evaluation (four-state and reduced
+//! model), one simulation of one measured curve (560 °C, 100 MPa, the paper's start) in f64 and
+//! in dual numbers, one eq. 8 residual evaluation and one sensitivity Jacobian (three curves),
+//! and one local fit (560 °C, w = 1, from the paper's start). The 1,000-start × 10-w sweep is
+//! timed by `scripts/bench_sweep.sh` (a criterion sample of it would take minutes).
 
 use std::path::Path;
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 
 use creepfit::config::RunConfig;
+use creepfit::dual::{Dual, Scalar, SENS};
 use creepfit::fit::{local_fit, param_space, FitSettings};
-use creepfit::model::{registry, Load};
-use creepfit::objective::Objective;
+use creepfit::lsq::LeastSquaresProblem;
+use creepfit::model::{registry, CreepModel, Khd, KhdReduced, Load};
+use creepfit::objective::{CreepProblem, JacobianMethod, Objective};
 use creepfit::ode::OdeOptions;
+use nalgebra::DMatrix;
 
 fn bench(c: &mut Criterion) {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
@@ -28,9 +33,34 @@ fn bench(c: &mut Criterion) {
         t_end: 100.0 * curve.rupture_time_h.unwrap(),
         ..settings.ode
     };
+    // Right-hand side at a mid-life state.
+    let p4 = Khd.prepare(&start, &load);
+    let y4 = [0.01, 0.3, 0.05, 0.01 * start[5]];
+    let mut dy4 = [0.0; 4];
+    c.bench_function("rhs_khd4", |b| {
+        b.iter(|| Khd.rhs(&p4, black_box(1.0e4), black_box(&y4), &mut dy4))
+    });
+    let p1 = KhdReduced.prepare(&start, &load);
+    let mut dy1 = [0.0; 1];
+    c.bench_function("rhs_khd1", |b| {
+        b.iter(|| KhdReduced.rhs(&p1, black_box(1.0e4), black_box(&[0.01]), &mut dy1))
+    });
     let mut out = vec![0.0; curve.times_h.len()];
     c.bench_function("simulate_curve_560C_100MPa", |b| {
         b.iter(|| model.simulate(black_box(&start), &load, &curve.times_h, &mut out, &ode))
+    });
+    let four = registry("khd4").unwrap();
+    c.bench_function("simulate_curve_560C_100MPa_khd4", |b| {
+        b.iter(|| four.simulate(black_box(&start), &load, &curve.times_h, &mut out, &ode))
+    });
+    let xd: Vec<Dual<SENS>> = start
+        .iter()
+        .enumerate()
+        .map(|(k, &v)| Dual::var(v, k, 1.0))
+        .collect();
+    let mut outd = vec![Dual::<SENS>::cst(0.0); curve.times_h.len()];
+    c.bench_function("simulate_curve_560C_100MPa_dual", |b| {
+        b.iter(|| model.simulate_sens(black_box(&xd), &load, &curve.times_h, &mut outd, &ode))
     });
     let objective = Objective {
         model: model.as_ref(),
@@ -45,6 +75,21 @@ fn bench(c: &mut Criterion) {
         b.iter(|| objective.residuals(black_box(&start), &mut r).unwrap())
     });
     let space = param_space(&cfg);
+    let problem = CreepProblem {
+        objective,
+        space: space.clone(),
+        jacobian: JacobianMethod::Sensitivity,
+    };
+    let u = space.to_unit(&start);
+    let mut jac = DMatrix::zeros(problem.n_residuals(), problem.n_params());
+    c.bench_function("jacobian_sensitivity_560C", |b| {
+        b.iter(|| {
+            problem
+                .jacobian(black_box(&u), &r, &mut jac)
+                .unwrap()
+                .unwrap()
+        })
+    });
     let mut g = c.benchmark_group("fit");
     g.sample_size(10);
     g.bench_function("local_fit_560C_w1", |b| {

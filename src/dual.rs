@@ -42,6 +42,8 @@ pub trait Scalar:
     fn sqrt(self) -> Self;
     /// self^e for a constant exponent.
     fn powf(self, e: f64) -> Self;
+    /// Cube root (faster than `powf(1/3)`).
+    fn cbrt(self) -> Self;
     /// Whether value and gradient are finite.
     fn is_finite(&self) -> bool;
 }
@@ -83,6 +85,10 @@ impl Scalar for f64 {
     #[inline(always)]
     fn powf(self, e: f64) -> Self {
         f64::powf(self, e)
+    }
+    #[inline(always)]
+    fn cbrt(self) -> Self {
+        f64::cbrt(self)
     }
     #[inline(always)]
     fn is_finite(&self) -> bool {
@@ -247,7 +253,14 @@ impl<const K: usize> Scalar for Dual<K> {
     }
     #[inline(always)]
     fn sinh(self) -> Self {
-        self.chain(self.v.sinh(), self.v.cosh())
+        // One exponential for value and derivative where no cancellation threatens.
+        if self.v.abs() >= 1.0 {
+            let e = self.v.exp();
+            let ie = 1.0 / e;
+            self.chain(0.5 * (e - ie), 0.5 * (e + ie))
+        } else {
+            self.chain(self.v.sinh(), self.v.cosh())
+        }
     }
     #[inline(always)]
     fn cosh(self) -> Self {
@@ -271,6 +284,11 @@ impl<const K: usize> Scalar for Dual<K> {
     fn powf(self, e: f64) -> Self {
         let p = self.v.powf(e);
         self.chain(p, e * p / self.v)
+    }
+    #[inline(always)]
+    fn cbrt(self) -> Self {
+        let c = self.v.cbrt();
+        self.chain(c, c / (3.0 * self.v))
     }
     #[inline(always)]
     fn is_finite(&self) -> bool {
@@ -297,6 +315,10 @@ mod tests {
         assert!(close(x.exp().d[0], 0.7f64.exp()));
         assert!(close(x.ln().d[0], 1.0 / 0.7));
         assert!(close(x.sqrt().d[0], 0.5 / 0.7f64.sqrt()));
+        assert!(close(x.cbrt().d[0], 0.7f64.powf(-2.0 / 3.0) / 3.0));
+        let big = Dual::<2>::var(7.5, 0, 1.0);
+        assert!(close(big.sinh().v, 7.5f64.sinh()));
+        assert!(close(big.sinh().d[0], 7.5f64.cosh()));
         assert!(close(
             x.powf(-1.0 / 3.0).d[0],
             -(0.7f64.powf(-4.0 / 3.0)) / 3.0

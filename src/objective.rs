@@ -24,7 +24,7 @@ use crate::ode::{OdeOptions, Outcome, SimResult};
 
 /// Integration horizon as a multiple of the longest measured time of a curve (rupture time
 /// or last point): a prediction that has not ruptured by then is a failed simulation.
-pub const HORIZON_FACTOR: f64 = 100.0;
+pub const HORIZON_FACTOR: f64 = 1000.0;
 
 /// Largest number of constants a model may have (fixed-size parameter buffers).
 pub const MAX_PARAMS: usize = 16;

@@ -193,7 +193,7 @@ impl CreepModel<1> for KhdReduced {
     fn rhs<S: Scalar>(&self, p: &KhdPrepared<S>, t: S, y: &[S; 1], dy: &mut [S; 1]) -> bool {
         let eps = y[0];
         let hard = p.hstar * (S::cst(1.0) - (-(p.h_over_sigma * eps * p.inv_hstar)).exp());
-        let one_minus_phi = (p.kc * t + 1.0).powf(-1.0 / 3.0);
+        let one_minus_phi = S::cst(1.0) / (p.kc * t + 1.0).cbrt();
         match khd_rate(p, hard, one_minus_phi, S::cst(1.0) - p.c * eps) {
             Some(rate) => {
                 dy[0] = rate;
