@@ -9,7 +9,7 @@ use crate::config::RunConfig;
 use crate::data::{self, Dataset};
 use crate::error::Result;
 use crate::fit::{run_fit_with, FitRequest, StartChoice};
-use crate::model::{registry, Load};
+use crate::model::{build, Load};
 use crate::ode::OdeOptions;
 use crate::report::plot::{plot_creep_curves, CurvePlot};
 use crate::report::tables::{self, default_out, ensure_dir, num, write_csv, write_text};
@@ -381,7 +381,7 @@ fn simulate(
     w: Option<f64>,
 ) -> Result<()> {
     let (cfg, data) = load(config)?;
-    let model = registry(&cfg.model)?;
+    let model = build(&cfg.model, &cfg.extensions)?;
     let params = match constants {
         Some(path) => tables::read_constants(&path, model.as_ref())?,
         None => cfg.starts_all_given().ok_or_else(|| {

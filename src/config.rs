@@ -14,14 +14,8 @@ use crate::error::{Error, Result};
 use crate::model::{self, Scale};
 use crate::objective::JacobianMethod;
 
-/// Names of the extension catalogue (DESIGN.md §6). None is implemented yet: listing one in
-/// `extensions` is an error that says so.
-pub const EXTENSION_NAMES: &[&str] = &[
-    "constant_load",
-    "loading_strain",
-    "dislocation_damage",
-    "stress_ductility",
-];
+/// Names of the extension catalogue (DESIGN.md §6).
+pub const EXTENSION_NAMES: &[&str] = model::ext::CATALOGUE;
 
 /// Which side of the lifetime error enters the objective (eq. 8).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -228,17 +222,20 @@ impl RunConfig {
         let raw: RawConfig = toml::from_str(text).map_err(|e| toml_error(text, path, &e))?;
         let err = |msg: String| Error::config(path, msg);
 
-        let m = model::registry(&raw.model).map_err(|e| err(format!("model: {e}")))?;
-        if let Some(ext) = raw.extensions.first() {
-            return Err(err(if EXTENSION_NAMES.contains(&ext.as_str()) {
-                format!("extensions: extension {ext} is not implemented yet")
-            } else {
-                format!(
+        model::registry(&raw.model).map_err(|e| err(format!("model: {e}")))?;
+        for (i, ext) in raw.extensions.iter().enumerate() {
+            if !EXTENSION_NAMES.contains(&ext.as_str()) {
+                return Err(err(format!(
                     "extensions: unknown extension '{ext}' (known: {})",
                     EXTENSION_NAMES.join(", ")
-                )
-            }));
+                )));
+            }
+            if raw.extensions[..i].contains(ext) {
+                return Err(err(format!("extensions: '{ext}' is listed twice")));
+            }
         }
+        let m = model::build(&raw.model, &raw.extensions)
+            .map_err(|e| err(format!("extensions: {e}")))?;
 
         let specs = m.constants();
         for name in raw.constants.keys() {
@@ -529,8 +526,12 @@ rtol = 1e-8
             ("bogus = 1\n", "line 3: unknown field `bogus`"),
             ("model = \"nope\"\n", "unknown model 'nope'"),
             (
-                "extensions = [\"constant_load\"]\n",
-                "constant_load is not implemented yet",
+                "extensions = [\"constant_load\", \"constant_load\"]\n",
+                "'constant_load' is listed twice",
+            ),
+            (
+                "extensions = [\"loading_strain\"]\n[constants]\nEL = { lb = 2, ub = 1 }\n",
+                "constants.EL",
             ),
             ("extensions = [\"foo\"]\n", "unknown extension 'foo'"),
             (

@@ -21,7 +21,7 @@ use crate::data::{Curve, Dataset};
 use crate::error::{Error, Result};
 use crate::guess::{initial_guess, Guess};
 use crate::lsq::{minimize, LmOptions, LmReport, Termination};
-use crate::model::{registry, Model};
+use crate::model::{build, Model};
 use crate::objective::{mean_abs, CreepProblem, Evaluation, JacobianMethod, Objective, ParamSpace};
 use crate::ode::OdeOptions;
 
@@ -281,7 +281,7 @@ pub fn run_fit(cfg: &RunConfig, data: &Dataset) -> Result<FitRun> {
 /// [`run_fit`] with a choice of starts and weights.
 pub fn run_fit_with(cfg: &RunConfig, data: &Dataset, req: &FitRequest) -> Result<FitRun> {
     let t0 = Instant::now();
-    let model = registry(&cfg.model)?;
+    let model = build(&cfg.model, &cfg.extensions)?;
     let space = param_space(cfg);
     let settings = FitSettings::from_config(cfg);
     let curves = &data.curves;

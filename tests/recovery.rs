@@ -230,3 +230,48 @@ fn noisy_fit_is_stable_and_reports_its_error() {
         );
     }
 }
+
+/// Every extension: curves simulated with the extension switched on and its extra constant at
+/// a realistic size are fitted with the same extended model from a displaced start and give
+/// back all constants, the extra one included (no noise).
+#[test]
+fn recovers_extension_constants_without_noise() {
+    let truth_base = vec![4e-10, 0.12, 0.55, 6e4, 8e-6, 5.0];
+    for (ext, extra, lb, ub, scale) in [
+        ("constant_load", None, 0.0, 0.0, Scale::Linear),
+        ("loading_strain", Some(8e4), 1e3, 1e7, Scale::Log),
+        ("dislocation_damage", Some(6.0), 0.0, 50.0, Scale::Linear),
+        ("stress_ductility", Some(1.5), -10.0, 10.0, Scale::Linear),
+    ] {
+        let model = creepfit::model::build("khd", &[ext.to_string()]).unwrap();
+        let mut space = space_560();
+        let mut truth = truth_base.clone();
+        if let Some(v) = extra {
+            space.lb.push(lb);
+            space.ub.push(ub);
+            space.scale.push(scale);
+            space.fixed.push(lb);
+            space.free.push(true);
+            truth.push(v);
+        }
+        let curves = synth(model.as_ref(), &truth, &[85.0, 100.0, 110.0], 36, 0.0, 5);
+        let start = displaced(&space, &truth, 0.08);
+        let fit = local_fit(
+            model.as_ref(),
+            &curves,
+            &space,
+            &[1.0; 3],
+            &start,
+            "test",
+            &settings(),
+        );
+        assert!(fit.lm.termination.converged(), "{ext}: {:?}", fit.lm);
+        for (j, (got, want)) in fit.params.iter().zip(&truth).enumerate() {
+            let rel = (got - want).abs() / want.abs();
+            assert!(
+                rel < 1e-4,
+                "{ext}: constant {j}: {got} vs {want} (rel {rel:e})"
+            );
+        }
+    }
+}

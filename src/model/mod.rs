@@ -6,8 +6,10 @@
 //! and the strain read-out. Adding an extension means one file that implements
 //! [`CreepModel`] plus one line in [`registry`].
 
+pub mod ext;
 mod khd;
 
+pub use ext::KhdExtended;
 pub use khd::{Khd, KhdReduced};
 
 use crate::dual::{Dual, Scalar, SENS};
@@ -127,16 +129,16 @@ pub trait Model: Send + Sync {
 /// Adapts any [`CreepModel`] to the object-safe [`Model`]; the integration stays
 /// monomorphised.
 pub struct Integrated<M, const N: usize> {
-    name: &'static str,
+    name: String,
     model: M,
     constants: Vec<ConstantSpec>,
 }
 
 impl<M, const N: usize> Integrated<M, N> {
     /// Wrap `model` under a registry `name` with its `constants`.
-    pub fn new(name: &'static str, model: M, constants: Vec<ConstantSpec>) -> Self {
+    pub fn new(name: impl Into<String>, model: M, constants: Vec<ConstantSpec>) -> Self {
         Integrated {
-            name,
+            name: name.into(),
             model,
             constants,
         }
@@ -145,7 +147,7 @@ impl<M, const N: usize> Integrated<M, N> {
 
 impl<M: CreepModel<N>, const N: usize> Model for Integrated<M, N> {
     fn name(&self) -> &str {
-        self.name
+        &self.name
     }
     fn constants(&self) -> &[ConstantSpec] {
         &self.constants
@@ -272,4 +274,25 @@ pub fn registry(name: &str) -> Result<Box<dyn Model>> {
             MODEL_NAMES.join(", "),
         )),
     }
+}
+
+/// The model of a configuration: `name` from the registry, plus the catalogued `extensions`
+/// (DESIGN.md §6) composed with it. Extensions apply to the KHD model (`khd`, `khd1`): the
+/// composition is the one-state reduction with the extensions' terms
+/// ([`ext::KhdExtended`]), named e.g. `khd+constant_load`.
+pub fn build(name: &str, extensions: &[String]) -> Result<Box<dyn Model>> {
+    if extensions.is_empty() {
+        return registry(name);
+    }
+    if !matches!(name, "khd" | "khd1") {
+        return Err(Error::UnknownModel(
+            format!("{name} with extensions"),
+            "khd, khd1 (extensions apply to the KHD model)".into(),
+        ));
+    }
+    let (m, constants) = KhdExtended::new(extensions).map_err(|bad| {
+        Error::UnknownModel(format!("extension {bad}"), ext::CATALOGUE.join(", "))
+    })?;
+    let full = format!("khd+{}", extensions.join("+"));
+    Ok(Box::new(Integrated::new(full, m, constants)))
 }

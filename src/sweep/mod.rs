@@ -30,7 +30,7 @@ use crate::data::Dataset;
 use crate::error::{Error, Result};
 use crate::fit::{local_fit, param_space, weight_candidates, FitSettings};
 use crate::guess::initial_guess;
-use crate::model::registry;
+use crate::model::build;
 use crate::objective::mean_abs;
 
 /// Options of one sweep run (command line over configuration).
@@ -103,7 +103,7 @@ pub fn plan(cfg: &RunConfig, data: &Dataset, starts: usize, seed: u64) -> Result
     if starts == 0 {
         return Err(Error::Invalid("--starts must be at least 1".into()));
     }
-    let model = registry(&cfg.model)?;
+    let model = build(&cfg.model, &cfg.extensions)?;
     let space = param_space(cfg);
     let settings = FitSettings::from_config(cfg);
     let ws = weight_candidates(cfg, data.curves.len())?;
@@ -177,7 +177,7 @@ pub struct SweepRun {
 pub fn run_sweep(cfg: &RunConfig, data: &Dataset, opts: &SweepOptions) -> Result<(Plan, SweepRun)> {
     let t0 = Instant::now();
     let plan = plan(cfg, data, opts.starts, opts.seed)?;
-    let model = registry(&cfg.model)?;
+    let model = build(&cfg.model, &cfg.extensions)?;
     let space = param_space(cfg);
     let settings = FitSettings::from_config(cfg);
     let (shard_i, shard_n) = opts.shard.unwrap_or((1, 1));

@@ -1,0 +1,176 @@
+//! The extension catalogue of DESIGN.md §6, one file each, composed with the base model.
+//!
+//! Every catalogued extension keeps H, ω and the extra variables functions of the creep strain
+//! alone, so the composed model is still the one-state reduction of DESIGN.md §1:
+//!
+//!   dε/dt = m(ε) · A sinh( Bσ s(ε) (1 − H(ε)) / ((1 − Φ(t)) (1 − ω(ε))) )
+//!   H(ε) = H*(1 − exp(−h g(ε)/(σ H*))),  ω(ε) = C k_σ ε,  ε_total = ε0 + ε
+//!
+//! with s = 1 + ε, g = ln(1+ε) for `constant_load` (else s = 1, g = ε); m = 1 + C_d ε for
+//! `dislocation_damage`; k_σ = (σ/σ_ref)^ν for `stress_ductility`; ε0 = σ/E_L for
+//! `loading_strain`. Each file holds its constants and its terms; adding one is a file, a
+//! line in [`CATALOGUE`] and its term in [`KhdExtended::rhs`].
+
+pub mod constant_load;
+pub mod dislocation_damage;
+pub mod loading_strain;
+pub mod stress_ductility;
+
+use super::khd::{self, khd_rate, KhdPrepared};
+use super::{ConstantSpec, CreepModel, Load};
+use crate::dual::Scalar;
+
+/// Names of the catalogued extensions (DESIGN.md §6), in the order their constants follow the
+/// base constants.
+pub const CATALOGUE: &[&str] = &[
+    constant_load::NAME,
+    loading_strain::NAME,
+    dislocation_damage::NAME,
+    stress_ductility::NAME,
+];
+
+/// Extra constants of one extension; `None` for an unknown name.
+pub fn extension_constants(name: &str) -> Option<Vec<ConstantSpec>> {
+    match name {
+        constant_load::NAME => Some(vec![]),
+        loading_strain::NAME => Some(loading_strain::constants()),
+        dislocation_damage::NAME => Some(dislocation_damage::constants()),
+        stress_ductility::NAME => Some(stress_ductility::constants()),
+        _ => None,
+    }
+}
+
+/// Which extensions are switched on, and where their constants sit in the parameter vector.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct KhdExtended {
+    /// σ → σ0(1+ε).
+    pub constant_load: bool,
+    /// Index of E_L.
+    pub loading_strain: Option<usize>,
+    /// Index of C_d.
+    pub dislocation_damage: Option<usize>,
+    /// Index of ν.
+    pub stress_ductility: Option<usize>,
+}
+
+impl KhdExtended {
+    /// The composed model for `names` (each at most once; unknown names are `Err(name)`), and
+    /// its constants: the base model's six, then each extension's in catalogue order.
+    pub fn new(names: &[String]) -> Result<(Self, Vec<ConstantSpec>), String> {
+        for n in names {
+            if !CATALOGUE.contains(&n.as_str()) {
+                return Err(n.clone());
+            }
+        }
+        let mut m = KhdExtended::default();
+        let mut constants = khd::constants();
+        for &name in CATALOGUE {
+            if !names.iter().any(|n| n == name) {
+                continue;
+            }
+            let idx = constants.len();
+            match name {
+                constant_load::NAME => m.constant_load = true,
+                loading_strain::NAME => m.loading_strain = Some(idx),
+                dislocation_damage::NAME => m.dislocation_damage = Some(idx),
+                stress_ductility::NAME => m.stress_ductility = Some(idx),
+                _ => unreachable!("catalogue entry without a term"),
+            }
+            constants.extend(extension_constants(name).expect("catalogued"));
+        }
+        Ok((m, constants))
+    }
+}
+
+/// Per-simulation constants of the composed model.
+#[derive(Debug, Clone, Copy)]
+pub struct ExtPrepared<S> {
+    /// The base model's.
+    pub base: KhdPrepared<S>,
+    /// Strain on loading ε0 (0 when off).
+    pub eps0: S,
+    /// C_d (0 when off).
+    pub c_d: S,
+    /// C·k_σ: damage per unit creep strain.
+    pub c_eff: S,
+}
+
+impl CreepModel<1> for KhdExtended {
+    type Prepared<S: Scalar> = ExtPrepared<S>;
+    fn prepare<S: Scalar>(&self, params: &[S], load: &Load) -> ExtPrepared<S> {
+        let base = khd::prepare(params, load);
+        let eps0 = match self.loading_strain {
+            Some(i) => loading_strain::loading_strain(params[i], load.stress_mpa),
+            None => S::cst(0.0),
+        };
+        let c_d = match self.dislocation_damage {
+            Some(i) => params[i],
+            None => S::cst(0.0),
+        };
+        let c_eff = match self.stress_ductility {
+            Some(i) => base.c * stress_ductility::ductility_factor(params[i], load.stress_mpa),
+            None => base.c,
+        };
+        ExtPrepared {
+            base,
+            eps0,
+            c_d,
+            c_eff,
+        }
+    }
+    fn init<S: Scalar>(&self, _p: &ExtPrepared<S>) -> [S; 1] {
+        [S::cst(0.0)]
+    }
+    #[inline(always)]
+    fn rhs<S: Scalar>(&self, p: &ExtPrepared<S>, t: S, y: &[S; 1], dy: &mut [S; 1]) -> bool {
+        let b = &p.base;
+        let eps = y[0];
+        let (g, s) = if self.constant_load {
+            (
+                constant_load::hardening_strain(eps),
+                constant_load::stress_factor(eps),
+            )
+        } else {
+            (eps, S::cst(1.0))
+        };
+        if !(eps.re() > -1.0) {
+            return false;
+        }
+        let hard = b.hstar * (S::cst(1.0) - (-(b.h_over_sigma * g * b.inv_hstar)).exp());
+        let one_minus_phi = S::cst(1.0) / (b.kc * t + 1.0).cbrt();
+        let scaled = KhdPrepared {
+            b_sigma: b.b_sigma * s,
+            ..*b
+        };
+        match khd_rate(&scaled, hard, one_minus_phi, S::cst(1.0) - p.c_eff * eps) {
+            Some(rate) => {
+                dy[0] = if self.dislocation_damage.is_some() {
+                    rate * dislocation_damage::rate_factor(p.c_d, eps)
+                } else {
+                    rate
+                };
+                true
+            }
+            None => false,
+        }
+    }
+    #[inline(always)]
+    fn event<S: Scalar>(&self, p: &ExtPrepared<S>, y: &[S; 1]) -> S {
+        p.c_eff * y[0] - p.base.omega_f
+    }
+    #[inline(always)]
+    fn event_rate<S: Scalar>(&self, p: &ExtPrepared<S>, _y: &[S; 1], dy: &[S; 1]) -> S {
+        p.c_eff * dy[0]
+    }
+    #[inline(always)]
+    fn strain<S: Scalar>(&self, p: &ExtPrepared<S>, y: &[S; 1]) -> S {
+        y[0] + p.eps0
+    }
+    #[inline(always)]
+    fn strain_rate<S: Scalar>(&self, _p: &ExtPrepared<S>, _y: &[S; 1], dy: &[S; 1]) -> S {
+        dy[0]
+    }
+    fn state_names(&self) -> [&'static str; 1] {
+        ["creep_strain"]
+    }
+}
