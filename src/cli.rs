@@ -7,11 +7,12 @@ use clap::{Parser, Subcommand};
 
 use crate::config::RunConfig;
 use crate::data::{self, Dataset};
+use crate::diagnose::{diagnose, DiagnoseOptions};
 use crate::error::Result;
 use crate::fit::{run_fit_with, FitRequest, StartChoice};
 use crate::model::{build, Load};
 use crate::ode::OdeOptions;
-use crate::report::plot::{plot_creep_curves, CurvePlot};
+use crate::report::plot::{plot_creep_curves, plot_residuals, CurvePlot, Series};
 use crate::report::tables::{self, default_out, ensure_dir, num, write_csv, write_text};
 use crate::sweep::{self, SweepOptions};
 
@@ -71,6 +72,20 @@ pub enum Command {
         /// Output folder of the merged result.
         #[arg(long)]
         out: PathBuf,
+    },
+    /// What the calibrated model gets wrong, the named cause, and what an extension gains.
+    Diagnose {
+        /// Run configuration (TOML).
+        config: PathBuf,
+        /// Output folder (default results/<name>/diagnose/).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Latin-hypercube starts per model (plus the initial guess).
+        #[arg(long, default_value_t = 16)]
+        starts: usize,
+        /// Seed of the starts.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
     },
     /// Simulate the configured tests with given constants (dense curves, ruptures).
     Simulate {
@@ -135,7 +150,79 @@ pub fn run(cli: Cli) -> Result<()> {
             sweep_cmd(&cfg, &data, &opts)
         }
         Command::Merge { dirs, out } => merge_cmd(&dirs, &out),
+        Command::Diagnose {
+            config,
+            out,
+            starts,
+            seed,
+        } => diagnose_cmd(&config, out, &DiagnoseOptions { starts, seed }),
     }
+}
+
+fn diagnose_cmd(config: &Path, out: Option<PathBuf>, opts: &DiagnoseOptions) -> Result<()> {
+    let (cfg, data) = load(config)?;
+    let d = diagnose(&cfg, &data, opts)?;
+    let out = out.unwrap_or_else(|| default_out(&cfg.name, "diagnose"));
+    ensure_dir(&out)?;
+    write_text(
+        &out.join("diagnosis.json"),
+        &serde_json::to_string_pretty(&d).expect("JSON of plain values"),
+    )?;
+    let md = crate::diagnose::report_md(&cfg, &d);
+    write_text(&out.join("report.md"), &md)?;
+    // Residual plots of the base model and of the chosen (else best-BIC) extension.
+    let chosen = d
+        .candidates
+        .iter()
+        .find(|c| Some(&c.name) == d.cause.as_ref())
+        .or_else(|| d.candidates.iter().min_by(|a, b| a.bic.total_cmp(&b.bic)));
+    for c in std::iter::once(&d.base).chain(chosen) {
+        let exts: Vec<String> = if c.name == "base" {
+            vec![]
+        } else {
+            vec![c.name.clone()]
+        };
+        let model = build(&cfg.model, &exts)?;
+        let x: Vec<f64> = c.constants.iter().map(|p| p.1).collect();
+        let obj = crate::objective::Objective {
+            model: model.as_ref(),
+            curves: &data.curves,
+            w: vec![crate::diagnose::SELECTION_W; data.curves.len()],
+            lifetime: cfg.objective.lifetime_term,
+            omega_f: cfg.objective.omega_f,
+            ode: crate::fit::FitSettings::from_config(&cfg).ode,
+        };
+        let ev = obj.evaluate(&x);
+        let series: Vec<Series> = data
+            .curves
+            .iter()
+            .zip(&ev.curves)
+            .map(|(cu, p)| Series {
+                label: format!("{} MPa", cu.stress_mpa),
+                points: (0..cu.times_h.len())
+                    .map(|k| {
+                        (
+                            cu.times_h[k] / cu.life_h(),
+                            100.0 * (cu.strains[k] - p.strain[k]) / cu.rupture_strain,
+                        )
+                    })
+                    .collect(),
+            })
+            .collect();
+        let path = out.join(format!("residuals_{}.png", c.name));
+        if let Err(e) = plot_residuals(
+            &path,
+            &format!("{}: residuals of {}", cfg.name, c.name),
+            &series,
+            "t / t_f",
+            "measured − predicted, % of rupture strain",
+        ) {
+            eprintln!("warning: {e}");
+        }
+    }
+    print!("{md}");
+    println!("wrote {}", out.display());
+    Ok(())
 }
 
 fn parse_shard(s: &str) -> std::result::Result<(usize, usize), String> {

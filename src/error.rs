@@ -38,6 +38,9 @@ pub enum Error {
     /// Anything else that is the caller's fault (bad arguments).
     #[error("{0}")]
     Invalid(String),
+    /// The diagnosis could not be carried out.
+    #[error("diagnose: {0}")]
+    Diagnose(String),
 }
 
 /// Shorthand for results of this crate.

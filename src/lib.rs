@@ -11,6 +11,7 @@
 pub mod cli;
 pub mod config;
 pub mod data;
+pub mod diagnose;
 pub mod dual;
 pub mod error;
 pub mod fit;
