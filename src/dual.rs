@@ -64,7 +64,7 @@ impl Scalar for f64 {
     }
     #[inline(always)]
     fn sinh(self) -> Self {
-        f64::sinh(self)
+        sinh(self)
     }
     #[inline(always)]
     fn cosh(self) -> Self {
@@ -88,12 +88,46 @@ impl Scalar for f64 {
     }
     #[inline(always)]
     fn cbrt(self) -> Self {
-        f64::cbrt(self)
+        cbrt(self)
     }
     #[inline(always)]
     fn is_finite(&self) -> bool {
         f64::is_finite(*self)
     }
+}
+
+/// Largest |x| for which sinh is computed from one exponential (below exp's overflow).
+const SINH_EXP_MAX: f64 = 700.0;
+
+/// sinh(x) from one exponential where no cancellation threatens (1 ≤ |x| ≤ 700; within
+/// 2 ulp there), libm elsewhere: libm's sinh goes through expm1 and costs twice as much.
+#[inline(always)]
+pub fn sinh(x: f64) -> f64 {
+    if x.abs() >= 1.0 && x.abs() <= SINH_EXP_MAX {
+        let e = x.exp();
+        0.5 * (e - 1.0 / e)
+    } else {
+        x.sinh()
+    }
+}
+
+/// Cube root of a number in [1e-300, 1e300] by three Halley iterations from a bit-level
+/// first guess (within 2 ulp; measured 4.4e-16 relative); other arguments go to libm. The
+/// bundled libm's cube root is correctly rounded and three times slower, and the one-state
+/// model takes one per right-hand side.
+#[inline(always)]
+pub fn cbrt(x: f64) -> f64 {
+    // Bounds keep 2·y³ + x finite and y³ normal.
+    if !(1e-300..=1e300).contains(&x) {
+        return x.cbrt();
+    }
+    // Dividing the bit pattern by 3 divides the exponent by 3 (first guess within ~3 %).
+    let mut y = f64::from_bits(x.to_bits() / 3 + 0x2A9F_7893_782D_A1CE);
+    for _ in 0..3 {
+        let y3 = y * y * y;
+        y *= (y3 + 2.0 * x) / (2.0 * y3 + x);
+    }
+    y
 }
 
 /// Number of constants a [`Dual`] carries derivatives for in the fit's sensitivity Jacobian
@@ -254,7 +288,7 @@ impl<const K: usize> Scalar for Dual<K> {
     #[inline(always)]
     fn sinh(self) -> Self {
         // One exponential for value and derivative where no cancellation threatens.
-        if self.v.abs() >= 1.0 {
+        if self.v.abs() >= 1.0 && self.v.abs() <= SINH_EXP_MAX {
             let e = self.v.exp();
             let ie = 1.0 / e;
             self.chain(0.5 * (e - ie), 0.5 * (e + ie))
@@ -287,7 +321,7 @@ impl<const K: usize> Scalar for Dual<K> {
     }
     #[inline(always)]
     fn cbrt(self) -> Self {
-        let c = self.v.cbrt();
+        let c = cbrt(self.v);
         self.chain(c, c / (3.0 * self.v))
     }
     #[inline(always)]
@@ -299,6 +333,43 @@ impl<const K: usize> Scalar for Dual<K> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The fast cube root and sinh against libm over many decades, at 2 ulp.
+    #[test]
+    fn fast_cbrt_and_sinh_match_libm() {
+        let mut x = 1e-300_f64;
+        while x < 1e300 {
+            for s in [1.0, -1.0] {
+                let (fast, lib) = (cbrt(s * x), (s * x).cbrt());
+                assert!(
+                    (fast - lib).abs() <= 4.5e-16 * lib.abs(),
+                    "cbrt({}) = {fast} vs {lib}",
+                    s * x
+                );
+            }
+            x *= 1.0137;
+        }
+        for v in [
+            0.0,
+            -0.0,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            1e-310,
+            f64::MAX,
+        ] {
+            assert_eq!(cbrt(v).to_bits(), v.cbrt().to_bits());
+        }
+        assert!(cbrt(f64::NAN).is_nan());
+        let mut x = -720.0_f64;
+        while x < 720.0 {
+            let (fast, lib) = (sinh(x), x.sinh());
+            assert!(
+                fast == lib || (fast - lib).abs() <= 4.5e-16 * lib.abs(),
+                "sinh({x}) = {fast} vs {lib}"
+            );
+            x += 0.0123;
+        }
+    }
 
     /// Central difference of f at x.
     fn cd(f: impl Fn(f64) -> f64, x: f64) -> f64 {

@@ -446,6 +446,28 @@ impl LeastSquaresProblem for CreepProblem<'_> {
         _r: &[f64],
         jac: &mut DMatrix<f64>,
     ) -> Option<Result<(), EvalFailure>> {
+        self.sensitivities(u, None, jac)
+    }
+    fn residuals_and_jacobian(
+        &self,
+        u: &[f64],
+        r: &mut [f64],
+        jac: &mut DMatrix<f64>,
+    ) -> Option<Result<(), EvalFailure>> {
+        self.sensitivities(u, Some(r), jac)
+    }
+}
+
+impl CreepProblem<'_> {
+    /// The sensitivity Jacobian (dual numbers), and the residuals with it if `r` is given;
+    /// `None` when finite differences are asked for or there are more than [`SENS`] free
+    /// constants.
+    fn sensitivities(
+        &self,
+        u: &[f64],
+        r: Option<&mut [f64]>,
+        jac: &mut DMatrix<f64>,
+    ) -> Option<Result<(), EvalFailure>> {
         let n_free = self.space.n_free();
         if self.jacobian != JacobianMethod::Sensitivity || n_free > SENS {
             return None;
@@ -471,6 +493,11 @@ impl LeastSquaresProblem for CreepProblem<'_> {
         for (i, ri) in rd.iter().enumerate() {
             for k in 0..n_free {
                 jac[(i, k)] = ri.d[k];
+            }
+        }
+        if let Some(r) = r {
+            for (ri, di) in r.iter_mut().zip(&rd) {
+                *ri = di.re();
             }
         }
         Some(Ok(()))

@@ -35,8 +35,11 @@ fn run4(
     (res, states)
 }
 
+/// n + 1 equally spaced times on [0, t_max] (the last one exactly t_max: t·n/n can round up).
 fn grid(t_max: f64, n: usize) -> Vec<f64> {
-    (0..=n).map(|i| t_max * i as f64 / n as f64).collect()
+    (0..=n)
+        .map(|i| (t_max * i as f64 / n as f64).min(t_max))
+        .collect()
 }
 
 #[test]

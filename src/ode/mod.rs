@@ -146,6 +146,8 @@ const SAFETY: f64 = 0.9;
 const FAC_MIN: f64 = 0.2;
 const FAC_MAX: f64 = 10.0;
 const BETA: f64 = 0.04;
+/// Smallest remembered error of the PI controller.
+const FACOLD_MIN: f64 = 1e-4;
 /// Shrink factor after a trial step that left the model's domain (no error estimate).
 const DOMAIN_SHRINK: f64 = 0.25;
 /// Relative tolerance of the event location in the step's θ ∈ [0, 1].
@@ -309,7 +311,8 @@ where
         Some(hf) => hf,
         None => initial_step(model, p, &y, &k1, opts, &mut stats),
     };
-    let mut facold = 1e-4_f64;
+    // facold^(−β) of the PI controller, facold = max(previous error, FACOLD_MIN).
+    let mut facold_pow_neg_beta = FACOLD_MIN.powf(-BETA);
     let mut last_rejected = false;
     let (mut k2, mut k3, mut k4, mut k5, mut k6, mut k7) = (
         [zero; N], [zero; N], [zero; N], [zero; N], [zero; N], [zero; N],
@@ -412,8 +415,9 @@ where
             h *= DOMAIN_SHRINK;
             continue;
         }
-        // Step-size proposal (PI controller).
-        let fac11 = err.powf(0.2 - BETA * 0.75);
+        // Step-size proposal (PI controller), powers as exponentials of one logarithm.
+        let ln_err = err.ln();
+        let fac11 = ((0.2 - BETA * 0.75) * ln_err).exp();
         if err > 1.0 {
             stats.rejected += 1;
             last_rejected = true;
@@ -448,6 +452,13 @@ where
                 let r1 = model.strain_rate(p, &y1, &k7);
                 (S::cst(tr), model.strain(p, &yr), r0 + (r1 - r0) * theta)
             });
+            // The Newton correction may move the rupture time past tr by a rounding-level
+            // amount: an output time in between still belongs to the solution.
+            while next < times.len() && times[next] <= t_r.re() {
+                let th = ((times[next] - t) / h).clamp(0.0, 1.0);
+                out(next, times[next], &d.at(th));
+                next += 1;
+            }
             mr.push(tr, rate_r.re());
             return result(Outcome::Ruptured, t_r, e_r, rate_r, &mr, next, stats);
         }
@@ -475,10 +486,10 @@ where
             );
         }
         if opts.fixed_step.is_none() {
-            let mut fac = fac11 / facold.powf(BETA);
+            let mut fac = fac11 * facold_pow_neg_beta;
             fac = (1.0 / FAC_MAX).max((1.0 / FAC_MIN).min(fac / SAFETY));
             let mut hnew = h / fac;
-            facold = err.max(1e-4);
+            facold_pow_neg_beta = (-BETA * ln_err.max(FACOLD_MIN.ln())).exp();
             if last_rejected {
                 hnew = hnew.min(h);
             }
