@@ -219,6 +219,47 @@ pub fn fd_jacobian<P: LeastSquaresProblem + ?Sized>(
     Ok(())
 }
 
+/// Ridge (relative to the largest diagonal of JᵀJ) that keeps the undamped model solvable.
+const GN_RIDGE: f64 = 1e-12;
+
+/// Reduction of ‖r‖² that the undamped (Gauss–Newton) linear model predicts for its step on
+/// the variables `held`, projected onto the box: what the iteration could still gain. ∞ if
+/// the model cannot be solved.
+#[allow(clippy::too_many_arguments)]
+fn gauss_newton_gain(
+    jac: &DMatrix<f64>,
+    jtj: &DMatrix<f64>,
+    g: &DVector<f64>,
+    r: &[f64],
+    f: f64,
+    x: &[f64],
+    lb: &[f64],
+    ub: &[f64],
+    held: &[usize],
+    diag_max: f64,
+) -> f64 {
+    let nf = held.len();
+    let mut a = DMatrix::<f64>::zeros(nf, nf);
+    let mut b = DVector::<f64>::zeros(nf);
+    for (p, &jp) in held.iter().enumerate() {
+        b[p] = -g[jp];
+        for (q, &jq) in held.iter().enumerate() {
+            a[(p, q)] = jtj[(jp, jq)];
+        }
+        a[(p, p)] += GN_RIDGE * diag_max;
+    }
+    let Some(ch) = a.cholesky() else {
+        return f64::INFINITY;
+    };
+    let step = ch.solve(&b);
+    let mut v = DVector::<f64>::zeros(x.len());
+    for (p, &jp) in held.iter().enumerate() {
+        v[jp] = (x[jp] + step[p]).clamp(lb[jp], ub[jp]) - x[jp];
+    }
+    let jv = jac * v;
+    f - (0..r.len()).map(|i| (r[i] + jv[i]).powi(2)).sum::<f64>()
+}
+
 /// Minimise ½‖r(x)‖² over the box [lb, ub] from `x0` (projected onto the box first).
 pub fn minimize<P: LeastSquaresProblem + ?Sized>(
     problem: &P,
@@ -467,8 +508,18 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
             // the geodesic correction bends the step, it is not part of the model.
             let actual = f - f_trial;
             let rho = actual / predicted;
+            // The objective has converged when the step's actual and predicted reductions
+            // and what the undamped model could still gain are all below ftol·f; the last
+            // keeps a heavily damped step far from a minimum (tiny predicted reduction of a
+            // huge f) from passing for convergence.
+            let negligible = |reduction: f64| reduction.abs() <= opts.ftol * f;
+            let objective_converged = trial_ok
+                && negligible(actual)
+                && negligible(predicted)
+                && negligible(gauss_newton_gain(
+                    &jac, &jtj, &g, &r, f, &x, lb, ub, &held, diag_max,
+                ));
             if trial_ok && f_trial.is_finite() && actual > 0.0 && rho > 1e-4 {
-                let f_old = f;
                 std::mem::swap(&mut x, &mut x_trial);
                 std::mem::swap(&mut r, &mut r_trial);
                 if trial_jac {
@@ -478,7 +529,7 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
                 f = f_trial;
                 lambda *= (1.0_f64 / 3.0).max(1.0 - (2.0 * rho - 1.0).powi(3));
                 nu = 2.0;
-                if actual <= opts.ftol * f_old && predicted <= opts.ftol * f_old {
+                if objective_converged {
                     return done(x, f, r, iter, evaluations, Termination::ConvergedObjective);
                 }
                 if dx_norm <= opts.xtol * (x_norm + opts.xtol) {
@@ -486,8 +537,8 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
                 }
                 break;
             }
-            // Rejected: both reductions negligible means we are at the noise floor.
-            if trial_ok && predicted.abs() <= opts.ftol * f && actual.abs() <= opts.ftol * f {
+            // Rejected with negligible reductions: we are at the noise floor.
+            if objective_converged {
                 return done(x, f, r, iter, evaluations, Termination::ConvergedObjective);
             }
             lambda *= nu;

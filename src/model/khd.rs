@@ -129,6 +129,30 @@ pub fn khd_rate<S: Scalar>(
     Some(p.a * arg.sinh())
 }
 
+/// 1/(1 − Φ(t)) = (1 + Kc·t)^(1/3): the closed-form coarsening of the one-state models.
+#[inline(always)]
+pub fn coarsening_factor<S: Scalar>(p: &KhdPrepared<S>, t: S) -> S {
+    (p.kc * t + 1.0).cbrt()
+}
+
+/// [`khd_rate`] with the coarsening given as `coarsening` = 1/(1 − Φ) (one division less).
+#[inline(always)]
+pub fn khd_rate_coarsened<S: Scalar>(
+    p: &KhdPrepared<S>,
+    hard: S,
+    coarsening: S,
+    one_minus_omega: S,
+) -> Option<S> {
+    if !(one_minus_omega.re() > 0.0 && coarsening.re() > 0.0) {
+        return None;
+    }
+    let arg = p.b_sigma * (S::cst(1.0) - hard) * coarsening / one_minus_omega;
+    if !(arg.re().abs() <= MAX_SINH_ARG) {
+        return None;
+    }
+    Some(p.a * arg.sinh())
+}
+
 /// The paper's four-state model, state y = [ε, H, Φ, ω].
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Khd;
@@ -191,10 +215,24 @@ impl CreepModel<1> for KhdReduced {
     }
     #[inline(always)]
     fn rhs<S: Scalar>(&self, p: &KhdPrepared<S>, t: S, y: &[S; 1], dy: &mut [S; 1]) -> bool {
+        self.rhs_tp(p, t, self.time_part(p, t), y, dy)
+    }
+    #[inline(always)]
+    fn time_part<S: Scalar>(&self, p: &KhdPrepared<S>, t: S) -> S {
+        coarsening_factor(p, t)
+    }
+    #[inline(always)]
+    fn rhs_tp<S: Scalar>(
+        &self,
+        p: &KhdPrepared<S>,
+        _t: S,
+        tp: S,
+        y: &[S; 1],
+        dy: &mut [S; 1],
+    ) -> bool {
         let eps = y[0];
         let hard = p.hstar * (S::cst(1.0) - (-(p.h_over_sigma * eps * p.inv_hstar)).exp());
-        let one_minus_phi = S::cst(1.0) / (p.kc * t + 1.0).cbrt();
-        match khd_rate(p, hard, one_minus_phi, S::cst(1.0) - p.c * eps) {
+        match khd_rate_coarsened(p, hard, tp, S::cst(1.0) - p.c * eps) {
             Some(rate) => {
                 dy[0] = rate;
                 true

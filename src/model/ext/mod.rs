@@ -16,7 +16,7 @@ pub mod dislocation_damage;
 pub mod loading_strain;
 pub mod stress_ductility;
 
-use super::khd::{self, khd_rate, KhdPrepared};
+use super::khd::{self, coarsening_factor, khd_rate_coarsened, KhdPrepared};
 use super::{ConstantSpec, CreepModel, Load};
 use crate::dual::Scalar;
 
@@ -123,6 +123,21 @@ impl CreepModel<1> for KhdExtended {
     }
     #[inline(always)]
     fn rhs<S: Scalar>(&self, p: &ExtPrepared<S>, t: S, y: &[S; 1], dy: &mut [S; 1]) -> bool {
+        self.rhs_tp(p, t, self.time_part(p, t), y, dy)
+    }
+    #[inline(always)]
+    fn time_part<S: Scalar>(&self, p: &ExtPrepared<S>, t: S) -> S {
+        coarsening_factor(&p.base, t)
+    }
+    #[inline(always)]
+    fn rhs_tp<S: Scalar>(
+        &self,
+        p: &ExtPrepared<S>,
+        _t: S,
+        tp: S,
+        y: &[S; 1],
+        dy: &mut [S; 1],
+    ) -> bool {
         let b = &p.base;
         let eps = y[0];
         let (g, s) = if self.constant_load {
@@ -137,12 +152,11 @@ impl CreepModel<1> for KhdExtended {
             return false;
         }
         let hard = b.hstar * (S::cst(1.0) - (-(b.h_over_sigma * g * b.inv_hstar)).exp());
-        let one_minus_phi = S::cst(1.0) / (b.kc * t + 1.0).cbrt();
         let scaled = KhdPrepared {
             b_sigma: b.b_sigma * s,
             ..*b
         };
-        match khd_rate(&scaled, hard, one_minus_phi, S::cst(1.0) - p.c_eff * eps) {
+        match khd_rate_coarsened(&scaled, hard, tp, S::cst(1.0) - p.c_eff * eps) {
             Some(rate) => {
                 dy[0] = if self.dislocation_damage.is_some() {
                     rate * dislocation_damage::rate_factor(p.c_d, eps)
