@@ -465,3 +465,28 @@ fn fused_evaluation_replaces_the_separate_jacobian_and_changes_nothing() {
     assert_eq!(fus_jac, 0);
     assert!(fus_fused > fus.iterations, "{fus_fused} fused calls");
 }
+
+#[test]
+fn a_heavily_damped_step_is_not_taken_for_convergence() {
+    // r = 1e4·(x − 1): the initial damping (relative to the largest diagonal of JᵀJ, 1e8)
+    // makes the first step ~1e-5 of the way, a reduction of ~2e-5·f. With ftol = 1e-4 that
+    // step alone once passed for convergence; what the undamped model could still gain
+    // (all of f) must keep the iteration going to x = 1.
+    let p = Fun {
+        n: 1,
+        m: 1,
+        f: |x: &[f64], r: &mut [f64]| r[0] = 1e4 * (x[0] - 1.0),
+    };
+    let opts = LmOptions {
+        ftol: 1e-4,
+        ..LmOptions::default()
+    };
+    let rep = minimize(&p, &[0.0], &[-10.0], &[10.0], &opts);
+    assert!(rep.termination.converged(), "{:?}", rep.termination);
+    assert!(
+        (rep.x[0] - 1.0).abs() < 1e-6,
+        "{:?} after {} iterations",
+        rep.x,
+        rep.iterations
+    );
+}
