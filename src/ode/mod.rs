@@ -146,6 +146,11 @@ const SAFETY: f64 = 0.9;
 const FAC_MIN: f64 = 0.2;
 const FAC_MAX: f64 = 10.0;
 const BETA: f64 = 0.04;
+/// The sensitivities (gradient parts of a dual-number run) are error-controlled at this
+/// multiple of the state's relative tolerance: they only steer the optimiser's steps, and
+/// at 1× they took 1.5× the steps of the state alone; 10× takes 1.07× and gave 6 % more fits
+/// per second on the 560 °C sweep at the same minima (100× cost iterations).
+const SENS_RTOL_FACTOR: f64 = 10.0;
 /// Smallest remembered error of the PI controller.
 const FACOLD_MIN: f64 = 1e-4;
 /// Shrink factor after a trial step that left the model's domain (no error estimate).
@@ -392,13 +397,14 @@ where
             if S::N_GRAD > 0 {
                 // Sensitivities are error-controlled too: a quasi-static component (H at its
                 // saturation) can make the sensitivity equations stiff where the value shows
-                // no error at all, and an uncontrolled step then lets them blow up.
+                // no error at all, and an uncontrolled step then lets them blow up. Their
+                // tolerance is SENS_RTOL_FACTOR × rtol.
                 let mut s = 0.0;
                 for i in 0..N {
                     for k in 0..S::N_GRAD {
                         let sk = opts.atol
                             + opts.rtol
-                                * sens_factor()
+                                * SENS_RTOL_FACTOR
                                 * y[i].grad(k).abs().max(y1[i].grad(k).abs());
                         let e = h
                             * (E1 * k1[i].grad(k)
@@ -626,14 +632,4 @@ fn initial_step<S: Scalar, const N: usize, M: CreepModel<N>>(
         (0.01 / der12).powf(0.2)
     };
     (100.0 * h).min(h1).min(hmax)
-}
-
-fn sens_factor() -> f64 {
-    static F: std::sync::OnceLock<f64> = std::sync::OnceLock::new();
-    *F.get_or_init(|| {
-        std::env::var("SF")
-            .ok()
-            .map(|v| v.parse().unwrap())
-            .unwrap_or(1.0)
-    })
 }
