@@ -113,6 +113,21 @@ pub fn pareto_front(c: &[[f64; 3]]) -> Vec<bool> {
         .collect()
 }
 
+/// A solution's Pareto criteria; a fit that did not converge (iteration limit, stalled) is
+/// not a minimum, so it gets the worst values and can neither dominate nor join the front
+/// while converged fits exist.
+fn pareto_criteria(s: &Solution) -> [f64; 3] {
+    if s.status.starts_with("converged") {
+        [
+            crit(s.norm_residual),
+            crit(s.lifetime_err_pct),
+            crit(s.min_rate_err_pct),
+        ]
+    } else {
+        [f64::INFINITY; 3]
+    }
+}
+
 /// Rank, cluster and summarise a set of solutions.
 pub fn analyse(header: &Header, solutions: &[Solution]) -> Analysis {
     let mut ranked = solutions.to_vec();
@@ -132,16 +147,7 @@ pub fn analyse(header: &Header, solutions: &[Solution]) -> Analysis {
         .collect();
 
     // Pareto set over (normalised residual, mean lifetime error, mean min-rate error).
-    let c: Vec<[f64; 3]> = ranked[..n_ok]
-        .iter()
-        .map(|s| {
-            [
-                crit(s.norm_residual),
-                crit(s.lifetime_err_pct),
-                crit(s.min_rate_err_pct),
-            ]
-        })
-        .collect();
+    let c: Vec<[f64; 3]> = ranked[..n_ok].iter().map(pareto_criteria).collect();
     let mut pareto = pareto_front(&c);
     pareto.resize(ranked.len(), false);
 
@@ -430,6 +436,32 @@ mod tests {
         ];
         let f = pareto_front(&c);
         assert_eq!(f, vec![true, true, false, false, true, true]);
+    }
+
+    #[test]
+    fn unconverged_fits_stay_off_the_pareto_front() {
+        let sol = |status: &str, res: f64, life: f64| Solution {
+            start_id: 0,
+            w_idx: 0,
+            objective: res,
+            norm_residual: res,
+            lifetime_err_pct: life,
+            min_rate_err_pct: 20.0,
+            lifetime_errs_pct: vec![life],
+            status: status.into(),
+            iterations: 10,
+            evaluations: 20,
+            params: vec![1.0],
+        };
+        // The unconverged row would be a trade-off by its numbers (best lifetime error).
+        let rows = [
+            sol("converged_objective", 0.25, 9.4),
+            sol("converged_step", 0.38, 2.1),
+            sol("iteration_limit", 0.34, 1.0),
+            sol("stalled", 0.20, 9.9),
+        ];
+        let c: Vec<[f64; 3]> = rows.iter().map(pareto_criteria).collect();
+        assert_eq!(pareto_front(&c), vec![true, true, false, false]);
     }
 
     #[test]
