@@ -184,14 +184,8 @@ fn diagnose_cmd(config: &Path, out: Option<PathBuf>, opts: &DiagnoseOptions) -> 
         };
         let model = build(&cfg.model, &exts)?;
         let x: Vec<f64> = c.constants.iter().map(|p| p.1).collect();
-        let obj = crate::objective::Objective {
-            model: model.as_ref(),
-            curves: &data.curves,
-            w: vec![crate::diagnose::SELECTION_W; data.curves.len()],
-            lifetime: cfg.objective.lifetime_term,
-            omega_f: cfg.objective.omega_f,
-            ode: crate::fit::FitSettings::from_config(&cfg).ode,
-        };
+        let settings = crate::fit::FitSettings::from_config(&cfg);
+        let obj = crate::diagnose::objective(model.as_ref(), &data.curves, &settings);
         let ev = obj.evaluate(&x);
         let series: Vec<Series> = data
             .curves

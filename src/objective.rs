@@ -326,6 +326,16 @@ impl<'a> Objective<'a> {
         }
     }
 
+    /// The relative lifetime error (t_r − t_exp)/t_exp that eq. 8 counts: with the `late`
+    /// term only a late prediction (positive error), else zero.
+    fn lifetime_error<S: SimScalar>(&self, t_r: S, t_exp: f64) -> S {
+        let rel = (t_r - t_exp) / t_exp;
+        match self.lifetime {
+            LifetimeTerm::Late if !(rel.re() > 0.0) => S::cst(0.0),
+            _ => rel,
+        }
+    }
+
     /// Fill `r` (length [`Objective::n_residuals`]) at the physical constants `params`.
     pub fn residuals(&self, params: &[f64], r: &mut [f64]) -> Result<(), EvalFailure> {
         self.residuals_in(params, r)
@@ -343,14 +353,7 @@ impl<'a> Objective<'a> {
                 r[off + k] = (r[off + k] - c.strains[k]) * inv;
             }
             r[off + n] = match c.rupture_time_h {
-                Some(t_exp) => {
-                    let rel = (t_r - t_exp) / t_exp;
-                    let rel = match self.lifetime {
-                        LifetimeTerm::Late if !(rel.re() > 0.0) => S::cst(0.0),
-                        _ => rel,
-                    };
-                    rel * self.w[i].sqrt()
-                }
+                Some(t_exp) => self.lifetime_error(t_r, t_exp) * self.w[i].sqrt(),
                 None => S::cst(0.0),
             };
             off += n + 1;
@@ -374,11 +377,7 @@ impl<'a> Objective<'a> {
                     norm += s;
                     objective += s;
                     if let Some(t_exp) = c.rupture_time_h {
-                        let rel = (t_r - t_exp) / t_exp;
-                        let rel = match self.lifetime {
-                            LifetimeTerm::Late => rel.max(0.0),
-                            LifetimeTerm::Both => rel,
-                        };
+                        let rel = self.lifetime_error(t_r, t_exp);
                         objective += self.w[i] * rel * rel;
                     }
                     curves.push(CurvePrediction {

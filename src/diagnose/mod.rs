@@ -155,7 +155,8 @@ fn multistart(
     best
 }
 
-fn objective<'a>(
+/// Eq. 8 at the selection weight [`SELECTION_W`], as `diagnose` compares its candidates.
+pub fn objective<'a>(
     model: &'a dyn Model,
     curves: &'a [Curve],
     settings: &FitSettings,

@@ -28,8 +28,3 @@ pub fn constants() -> Vec<ConstantSpec> {
 pub fn rate_factor<S: Scalar>(c_d: S, eps: S) -> S {
     c_d * eps + 1.0
 }
-
-/// The damage D = 1 − 1/(1 + C_d ε) (for reports).
-pub fn damage(c_d: f64, eps: f64) -> f64 {
-    1.0 - 1.0 / (1.0 + c_d * eps)
-}
