@@ -116,6 +116,12 @@ fn run(ext: &[&str], x: &[f64], stresses: &[f64], n: usize, noise: f64, seed: u6
     d
 }
 
+/// The diagnosis names `ext` as the cause, or lists it among the indistinguishable ones.
+fn assert_named(d: &Diagnosis, ext: &str) {
+    let named = d.cause.as_deref() == Some(ext) || d.indistinguishable.iter().any(|n| n == ext);
+    assert!(named, "{ext}: {:?} / {:?}", d.cause, d.indistinguishable);
+}
+
 fn extra(d: &Diagnosis, ext: &str, name: &str) -> f64 {
     let c = d.candidates.iter().find(|c| c.name == ext).unwrap();
     c.constants.iter().find(|p| p.0 == name).unwrap().1
@@ -183,11 +189,7 @@ fn hidden_dislocation_damage_is_found_and_its_constant_recovered() {
     assert_eq!(d.verdict, "extension", "{:?}", d.evidence);
     // constant_load also steepens the tertiary stage: the data may not tell them apart, but
     // the named cause must be the hidden one or list it as indistinguishable.
-    let named = d.cause.as_deref() == Some("dislocation_damage")
-        || d.indistinguishable
-            .iter()
-            .any(|n| n == "dislocation_damage");
-    assert!(named, "{:?} / {:?}", d.cause, d.indistinguishable);
+    assert_named(&d, "dislocation_damage");
     let cd = extra(&d, "dislocation_damage", "Cd");
     assert!((cd - 10.0).abs() < 0.2 * 10.0, "Cd {cd}");
 }
@@ -203,9 +205,7 @@ fn hidden_constant_load_is_found() {
         6,
     );
     assert_eq!(d.verdict, "extension", "{:?}", d.evidence);
-    let named = d.cause.as_deref() == Some("constant_load")
-        || d.indistinguishable.iter().any(|n| n == "constant_load");
-    assert!(named, "{:?} / {:?}", d.cause, d.indistinguishable);
+    assert_named(&d, "constant_load");
 }
 
 #[test]

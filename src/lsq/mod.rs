@@ -13,7 +13,7 @@
 //! costs no separate Jacobian. The problem is the [`LeastSquaresProblem`] trait, in the spirit
 //! of the `levenberg-marquardt` crate.
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
 /// A residual evaluation that could not be carried out (e.g. a simulation failed).
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -219,8 +219,55 @@ pub fn fd_jacobian<P: LeastSquaresProblem + ?Sized>(
     Ok(())
 }
 
-/// Ridge (relative to the largest diagonal of JᵀJ) that keeps the undamped model solvable.
-const GN_RIDGE: f64 = 1e-12;
+/// Floor of the damping's scale JᵀJ_jj and ridge of the undamped model, relative to the
+/// largest diagonal of JᵀJ: keeps the systems solvable when a column of J vanishes.
+const DIAG_FLOOR: f64 = 1e-12;
+
+/// Solve (JᵀJ + diag(d))·s = −g restricted to the variables `held`, with d_p = `diag(j_p)`:
+/// the Cholesky factor (reused for the geodesic correction) and the step, or `None` if the
+/// system is not positive definite.
+fn solve_held(
+    jtj: &DMatrix<f64>,
+    g: &DVector<f64>,
+    held: &[usize],
+    diag: impl Fn(usize) -> f64,
+) -> Option<(Cholesky<f64, Dyn>, DVector<f64>)> {
+    let nf = held.len();
+    let mut a = DMatrix::<f64>::zeros(nf, nf);
+    let mut b = DVector::<f64>::zeros(nf);
+    for (p, &jp) in held.iter().enumerate() {
+        b[p] = -g[jp];
+        for (q, &jq) in held.iter().enumerate() {
+            a[(p, q)] = jtj[(jp, jq)];
+        }
+        a[(p, p)] += diag(jp);
+    }
+    let ch = a.cholesky()?;
+    let step = ch.solve(&b);
+    Some((ch, step))
+}
+
+/// The displacement x → clamp(x + scale·step) of the variables `held` (full length).
+fn projected(
+    x: &[f64],
+    step: &DVector<f64>,
+    scale: f64,
+    held: &[usize],
+    lb: &[f64],
+    ub: &[f64],
+) -> DVector<f64> {
+    let mut v = DVector::<f64>::zeros(x.len());
+    for (p, &jp) in held.iter().enumerate() {
+        v[jp] = (x[jp] + scale * step[p]).clamp(lb[jp], ub[jp]) - x[jp];
+    }
+    v
+}
+
+/// ‖r + J·v‖², the linear model's objective after the displacement v.
+fn model_objective(jac: &DMatrix<f64>, r: &[f64], v: &DVector<f64>) -> f64 {
+    let jv = jac * v;
+    (0..r.len()).map(|i| (r[i] + jv[i]).powi(2)).sum()
+}
 
 /// Reduction of ‖r‖² that the undamped (Gauss–Newton) linear model predicts for its step on
 /// the variables `held`, projected onto the box: what the iteration could still gain. ∞ if
@@ -238,26 +285,10 @@ fn gauss_newton_gain(
     held: &[usize],
     diag_max: f64,
 ) -> f64 {
-    let nf = held.len();
-    let mut a = DMatrix::<f64>::zeros(nf, nf);
-    let mut b = DVector::<f64>::zeros(nf);
-    for (p, &jp) in held.iter().enumerate() {
-        b[p] = -g[jp];
-        for (q, &jq) in held.iter().enumerate() {
-            a[(p, q)] = jtj[(jp, jq)];
-        }
-        a[(p, p)] += GN_RIDGE * diag_max;
+    match solve_held(jtj, g, held, |_| DIAG_FLOOR * diag_max) {
+        Some((_, step)) => f - model_objective(jac, r, &projected(x, &step, 1.0, held, lb, ub)),
+        None => f64::INFINITY,
     }
-    let Some(ch) = a.cholesky() else {
-        return f64::INFINITY;
-    };
-    let step = ch.solve(&b);
-    let mut v = DVector::<f64>::zeros(x.len());
-    for (p, &jp) in held.iter().enumerate() {
-        v[jp] = (x[jp] + step[p]).clamp(lb[jp], ub[jp]) - x[jp];
-    }
-    let jv = jac * v;
-    f - (0..r.len()).map(|i| (r[i] + jv[i]).powi(2)).sum::<f64>()
 }
 
 /// Minimise ½‖r(x)‖² over the box [lb, ub] from `x0` (projected onto the box first).
@@ -368,21 +399,11 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
             // step of the remaining variables: hold it and solve again.
             let mut held = free.clone();
             let step = loop {
-                let nf = held.len();
-                let mut a = DMatrix::<f64>::zeros(nf, nf);
-                let mut b = DVector::<f64>::zeros(nf);
-                for (p, &jp) in held.iter().enumerate() {
-                    b[p] = -g[jp];
-                    for (q, &jq) in held.iter().enumerate() {
-                        a[(p, q)] = jtj[(jp, jq)];
-                    }
-                    let d = jtj[(jp, jp)].max(1e-12 * diag_max);
-                    a[(p, p)] += lambda * d;
-                }
-                let Some(ch) = a.cholesky() else {
+                let Some((ch, step)) = solve_held(&jtj, &g, &held, |j| {
+                    lambda * jtj[(j, j)].max(DIAG_FLOOR * diag_max)
+                }) else {
                     break None;
                 };
-                let step = ch.solve(&b);
                 let blocked: Vec<usize> = held
                     .iter()
                     .enumerate()
@@ -413,14 +434,9 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
             // bound it crosses (which keeps its direction), whichever the linear model
             // predicts to reduce the objective more. A clamped step can leave a narrow
             // valley; a cut step cannot, as the model decreases along the whole step.
-            let model_f = |v: &DVector<f64>| -> f64 {
-                let jv = &jac * v;
-                (0..m).map(|i| (r[i] + jv[i]).powi(2)).sum()
-            };
-            let mut v = DVector::<f64>::zeros(n);
+            let mut v = projected(&x, &step, 1.0, &held, lb, ub);
             let mut cut = 1.0_f64;
             for (p, &jp) in held.iter().enumerate() {
-                v[jp] = (x[jp] + step[p]).clamp(lb[jp], ub[jp]) - x[jp];
                 if step[p] > 0.0 {
                     cut = cut.min((ub[jp] - x[jp]) / step[p]);
                 } else if step[p] < 0.0 {
@@ -432,13 +448,10 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
             if v_norm <= opts.xtol * (x_norm + opts.xtol) {
                 return done(x, f, r, iter, evaluations, Termination::ConvergedStep);
             }
-            let mut predicted = f - model_f(&v);
+            let mut predicted = f - model_objective(&jac, &r, &v);
             if cut < 1.0 {
-                let mut vc = DVector::<f64>::zeros(n);
-                for (p, &jp) in held.iter().enumerate() {
-                    vc[jp] = (x[jp] + cut * step[p]).clamp(lb[jp], ub[jp]) - x[jp];
-                }
-                let pc = f - model_f(&vc);
+                let vc = projected(&x, &step, cut, &held, lb, ub);
+                let pc = f - model_objective(&jac, &r, &vc);
                 if pc > predicted {
                     predicted = pc;
                     v = vc;
