@@ -7,7 +7,7 @@ use clap::{Parser, Subcommand};
 
 use crate::config::RunConfig;
 use crate::data::{self, Dataset};
-use crate::diagnose::{diagnose, DiagnoseOptions};
+use crate::diagnose::diagnose_with;
 use crate::error::Result;
 use crate::fit::{run_fit_with, FitRequest, StartChoice};
 use crate::model::{build, Load};
@@ -80,12 +80,52 @@ pub enum Command {
         /// Output folder (default results/<name>/diagnose/).
         #[arg(long)]
         out: Option<PathBuf>,
-        /// Latin-hypercube starts per model (plus the initial guess).
-        #[arg(long, default_value_t = 16)]
-        starts: usize,
-        /// Seed of the starts.
+        /// Latin-hypercube starts per model (default: [diagnose] starts).
+        #[arg(long)]
+        starts: Option<usize>,
+        /// Seed of the starts and the bootstrap (default: [diagnose] seed).
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Most bootstrap replicates (default: [diagnose] bootstrap).
+        #[arg(long)]
+        bootstrap: Option<usize>,
+        /// False-alarm level (default: [diagnose] alpha).
+        #[arg(long)]
+        alpha: Option<f64>,
+        /// Worker threads (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+    },
+    /// Generate synthetic data sets with known hidden effects (input formats + truth.json).
+    Synth {
+        /// Output folder: one sub-folder per set.
+        out: PathBuf,
+        /// Number of sets.
+        #[arg(long, default_value_t = 8)]
+        sets: usize,
+        /// Seed of the first set (set i has seed SEED + i).
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// Scenario of every set (default: cycle through all): none, constant_load,
+        /// loading_strain, dislocation_damage, stress_ductility, primary_transient,
+        /// mid_life_step.
+        #[arg(long)]
+        scenario: Option<String>,
+    },
+    /// Generate a battery of data sets, diagnose each, and write the confusion matrix and
+    /// power tables (resumes an interrupted battery in the same folder).
+    Battery {
+        /// Output folder.
+        out: PathBuf,
+        /// Number of sets.
+        #[arg(long, default_value_t = 40)]
+        sets: usize,
+        /// Seed of the first set (set i has seed SEED + i).
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Worker threads (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
     },
     /// Simulate the configured tests with given constants (dense curves, ruptures).
     Simulate {
@@ -150,42 +190,108 @@ pub fn run(cli: Cli) -> Result<()> {
             sweep_cmd(&cfg, &data, &opts)
         }
         Command::Merge { dirs, out } => merge_cmd(&dirs, &out),
+        Command::Synth {
+            out,
+            sets,
+            seed,
+            scenario,
+        } => synth_cmd(&out, sets, seed, scenario.as_deref()),
+        Command::Battery {
+            out,
+            sets,
+            seed,
+            threads,
+        } => with_threads(threads, || {
+            let results = crate::battery::run_battery(&out, seed, sets, true)?;
+            let r = crate::battery::write_reports(&out, &results, seed)?;
+            println!(
+                "{} sets: false alarms {} of {} no-effect sets; named correctly (detectable): {}; outside the catalogue with an extension verdict: {} of {}",
+                results.len(),
+                r.false_alarms,
+                r.null_sets,
+                r.named
+                    .iter()
+                    .map(|(e, _, d, k)| format!("{e} {k}/{d}"))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                r.outside_extension,
+                r.outside_sets
+            );
+            println!("wrote {}", out.display());
+            Ok(())
+        }),
         Command::Diagnose {
             config,
             out,
             starts,
             seed,
-        } => diagnose_cmd(&config, out, &DiagnoseOptions { starts, seed }),
+            bootstrap,
+            alpha,
+            threads,
+        } => {
+            let (cfg, data) = load(&config)?;
+            let mut dc = cfg.diagnose.clone();
+            dc.starts = starts.unwrap_or(dc.starts);
+            dc.seed = seed.unwrap_or(dc.seed);
+            dc.bootstrap = bootstrap.unwrap_or(dc.bootstrap);
+            dc.alpha = alpha.unwrap_or(dc.alpha);
+            let out = out.unwrap_or_else(|| default_out(&cfg.name, "diagnose"));
+            with_threads(threads, || diagnose_cmd(&cfg, &data, &out, &dc))
+        }
     }
 }
 
-fn diagnose_cmd(config: &Path, out: Option<PathBuf>, opts: &DiagnoseOptions) -> Result<()> {
-    let (cfg, data) = load(config)?;
-    let d = diagnose(&cfg, &data, opts)?;
-    let out = out.unwrap_or_else(|| default_out(&cfg.name, "diagnose"));
-    ensure_dir(&out)?;
+/// Run `f` on a pool of `threads` workers (rayon's default pool when `None`).
+fn with_threads<T: Send>(threads: Option<usize>, f: impl FnOnce() -> Result<T> + Send) -> Result<T> {
+    match threads {
+        None => f(),
+        Some(n) => rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .map_err(|e| crate::Error::Invalid(format!("--threads {n}: {e}")))?
+            .install(f),
+    }
+}
+
+fn diagnose_cmd(
+    cfg: &RunConfig,
+    data: &Dataset,
+    out: &Path,
+    dc: &crate::config::DiagnoseConfig,
+) -> Result<()> {
+    let d = diagnose_with(cfg, data, dc)?;
+    ensure_dir(out)?;
     write_text(
         &out.join("diagnosis.json"),
         &serde_json::to_string_pretty(&d).expect("JSON of plain values"),
     )?;
-    let md = crate::diagnose::report_md(&cfg, &d);
+    let md = crate::diagnose::report::report_md(cfg, &d);
     write_text(&out.join("report.md"), &md)?;
-    // Residual plots of the base model and of the chosen (else best-BIC) extension.
+    // Residual plots of the base model and of the chosen (else lowest-AIC) extension.
     let chosen = d
         .candidates
         .iter()
         .find(|c| Some(&c.name) == d.cause.as_ref())
-        .or_else(|| d.candidates.iter().min_by(|a, b| a.bic.total_cmp(&b.bic)));
+        .or_else(|| {
+            d.candidates
+                .iter()
+                .filter(|c| c.aic.is_finite())
+                .min_by(|a, b| a.aic.total_cmp(&b.aic))
+        });
     for c in std::iter::once(&d.base).chain(chosen) {
-        let exts: Vec<String> = if c.name == "base" {
-            vec![]
+        let model = build(&cfg.model, &[])?;
+        let model = if c.model == model.name() {
+            model
         } else {
-            vec![c.name.clone()]
+            let mut exts = cfg.extensions.clone();
+            if c.name != "base" {
+                exts.push(c.name.clone());
+            }
+            build(&cfg.model, &exts)?
         };
-        let model = build(&cfg.model, &exts)?;
         let x: Vec<f64> = c.constants.iter().map(|p| p.1).collect();
-        let settings = crate::fit::FitSettings::from_config(&cfg);
-        let obj = crate::diagnose::objective(model.as_ref(), &data.curves, &settings);
+        let settings = crate::fit::FitSettings::from_config(cfg);
+        let obj = crate::likelihood::raw_objective(model.as_ref(), &data.curves, &settings);
         let ev = obj.evaluate(&x);
         let series: Vec<Series> = data
             .curves
@@ -197,7 +303,7 @@ fn diagnose_cmd(config: &Path, out: Option<PathBuf>, opts: &DiagnoseOptions) -> 
                     .map(|k| {
                         (
                             cu.times_h[k] / cu.life_h(),
-                            100.0 * (cu.strains[k] - p.strain[k]) / cu.rupture_strain,
+                            100.0 * (p.strain[k] - cu.strains[k]) / cu.rupture_strain,
                         )
                     })
                     .collect(),
@@ -209,12 +315,39 @@ fn diagnose_cmd(config: &Path, out: Option<PathBuf>, opts: &DiagnoseOptions) -> 
             &format!("{}: residuals of {}", cfg.name, c.name),
             &series,
             "t / t_f",
-            "measured − predicted, % of rupture strain",
+            "predicted − measured, % of rupture strain",
         ) {
             eprintln!("warning: {e}");
         }
     }
     print!("{md}");
+    println!("wrote {}", out.display());
+    Ok(())
+}
+
+fn synth_cmd(out: &Path, sets: usize, seed: u64, scenario: Option<&str>) -> Result<()> {
+    if let Some(sc) = scenario {
+        if !crate::synth::SCENARIOS.contains(&sc) {
+            return Err(crate::Error::Invalid(format!(
+                "--scenario: unknown scenario '{sc}' (known: {})",
+                crate::synth::SCENARIOS.join(", ")
+            )));
+        }
+    }
+    for i in 0..sets {
+        let s = seed + i as u64;
+        let sc = scenario.unwrap_or_else(|| crate::synth::scenario_of(i));
+        let name = format!("set-{s}");
+        let set = crate::synth::generate(&name, sc, s)?;
+        crate::synth::write_set(&set, &out.join(&name))?;
+        println!(
+            "{name}: {} ({}), {} curves, {:?}",
+            sc,
+            set.truth.family,
+            set.truth.stresses.len(),
+            set.truth.sampling
+        );
+    }
     println!("wrote {}", out.display());
     Ok(())
 }

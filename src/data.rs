@@ -521,7 +521,7 @@ pub fn read_curves(path: &Path) -> Result<(Vec<RawCurve>, Vec<String>)> {
         let t = f.num(ct, "temperature_C", Range::Any)?;
         let s = f.num(cs, "stress_MPa", Range::Positive)?;
         let time = f.num(cti, "time_h", Range::NonNegative)?;
-        let e = f.num(ce, "strain_pct", Range::NonNegative)?;
+        let e = f.num(ce, "strain_pct", Range::Any)?;
         let sp = f.opt_text(csp);
         let key = (key_bits(t), key_bits(s), sp.clone());
         let k = *index.entry(key).or_insert_with(|| {

@@ -8,19 +8,23 @@
 // Numerical loops index several arrays with one index; iterator chains would obscure them.
 #![allow(clippy::needless_range_loop)]
 
+pub mod battery;
 pub mod cli;
 pub mod config;
 pub mod data;
 pub mod diagnose;
 pub mod dual;
+pub mod errmodel;
 pub mod error;
 pub mod fit;
 pub mod guess;
+pub mod likelihood;
 pub mod lsq;
 pub mod model;
 pub mod objective;
 pub mod ode;
 pub mod report;
 pub mod sweep;
+pub mod synth;
 
 pub use error::{Error, Result};

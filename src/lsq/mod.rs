@@ -49,6 +49,16 @@ pub trait LeastSquaresProblem: Sync {
     ) -> Option<Result<(), EvalFailure>> {
         None
     }
+    /// For problems whose residual weights are estimated from the residuals themselves (a
+    /// profiled likelihood: iteratively reweighted least squares inside the iteration): called
+    /// at every accepted point `x` with its residuals `r` (and its Jacobian, when already
+    /// computed); re-estimate the weights, rewrite `r` (and `jac`) under the new weights and
+    /// return `true`, or return `false` (the default) when nothing changed. Re-estimating the
+    /// weights at fixed x must not increase the problem's true objective, so that the
+    /// iteration stays a descent method on it.
+    fn reweight(&self, _x: &[f64], _r: &mut [f64], _jac: Option<&mut DMatrix<f64>>) -> bool {
+        false
+    }
 }
 
 /// Options of [`minimize`]; tolerances are relative unless said otherwise.
@@ -349,6 +359,9 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
     };
 
     for iter in 1..=opts.max_iterations {
+        if problem.reweight(&x, &mut r, jac_fresh.then_some(&mut jac)) {
+            f = sumsq(&r);
+        }
         let jac_result = if jac_fresh {
             Ok(())
         } else {

@@ -28,3 +28,9 @@ pub fn constants() -> Vec<ConstantSpec> {
 pub fn rate_factor<S: Scalar>(c_d: S, eps: S) -> S {
     c_d * eps + 1.0
 }
+
+/// The value of the extra constant that switches the extension off within [lb, ub]:
+/// C_d = 0 (inside the box).
+pub fn off_value(lb: f64, ub: f64) -> f64 {
+    0.0f64.clamp(lb, ub)
+}

@@ -26,3 +26,9 @@ pub fn constants() -> Vec<ConstantSpec> {
 pub fn loading_strain<S: Scalar>(e_l: S, stress_mpa: f64) -> S {
     S::cst(stress_mpa) / e_l
 }
+
+/// The value of the extra constant that switches the extension off within [lb, ub]:
+/// E_L at its upper bound: the smallest loading strain the box allows.
+pub fn off_value(_lb: f64, ub: f64) -> f64 {
+    ub
+}

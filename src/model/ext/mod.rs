@@ -40,6 +40,21 @@ pub fn extension_constants(name: &str) -> Option<Vec<ConstantSpec>> {
     }
 }
 
+/// The value of extension constant `constant` that switches its extension off (or, for E_L,
+/// nearly: its upper bound) within [lb, ub]; `None` for a constant of no extension.
+pub fn off_value(constant: &str, lb: f64, ub: f64) -> Option<f64> {
+    let has = |c: Vec<ConstantSpec>| c.iter().any(|s| s.name == constant);
+    if has(loading_strain::constants()) {
+        Some(loading_strain::off_value(lb, ub))
+    } else if has(dislocation_damage::constants()) {
+        Some(dislocation_damage::off_value(lb, ub))
+    } else if has(stress_ductility::constants()) {
+        Some(stress_ductility::off_value(lb, ub))
+    } else {
+        None
+    }
+}
+
 /// Which extensions are switched on, and where their constants sit in the parameter vector.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct KhdExtended {

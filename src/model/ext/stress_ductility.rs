@@ -29,3 +29,9 @@ pub fn constants() -> Vec<ConstantSpec> {
 pub fn ductility_factor<S: Scalar>(nu: S, stress_mpa: f64) -> S {
     (nu * (stress_mpa / SIGMA_REF_MPA).ln()).exp()
 }
+
+/// The value of the extra constant that switches the extension off within [lb, ub]:
+/// ν = 0 (inside the box).
+pub fn off_value(lb: f64, ub: f64) -> f64 {
+    0.0f64.clamp(lb, ub)
+}

@@ -1,0 +1,160 @@
+//! The parametric bootstrap behind `diagnose`'s p-values: replicate data sets simulated from
+//! a fitted model with its fitted error model, at the measured times of the real curves, each
+//! refitted exactly as the real data were (warm starts plus random starts), so that the
+//! statistics' null distributions include everything the procedure does — the error model's
+//! estimation, the optimiser, the early ends of the curves.
+//!
+//! Replicate b draws from its own random stream (seed, b), and replicates run in batches of
+//! [`BATCH`] whose size does not depend on the thread count: results are identical for any
+//! number of threads. Sampling stops early (Besag & Clifford 1991) once every test has at
+//! least [`STOP_EXCEEDANCES`] replicates at or above its observed statistic — the p-values are
+//! then at least 10/(b + 1) > 0.1 and no decision at α ≤ 0.1 can change.
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rand_distr::StandardNormal;
+use rayon::prelude::*;
+
+use crate::data::Curve;
+use crate::errmodel::ErrorModel;
+use crate::objective::Evaluation;
+
+/// Replicates per batch (fixed, for thread-count invariance).
+pub const BATCH: usize = 10;
+/// Exceedances per test after which sampling may stop.
+pub const STOP_EXCEEDANCES: usize = 10;
+
+/// The random stream of replicate `b` (0-based) of a bootstrap seeded with `seed`; `purpose`
+/// separates independent bootstraps of one run.
+pub fn replicate_rng(seed: u64, purpose: u64, b: usize) -> ChaCha8Rng {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ purpose.wrapping_mul(0x9e37_79b9_7f4a_7c15));
+    rng.set_stream(b as u64 + 1);
+    rng
+}
+
+/// A replicate of `curves`: the fitted model's predictions at the measured times (`eval`,
+/// with the objective's continuation after a predicted rupture, exactly what the fit was
+/// compared with) plus AR(1) reading error per curve, and rupture times scattered on the log
+/// scale by the fitted lifetime scatter. Everything else (times, rupture strain used for
+/// normalisation, the estimated minimum rate) is the real curve's.
+pub fn replicate_data<R: Rng>(
+    curves: &[Curve],
+    eval: &Evaluation,
+    noise: &ErrorModel,
+    rng: &mut R,
+) -> Vec<Curve> {
+    curves
+        .iter()
+        .zip(&eval.curves)
+        .enumerate()
+        .map(|(i, (c, p))| {
+            let e = noise.strain[i].simulate(c.times_h.len(), rng);
+            let strains: Vec<f64> = p.strain.iter().zip(&e).map(|(s, d)| s + d).collect();
+            let z: f64 = rng.sample(StandardNormal);
+            let rupture_time_h = c.rupture_time_h.map(|t| {
+                let base = if p.rupture_time_h.is_finite() {
+                    p.rupture_time_h
+                } else {
+                    t
+                };
+                base * (noise.lifetime_sd * z).exp()
+            });
+            Curve {
+                strains,
+                rupture_time_h,
+                ..c.clone()
+            }
+        })
+        .collect()
+}
+
+/// Monte Carlo p-value of observed statistic `obs` against replicate statistics `sample`:
+/// (1 + #{T* ≥ T or T* not computed}) / (B + 1). A replicate whose refit failed counts
+/// against rejection: a failure never counts as evidence.
+pub fn p_value(obs: f64, sample: &[f64]) -> f64 {
+    if !obs.is_finite() {
+        return 1.0;
+    }
+    let ge = sample.iter().filter(|&&s| !(s < obs)).count();
+    (1 + ge) as f64 / (sample.len() + 1) as f64
+}
+
+/// Run replicates `0..max` of `one` in batches; after each batch stop if every one of the
+/// `observed` statistics has at least [`STOP_EXCEEDANCES`] replicates at or above it. `one`
+/// returns one statistic per observed one (NaN: not computed). Returns the replicates' statistics
+/// (replicate order) and whether sampling stopped early.
+pub fn sequential<F>(observed: &[f64], max: usize, one: F) -> (Vec<Vec<f64>>, bool)
+where
+    F: Fn(usize) -> Vec<f64> + Sync,
+{
+    let mut out: Vec<Vec<f64>> = Vec::with_capacity(max);
+    while out.len() < max {
+        let lo = out.len();
+        let hi = (lo + BATCH).min(max);
+        let batch: Vec<Vec<f64>> = (lo..hi).into_par_iter().map(&one).collect();
+        out.extend(batch);
+        let done = observed.iter().enumerate().all(|(k, &obs)| {
+            !obs.is_finite()
+                || out.iter().filter(|r| !(r[k] < obs)).count() >= STOP_EXCEEDANCES
+        });
+        if done && out.len() < max {
+            return (out, true);
+        }
+    }
+    (out, false)
+}
+
+/// The 95 % quantile of |a_b − c_b| over replicates where both are finite (NaN if none).
+pub fn spread95(a: &[f64], c: &[f64]) -> f64 {
+    let mut d: Vec<f64> = a
+        .iter()
+        .zip(c)
+        .filter(|(x, y)| x.is_finite() && y.is_finite())
+        .map(|(x, y)| (x - y).abs())
+        .collect();
+    if d.is_empty() {
+        return f64::NAN;
+    }
+    d.sort_by(|x, y| x.total_cmp(y));
+    let idx = ((0.95 * d.len() as f64).ceil() as usize).clamp(1, d.len()) - 1;
+    d[idx]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn p_values_count_failures_against_rejection() {
+        assert_eq!(p_value(5.0, &[1.0, 2.0, 3.0]), 0.25);
+        assert_eq!(p_value(2.0, &[1.0, 2.0, 3.0]), 0.75);
+        assert_eq!(p_value(5.0, &[1.0, f64::NAN, 3.0]), 0.5);
+        assert_eq!(p_value(f64::NAN, &[1.0]), 1.0);
+    }
+
+    #[test]
+    fn sequential_stops_only_when_every_test_is_clearly_not_significant() {
+        // Test 0 typical (T = 0.5 of uniform replicates), test 1 extreme: no early stop.
+        let one = |b: usize| vec![(b % 7) as f64 / 7.0, (b % 5) as f64];
+        let (r, early) = sequential(&[0.5, 100.0], 99, one);
+        assert_eq!(r.len(), 99);
+        assert!(!early);
+        // Both typical: stops after the first batch with ≥ 10 exceedances each.
+        let (r, early) = sequential(&[0.1, 0.0], 99, one);
+        assert!(early);
+        assert_eq!(r.len() % BATCH, 0);
+        assert!(r.len() < 99);
+        // Identical whatever the thread count.
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+        let (r1, _) = pool.install(|| sequential(&[0.1, 0.0], 99, one));
+        assert_eq!(r, r1);
+    }
+
+    #[test]
+    fn spread_is_the_95_percent_quantile() {
+        let a: Vec<f64> = (0..100).map(|k| k as f64).collect();
+        let c = vec![0.0; 100];
+        assert_eq!(spread95(&a, &c), 94.0);
+        assert!(spread95(&[f64::NAN], &[1.0]).is_nan());
+    }
+}

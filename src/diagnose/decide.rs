@@ -1,0 +1,238 @@
+//! The decision of `diagnose` as pure functions of the fitted candidates' numbers.
+//!
+//! 1. **Family of tests** at false-alarm level α, Holm's step-down: one likelihood-ratio test
+//!    per extension (H0: the base model suffices; p-value from the parametric bootstrap under
+//!    the fitted base model) and the goodness-of-fit test of the base model (H0: no misfit
+//!    shape common to the curves beyond the error model). Under the global null — the base
+//!    model and its error model are right — the chance of any rejection is at most α.
+//! 2. **Attribution** among the rejected extensions: the lowest AIC (−2 ln L + 2k) is the
+//!    candidate cause; a rejected extension whose AIC is within the bootstrap's spread of the
+//!    best (the 95 % quantile of |T*_best − T*_other| over the null replicates) cannot be told
+//!    apart from it and is listed as indistinguishable.
+//! 3. **Verdict**: no rejection → `adequate`; an extension rejected → `extension` if the
+//!    extended model passes its own goodness-of-fit test (bootstrap under the extended model,
+//!    level α), else `unexplained`; only the base goodness of fit rejected → `unexplained`.
+//!
+//! A p-value that could not be computed (NaN) counts as 1: a failure never counts as evidence.
+
+/// What `diagnose` concludes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Verdict {
+    /// No systematic misfit beyond the error model, and no extension improves significantly.
+    Adequate,
+    /// A catalogued extension explains the misfit (`cause`).
+    Extension,
+    /// Systematic misfit that no catalogued extension removes.
+    Unexplained,
+}
+
+impl Verdict {
+    /// Name as in `diagnosis.json`.
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            Verdict::Adequate => "adequate",
+            Verdict::Extension => "extension",
+            Verdict::Unexplained => "unexplained",
+        }
+    }
+}
+
+/// Holm's step-down procedure: which hypotheses are rejected at family-wise level `alpha`,
+/// and the Holm-adjusted p-values. NaN p-values count as 1.
+pub fn holm(p: &[f64], alpha: f64) -> (Vec<bool>, Vec<f64>) {
+    let m = p.len();
+    let clean: Vec<f64> = p
+        .iter()
+        .map(|v| if v.is_nan() { 1.0 } else { v.clamp(0.0, 1.0) })
+        .collect();
+    let mut order: Vec<usize> = (0..m).collect();
+    order.sort_by(|&a, &b| clean[a].total_cmp(&clean[b]).then(a.cmp(&b)));
+    let mut rejected = vec![false; m];
+    let mut adjusted = vec![1.0; m];
+    let mut running: f64 = 0.0;
+    let mut stop = false;
+    for (rank, &i) in order.iter().enumerate() {
+        let factor = (m - rank) as f64;
+        running = running.max((factor * clean[i]).min(1.0));
+        adjusted[i] = running;
+        if !stop && clean[i] <= alpha / factor {
+            rejected[i] = true;
+        } else {
+            stop = true;
+        }
+    }
+    (rejected, adjusted)
+}
+
+/// One extension's numbers for the decision.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExtensionEvidence {
+    /// Extension name.
+    pub name: String,
+    /// Bootstrap p-value of its likelihood-ratio test against the base model.
+    pub p_value: f64,
+    /// AIC = −2 ln L + 2k of its fit (NaN: the fit failed).
+    pub aic: f64,
+}
+
+/// Everything the first stage of the decision needs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SelectInput {
+    /// False-alarm level of the family.
+    pub alpha: f64,
+    /// The extensions tested.
+    pub extensions: Vec<ExtensionEvidence>,
+    /// Bootstrap p-value of the base model's goodness-of-fit test.
+    pub base_gof_p: f64,
+    /// `spread[j][k]`: 95 % quantile of |T*_j − T*_k| over the null bootstrap replicates.
+    pub spread: Vec<Vec<f64>>,
+}
+
+/// The outcome of the first stage.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Selection {
+    /// Per extension: rejected by Holm.
+    pub rejected: Vec<bool>,
+    /// Per extension: Holm-adjusted p-value.
+    pub adjusted: Vec<f64>,
+    /// The base goodness-of-fit test rejected.
+    pub base_gof_rejected: bool,
+    /// Its Holm-adjusted p-value.
+    pub base_gof_adjusted: f64,
+    /// Index of the rejected extension with the lowest AIC.
+    pub best: Option<usize>,
+    /// Rejected extensions within the bootstrap's spread of the best: (index, ΔAIC, spread).
+    pub indistinguishable: Vec<(usize, f64, f64)>,
+}
+
+/// Stage 1: Holm over the extension tests and the base goodness of fit, then attribution.
+pub fn select(inp: &SelectInput) -> Selection {
+    let mut p: Vec<f64> = inp.extensions.iter().map(|e| e.p_value).collect();
+    p.push(inp.base_gof_p);
+    let (rej, adj) = holm(&p, inp.alpha);
+    let k = inp.extensions.len();
+    let rejected: Vec<bool> = (0..k)
+        .map(|i| rej[i] && inp.extensions[i].aic.is_finite())
+        .collect();
+    let best = (0..k).filter(|&i| rejected[i]).min_by(|&a, &b| {
+        inp.extensions[a]
+            .aic
+            .total_cmp(&inp.extensions[b].aic)
+            .then(a.cmp(&b))
+    });
+    let mut indistinguishable = Vec::new();
+    if let Some(b) = best {
+        for i in (0..k).filter(|&i| rejected[i] && i != b) {
+            let d = inp.extensions[i].aic - inp.extensions[b].aic;
+            let s = inp
+                .spread
+                .get(b)
+                .and_then(|row| row.get(i))
+                .copied()
+                .unwrap_or(f64::NAN);
+            if s.is_finite() && d <= s {
+                indistinguishable.push((i, d, s));
+            }
+        }
+    }
+    Selection {
+        rejected,
+        adjusted: adj[..k].to_vec(),
+        base_gof_rejected: rej[k],
+        base_gof_adjusted: adj[k],
+        best,
+        indistinguishable,
+    }
+}
+
+/// Stage 2: the verdict and the cause, given the bootstrap p-value of the best extension's
+/// own goodness-of-fit test (`None` when there is no best extension).
+pub fn verdict(sel: &Selection, cause_gof_p: Option<f64>, alpha: f64) -> (Verdict, Option<usize>) {
+    match sel.best {
+        Some(b) => {
+            let p = cause_gof_p.unwrap_or(f64::NAN);
+            let p = if p.is_nan() { 1.0 } else { p };
+            if p <= alpha {
+                (Verdict::Unexplained, None)
+            } else {
+                (Verdict::Extension, Some(b))
+            }
+        }
+        None if sel.base_gof_rejected => (Verdict::Unexplained, None),
+        None => (Verdict::Adequate, None),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn holm_against_hand_computed_tables() {
+        // (p-values, alpha, rejected, adjusted)
+        let cases: &[(&[f64], f64, &[bool], &[f64])] = &[
+            (&[0.01, 0.04, 0.03, 0.005], 0.05, &[true, false, false, true], &[0.03, 0.06, 0.06, 0.02]),
+            (&[0.01, 0.01, 0.01], 0.05, &[true, true, true], &[0.03, 0.03, 0.03]),
+            (&[0.2, f64::NAN, 0.011], 0.05, &[false, false, true], &[0.4, 1.0, 0.033]),
+            (&[0.0125, 0.5, 0.9, 0.9, 0.9], 0.05, &[false, false, false, false, false], &[0.0625, 1.0, 1.0, 1.0, 1.0]),
+            (&[0.01, 0.5, 0.9, 0.9, 0.9], 0.05, &[true, false, false, false, false], &[0.05, 1.0, 1.0, 1.0, 1.0]),
+        ];
+        for (p, a, want_r, want_adj) in cases {
+            let (r, adj) = holm(p, *a);
+            assert_eq!(&r[..], *want_r, "{p:?}");
+            for (x, y) in adj.iter().zip(*want_adj) {
+                assert!((x - y).abs() < 1e-12, "{p:?}: {adj:?}");
+            }
+        }
+    }
+
+    fn ext(name: &str, p: f64, aic: f64) -> ExtensionEvidence {
+        ExtensionEvidence {
+            name: name.into(),
+            p_value: p,
+            aic,
+        }
+    }
+
+    #[test]
+    fn decisions_as_a_table() {
+        let spread = vec![vec![0.0, 4.0, 4.0], vec![4.0, 0.0, 4.0], vec![4.0, 4.0, 0.0]];
+        // (extensions, base gof p, cause gof p, verdict, cause, indistinguishable)
+        type Row = (Vec<ExtensionEvidence>, f64, Option<f64>, Verdict, Option<usize>, Vec<usize>);
+        let rows: Vec<Row> = vec![
+            // Nothing significant: adequate.
+            (vec![ext("a", 0.4, 10.0), ext("b", 0.2, 9.0), ext("c", 0.9, 11.0)], 0.6, None, Verdict::Adequate, None, vec![]),
+            // One clear extension that fits: extension a.
+            (vec![ext("a", 0.01, -50.0), ext("b", 0.3, 9.0), ext("c", 0.9, 11.0)], 0.01, Some(0.5), Verdict::Extension, Some(0), vec![]),
+            // Two significant, b better by more than the spread: cause b.
+            (vec![ext("a", 0.01, -50.0), ext("b", 0.01, -60.0), ext("c", 0.9, 11.0)], 0.5, Some(0.3), Verdict::Extension, Some(1), vec![]),
+            // Two significant within the spread: cause the lower AIC, the other listed.
+            (vec![ext("a", 0.01, -58.0), ext("b", 0.01, -60.0), ext("c", 0.9, 11.0)], 0.5, Some(0.3), Verdict::Extension, Some(1), vec![0]),
+            // The best extension still fails its own goodness of fit: unexplained.
+            (vec![ext("a", 0.01, -50.0), ext("b", 0.3, 9.0), ext("c", 0.9, 11.0)], 0.01, Some(0.01), Verdict::Unexplained, None, vec![]),
+            // Only the base goodness of fit fails: unexplained.
+            (vec![ext("a", 0.3, 1.0), ext("b", 0.3, 9.0), ext("c", 0.9, 11.0)], 0.002, None, Verdict::Unexplained, None, vec![]),
+            // Significant but its fit failed (AIC NaN): never the cause.
+            (vec![ext("a", 0.001, f64::NAN), ext("b", 0.4, 9.0), ext("c", 0.9, 11.0)], 0.5, None, Verdict::Adequate, None, vec![]),
+            // p just above the Holm threshold α/4 = 0.0125 (4 tests): not rejected.
+            (vec![ext("a", 0.013, -50.0), ext("b", 0.4, 9.0), ext("c", 0.9, 11.0)], 0.5, None, Verdict::Adequate, None, vec![]),
+            // A cause whose goodness-of-fit p-value could not be computed counts as fitting.
+            (vec![ext("a", 0.01, -50.0), ext("b", 0.4, 9.0), ext("c", 0.9, 11.0)], 0.5, Some(f64::NAN), Verdict::Extension, Some(0), vec![]),
+        ];
+        for (i, (e, gof, cgof, want_v, want_c, want_ind)) in rows.into_iter().enumerate() {
+            let sel = select(&SelectInput {
+                alpha: 0.05,
+                extensions: e,
+                base_gof_p: gof,
+                spread: spread.clone(),
+            });
+            let cg = if sel.best.is_some() { cgof } else { None };
+            let (v, c) = verdict(&sel, cg, 0.05);
+            assert_eq!(v, want_v, "row {i}");
+            assert_eq!(c, want_c, "row {i}");
+            let ind: Vec<usize> = sel.indistinguishable.iter().map(|t| t.0).collect();
+            assert_eq!(ind, want_ind, "row {i}");
+        }
+    }
+}

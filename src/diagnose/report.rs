@@ -1,0 +1,218 @@
+//! `report.md`: the diagnosis for a person.
+
+use super::{Candidate, Diagnosis, Verdict};
+use crate::config::RunConfig;
+use crate::diagnose::gof::KNOTS;
+use crate::diagnose::signature::STAGES;
+
+fn f(v: f64, prec: usize) -> String {
+    if v.is_finite() {
+        format!("{v:.prec$}")
+    } else {
+        "–".into()
+    }
+}
+
+fn opt(v: Option<f64>, prec: usize) -> String {
+    v.map_or("–".into(), |x| f(x, prec))
+}
+
+fn list(v: &[f64], prec: usize) -> String {
+    v.iter()
+        .map(|x| if x.is_finite() { format!("{x:+.prec$}") } else { "–".into() })
+        .collect::<Vec<_>>()
+        .join(" / ")
+}
+
+fn curve_label(c: &super::CurveSignature) -> String {
+    match &c.specimen {
+        Some(s) => format!("{} ({s})", c.stress_mpa),
+        None => format!("{}", c.stress_mpa),
+    }
+}
+
+/// The markdown report.
+pub fn report_md(cfg: &RunConfig, d: &Diagnosis) -> String {
+    let mut s = format!("# Diagnosis of {}\n\n", cfg.name);
+    s += &format!("**Verdict: {}**", d.verdict.as_str());
+    match (&d.cause, &d.closest) {
+        (Some(c), _) => s += &format!(" — cause: `{c}`"),
+        (None, Some(c)) => {
+            s += &format!(" — `{c}` improves the fit significantly but still misfits")
+        }
+        _ => {}
+    }
+    s += &format!(
+        " (false-alarm level α = {}, {} bootstrap replicates{}).\n\n",
+        d.alpha,
+        d.bootstrap.replicates,
+        if d.bootstrap.stopped_early {
+            ", stopped early: no test near significance"
+        } else {
+            ""
+        }
+    );
+    if !d.indistinguishable.is_empty() {
+        s += "The data cannot tell the cause apart from: ";
+        s += &d
+            .indistinguishable
+            .iter()
+            .map(|i| {
+                format!(
+                    "`{}` (AIC {:+.1} against a bootstrap spread of {:.1})",
+                    i.name, i.delta_aic, i.spread95
+                )
+            })
+            .collect::<Vec<_>>()
+            .join(", ");
+        s += ".\n\n";
+    }
+    s += "## Decision\n\n";
+    for w in &d.decision {
+        s += &format!("- {w}\n");
+    }
+    s += "\n## What the calibrated base model gets wrong\n\n";
+    s += "Sign convention: predicted − measured, in % of each curve's rupture strain \
+          (positive: the model over-predicts the strain). Compared at the measured times only.\n\n";
+    if d.evidence.is_empty() {
+        s += "No stage bias or lifetime bias common to the curves reaches 2 standard errors \
+              of the fitted reading error.\n\n";
+    }
+    for e in &d.evidence {
+        s += &format!("- `{}`: {}\n", e.code, e.text);
+    }
+    let g = &d.gof.gof;
+    s += &format!(
+        "\nCommon misfit shape (goodness-of-fit statistic G = {:.1} on {} columns, bootstrap p = {:.3}) \
+         at life fractions {}: {} % of ε_f; common log-lifetime bias {}.\n\n",
+        g.statistic,
+        g.dof,
+        d.gof.p_value,
+        KNOTS.iter().map(|k| format!("{k}")).collect::<Vec<_>>().join(", "),
+        list(&g.shape_pct, 2),
+        f(g.lifetime_bias, 3)
+    );
+    s += &format!(
+        "| stress MPa | {} bias % (z) | first point % | last point: t/t_f, meas / pred strain % | lifetime error % | reading error sd %, φ |\n|---|---|---|---|---|---|\n",
+        STAGES.iter().map(|st| st.0).collect::<Vec<_>>().join(" / ")
+    );
+    for c in &d.base.curves {
+        s += &format!(
+            "| {} | {} | {:+.2} | {:.3}, {:.3} / {:.3} | {:+.2} | {:.4}, {:.2} |\n",
+            curve_label(c),
+            (0..3)
+                .map(|k| format!("{} ({})", f(c.stage_bias_pct[k], 2), f(c.stage_z[k], 1)))
+                .collect::<Vec<_>>()
+                .join(" / "),
+            c.first_point_pct,
+            c.last_fraction,
+            c.last_point_pct.0,
+            c.last_point_pct.1,
+            c.lifetime_err_pct,
+            c.noise_sd_pct,
+            c.noise_phi
+        );
+    }
+    if !d.base.pinned.is_empty() {
+        s += &format!(
+            "\nBase constants on a bound: {}.\n",
+            d.base
+                .pinned
+                .iter()
+                .map(|(n, b)| format!("{n} ({b})"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
+    s += "\n## Candidates\n\n| model | −2 ln L | AIC | LR | p | p (Holm) | ΔBIC (n_eff) | leave-one-stress-out RMSE | gain % | held-out lifetime error % | lifetime errors % | extra constants |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+    let row = |c: &Candidate| -> String {
+        let extra: Vec<String> = c
+            .extra_constants
+            .iter()
+            .map(|n| {
+                let v = c.constants.iter().find(|(m, _)| m == n).map(|p| p.1);
+                format!("{n} = {}", v.map_or("–".into(), |v| format!("{v:.4e}")))
+            })
+            .collect();
+        format!(
+            "| {}{} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            c.name,
+            if c.significant { " *" } else { "" },
+            f(c.objective, 2),
+            f(c.aic, 2),
+            f(c.lr, 2),
+            opt(c.p_value, 3),
+            opt(c.p_holm, 3),
+            f(c.delta_bic, 1),
+            f(c.loo_rmse, 4),
+            f(c.gain_pct, 1),
+            f(c.loo_lifetime_err_pct, 2),
+            list(&c.lifetime_errs_pct, 2),
+            if c.status == super::FitStatus::Failed {
+                format!("fit failed from all {} starts", c.failed_starts)
+            } else {
+                extra.join(", ")
+            }
+        )
+    };
+    s += &row(&d.base);
+    for c in &d.candidates {
+        s += &row(c);
+    }
+    s += "\n`*`: rejects the base model at the family's level α. LR = −2 ln L(base) − (−2 ln L). \
+          ΔBIC and the leave-one-stress-out errors are for orientation; the decision uses the \
+          bootstrap p-values only.\n";
+    for c in std::iter::once(&d.base).chain(&d.candidates) {
+        if !c.loo_failed_folds.is_empty() {
+            s += &format!(
+                "\n{}: the leave-one-out fit failed from every start without the curves at {:?} MPa; no held-out error is reported.\n",
+                c.name, c.loo_failed_folds
+            );
+        }
+    }
+    if let Some(n) = &d.base.noise {
+        s += &format!(
+            "\n## Error model of the base fit\n\nReading error per curve (marginal sd, % strain): {}; AR(1) correlation: {}; scatter of rupture times: {:.2} % (ln scale; floor {:.2} %).\n",
+            n.strain_sd_pct.iter().map(|v| format!("{v:.4}")).collect::<Vec<_>>().join(" / "),
+            n.phi.iter().map(|v| format!("{v:.2}")).collect::<Vec<_>>().join(" / "),
+            n.lifetime_sd_pct,
+            100.0 * d.settings.lifetime_sd_floor
+        );
+    }
+    if d.bootstrap.failed_base_refits > 0
+        || d.bootstrap.failed_extension_refits.iter().any(|f| f.1 > 0)
+    {
+        s += &format!(
+            "\nRefits that failed in the bootstrap (counted against rejection): base {}; {}.\n",
+            d.bootstrap.failed_base_refits,
+            d.bootstrap
+                .failed_extension_refits
+                .iter()
+                .map(|(n, k)| format!("{n} {k}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
+    s += &format!(
+        "\n## Method\n\nEvery model is fitted by maximum likelihood under an error model with an AR(1) \
+         reading error per curve and a log-normal scatter of rupture times; each extension is tested \
+         against the base model by its likelihood ratio, and the base model's fit by a statistic for a \
+         misfit shape common to the curves; the null distributions come from {} parametric bootstrap \
+         replicates under the fitted base model, every replicate refitted by every model (warm starts \
+         from the fitted optimum and up to {} distinct optima found on the data, plus {} random \
+         start(s)). Holm's procedure keeps the chance of any false alarm at α = {}. A \
+         significant extension is the cause only if it passes its own goodness-of-fit test ({}).\n",
+        d.bootstrap.max,
+        d.settings.replicate_basins,
+        d.settings.replicate_starts,
+        d.alpha,
+        match d.verdict {
+            Verdict::Extension | Verdict::Unexplained if d.cause_gof.is_some() => format!(
+                "here p = {:.3}",
+                d.cause_gof.as_ref().map_or(f64::NAN, |g| g.p_value)
+            ),
+            _ => "not needed here".into(),
+        }
+    );
+    s
+}

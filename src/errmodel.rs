@@ -1,0 +1,418 @@
+//! The error model of creep data: what a measured curve and a measured rupture time are
+//! allowed to differ from the model's prediction by.
+//!
+//! - **Strain reading error**, per curve: a stationary AR(1) process in measurement order,
+//!   e_1 ~ N(0, σ²/(1 − φ²)), e_j = φ·e_{j−1} + σ·z_j, with its own innovation scale σ (strain
+//!   as a fraction) and correlation φ. Digitised and logged curves have correlated reading
+//!   error (a digitiser's hand, an extensometer's drift): counting every point as independent
+//!   overstates the evidence by orders of magnitude. φ = 0 is white noise.
+//! - **Rupture-time error**, separately, on a log scale: ln t_f = ln t_r,pred + s·z, one s for
+//!   all curves (≈ 1 % scatter of repeated tests at best, far more between specimens). It is
+//!   estimated from the lifetime residuals with a floor ([`ErrorModel::estimate`]): a model
+//!   with six constants can all but interpolate three rupture times, and the maximum-likelihood
+//!   s would then collapse to zero.
+//!
+//! Estimation is exact Gaussian maximum likelihood given the residuals; the likelihood is the
+//! exact AR(1) one (not conditional on the first point), so it is what a dense covariance
+//! matrix gives (tested). Whitening turns the residuals into independent standard normal
+//! innovations, which is how [`crate::likelihood`] fits constants under this model.
+
+use rand::Rng;
+use rand_distr::StandardNormal;
+
+/// Largest |φ| an estimate may take: beyond it the process is a random walk in all but name
+/// and the likelihood's −ln(1 − φ²) term dominates.
+pub const PHI_MAX: f64 = 0.995;
+/// Smallest innovation scale (strain fraction): a numerical floor for noise-free curves.
+pub const SIGMA_FLOOR: f64 = 1e-9;
+/// Default floor of the rupture-time scatter (ln scale): 1 %, the reproducibility of a
+/// rupture time under the best conditions.
+pub const DEFAULT_LIFETIME_SD_FLOOR: f64 = 0.01;
+
+const LN_2PI: f64 = 1.837_877_066_409_345_5;
+
+/// An AR(1) reading error: innovation sd `sigma` (strain fraction) and correlation `phi`
+/// between consecutive measurements.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Ar1 {
+    /// Innovation standard deviation, strain as a fraction.
+    pub sigma: f64,
+    /// Correlation of consecutive errors, in (−1, 1).
+    pub phi: f64,
+}
+
+/// The quadratic S(φ) = a − 2bφ + cφ² of the AR(1) likelihood: the sum of squared
+/// innovations (times σ²) of residuals `e` at correlation φ.
+#[derive(Debug, Clone, Copy)]
+struct Quad {
+    a: f64,
+    b: f64,
+    c: f64,
+    n: usize,
+}
+
+impl Quad {
+    fn of(e: &[f64]) -> Quad {
+        let n = e.len();
+        let a: f64 = e.iter().map(|v| v * v).sum();
+        let b: f64 = e.windows(2).map(|w| w[0] * w[1]).sum();
+        let c: f64 = if n > 2 {
+            e[1..n - 1].iter().map(|v| v * v).sum()
+        } else {
+            0.0
+        };
+        Quad { a, b, c, n }
+    }
+    fn s(&self, phi: f64) -> f64 {
+        (self.a - 2.0 * self.b * phi + self.c * phi * phi).max(0.0)
+    }
+    /// Profile −2 ln L (σ² at its optimum S/n), without the constant n(ln 2π + 1).
+    fn profile(&self, phi: f64) -> f64 {
+        let n = self.n as f64;
+        let s = self.s(phi).max(n * SIGMA_FLOOR * SIGMA_FLOOR);
+        n * (s / n).ln() - (1.0 - phi * phi).ln()
+    }
+}
+
+impl Ar1 {
+    /// White noise of standard deviation `sd`.
+    pub fn white(sd: f64) -> Ar1 {
+        Ar1 { sigma: sd, phi: 0.0 }
+    }
+
+    /// The AR(1) whose errors have marginal standard deviation `sd` and correlation `phi`.
+    pub fn with_marginal(sd: f64, phi: f64) -> Ar1 {
+        Ar1 {
+            sigma: sd * (1.0 - phi * phi).sqrt(),
+            phi,
+        }
+    }
+
+    /// Marginal standard deviation of one error, σ/√(1 − φ²).
+    pub fn marginal_sd(&self) -> f64 {
+        self.sigma / (1.0 - self.phi * self.phi).sqrt()
+    }
+
+    /// Exact maximum-likelihood estimate from residuals `e` (in measurement order), φ within
+    /// ±[`PHI_MAX`]. Fewer than 3 residuals give φ = 0.
+    pub fn estimate(e: &[f64]) -> Ar1 {
+        let n = e.len();
+        if n == 0 {
+            return Ar1::white(SIGMA_FLOOR);
+        }
+        let q = Quad::of(e);
+        let phi = if n < 3 { 0.0 } else { argmin_phi(&q) };
+        let sigma = (q.s(phi) / n as f64).sqrt().max(SIGMA_FLOOR);
+        Ar1 { sigma, phi }
+    }
+
+    /// Exact −2 ln L of residuals `e` under this process.
+    pub fn neg2ll(&self, e: &[f64]) -> f64 {
+        let n = e.len() as f64;
+        if e.is_empty() {
+            return 0.0;
+        }
+        let s = Quad::of(e).s(self.phi);
+        n * (LN_2PI + 2.0 * self.sigma.ln()) - (1.0 - self.phi * self.phi).ln()
+            + s / (self.sigma * self.sigma)
+    }
+
+    /// Whiten in place: e ↦ independent standard-normal innovations (√(1−φ²)e_1/σ,
+    /// (e_j − φe_{j−1})/σ). Linear, so it applies to Jacobian columns alike (`stride` is the
+    /// distance between consecutive entries; 1 for a plain slice).
+    pub fn whiten_strided(&self, v: &mut [f64], n: usize, stride: usize) {
+        if n == 0 {
+            return;
+        }
+        let inv = 1.0 / self.sigma;
+        for j in (1..n).rev() {
+            v[j * stride] = (v[j * stride] - self.phi * v[(j - 1) * stride]) * inv;
+        }
+        v[0] *= (1.0 - self.phi * self.phi).sqrt() * inv;
+    }
+
+    /// Inverse of [`Ar1::whiten_strided`]: innovations ↦ errors.
+    pub fn unwhiten_strided(&self, v: &mut [f64], n: usize, stride: usize) {
+        if n == 0 {
+            return;
+        }
+        v[0] *= self.sigma / (1.0 - self.phi * self.phi).sqrt();
+        for j in 1..n {
+            v[j * stride] = v[j * stride] * self.sigma + self.phi * v[(j - 1) * stride];
+        }
+    }
+
+    /// [`Ar1::whiten_strided`] on a contiguous slice.
+    pub fn whiten(&self, v: &mut [f64]) {
+        let n = v.len();
+        self.whiten_strided(v, n, 1);
+    }
+
+    /// Draw `n` consecutive errors of this stationary process.
+    pub fn simulate<R: Rng>(&self, n: usize, rng: &mut R) -> Vec<f64> {
+        let mut out = Vec::with_capacity(n);
+        let mut prev = 0.0;
+        for j in 0..n {
+            let z: f64 = rng.sample(StandardNormal);
+            let e = if j == 0 {
+                self.marginal_sd() * z
+            } else {
+                self.phi * prev + self.sigma * z
+            };
+            out.push(e);
+            prev = e;
+        }
+        out
+    }
+
+    /// Variance of the mean of `k` consecutive errors:
+    /// σ_m²/k² · (k + 2 Σ_{l=1}^{k−1} (k − l) φ^l).
+    pub fn mean_variance(&self, k: usize) -> f64 {
+        if k == 0 {
+            return f64::NAN;
+        }
+        let m2 = self.marginal_sd().powi(2);
+        let kf = k as f64;
+        let p = self.phi;
+        // Σ_{l=1}^{k−1} (k − l) p^l by recurrence (exact for any p, O(k)).
+        let mut sum = 0.0;
+        let mut pl = 1.0;
+        for l in 1..k {
+            pl *= p;
+            if pl.abs() < 1e-300 {
+                break;
+            }
+            sum += (kf - l as f64) * pl;
+        }
+        m2 * (kf + 2.0 * sum) / (kf * kf)
+    }
+}
+
+/// φ minimising the profile likelihood on [−PHI_MAX, PHI_MAX]: a grid, then golden section
+/// around the best grid point (the profile is smooth and, in practice, unimodal).
+fn argmin_phi(q: &Quad) -> f64 {
+    const GRID: usize = 80;
+    let step = 2.0 * PHI_MAX / GRID as f64;
+    let mut best = (f64::INFINITY, 0.0);
+    for i in 0..=GRID {
+        let p = -PHI_MAX + i as f64 * step;
+        let f = q.profile(p);
+        if f < best.0 {
+            best = (f, p);
+        }
+    }
+    let (mut lo, mut hi) = (
+        (best.1 - step).max(-PHI_MAX),
+        (best.1 + step).min(PHI_MAX),
+    );
+    let g = 0.5 * (5f64.sqrt() - 1.0);
+    let mut x1 = hi - g * (hi - lo);
+    let mut x2 = lo + g * (hi - lo);
+    let (mut f1, mut f2) = (q.profile(x1), q.profile(x2));
+    for _ in 0..60 {
+        if f1 <= f2 {
+            hi = x2;
+            x2 = x1;
+            f2 = f1;
+            x1 = hi - g * (hi - lo);
+            f1 = q.profile(x1);
+        } else {
+            lo = x1;
+            x1 = x2;
+            f1 = f2;
+            x2 = lo + g * (hi - lo);
+            f2 = q.profile(x2);
+        }
+        if hi - lo < 1e-10 {
+            break;
+        }
+    }
+    let x = 0.5 * (lo + hi);
+    if q.profile(x) <= best.0 {
+        x
+    } else {
+        best.1
+    }
+}
+
+/// The error model of one data set: an AR(1) per curve and the rupture-time scatter.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ErrorModel {
+    /// Strain reading error per curve (the data set's curve order).
+    pub strain: Vec<Ar1>,
+    /// Standard deviation of ln(t_r,pred / t_f), over curves with a measured rupture time.
+    pub lifetime_sd: f64,
+}
+
+/// Raw residuals of one data set at one constant set: per curve, predicted − measured strain
+/// (fraction) at the measured times, and ln(t_r,pred / t_f) (`None` without a rupture time).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Residuals {
+    /// Strain residuals per curve.
+    pub strain: Vec<Vec<f64>>,
+    /// Log lifetime residual per curve.
+    pub lifetime: Vec<Option<f64>>,
+}
+
+impl ErrorModel {
+    /// Maximum-likelihood estimate from residuals; the rupture-time scatter is the root mean
+    /// square of the log lifetime residuals, not below `lifetime_sd_floor`.
+    pub fn estimate(res: &Residuals, lifetime_sd_floor: f64) -> ErrorModel {
+        let strain = res.strain.iter().map(|e| Ar1::estimate(e)).collect();
+        let l: Vec<f64> = res.lifetime.iter().flatten().copied().collect();
+        let rms = if l.is_empty() {
+            0.0
+        } else {
+            (l.iter().map(|v| v * v).sum::<f64>() / l.len() as f64).sqrt()
+        };
+        ErrorModel {
+            strain,
+            lifetime_sd: rms.max(lifetime_sd_floor),
+        }
+    }
+
+    /// Exact −2 ln L of `res` under this model (strain and lifetime parts).
+    pub fn neg2ll(&self, res: &Residuals) -> f64 {
+        self.neg2ll_parts(res).iter().sum()
+    }
+
+    /// −2 ln L split as [strain, lifetime].
+    pub fn neg2ll_parts(&self, res: &Residuals) -> [f64; 2] {
+        let strain: f64 = self
+            .strain
+            .iter()
+            .zip(&res.strain)
+            .map(|(p, e)| p.neg2ll(e))
+            .sum();
+        let s = self.lifetime_sd;
+        let life: f64 = res
+            .lifetime
+            .iter()
+            .flatten()
+            .map(|l| LN_2PI + 2.0 * s.ln() + (l / s).powi(2))
+            .sum();
+        [strain, life]
+    }
+
+    /// Effective number of independent strain observations, Σ n_i (1 − φ_i)/(1 + φ_i) (the
+    /// large-sample information of a mean under AR(1)), plus one per rupture time.
+    pub fn effective_n(&self, res: &Residuals) -> f64 {
+        let s: f64 = self
+            .strain
+            .iter()
+            .zip(&res.strain)
+            .map(|(p, e)| e.len() as f64 * (1.0 - p.phi) / (1.0 + p.phi))
+            .sum();
+        s + res.lifetime.iter().flatten().count() as f64
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{DMatrix, DVector};
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    /// −2 ln L from the dense AR(1) covariance Σ_jk = σ²/(1−φ²) φ^|j−k|.
+    fn dense_neg2ll(p: &Ar1, e: &[f64]) -> f64 {
+        let n = e.len();
+        let m2 = p.marginal_sd().powi(2);
+        let cov = DMatrix::from_fn(n, n, |j, k| m2 * p.phi.powi((j as i32 - k as i32).abs()));
+        let ch = cov.clone().cholesky().unwrap();
+        let v = DVector::from_column_slice(e);
+        let x = ch.solve(&v);
+        let logdet: f64 = 2.0 * ch.l().diagonal().iter().map(|d| d.ln()).sum::<f64>();
+        n as f64 * LN_2PI + logdet + v.dot(&x)
+    }
+
+    #[test]
+    fn likelihood_equals_the_dense_gaussian() {
+        let e = [0.3, -0.1, 0.25, 0.4, -0.2, 0.05, 0.0, 0.11];
+        for p in [Ar1::white(0.2), Ar1 { sigma: 0.15, phi: 0.7 }, Ar1 { sigma: 0.3, phi: -0.4 }] {
+            let a = p.neg2ll(&e);
+            let b = dense_neg2ll(&p, &e);
+            assert!((a - b).abs() < 1e-10 * b.abs().max(1.0), "{p:?}: {a} vs {b}");
+        }
+    }
+
+    #[test]
+    fn whitening_gives_the_likelihood_quadratic_form() {
+        // Σ whitened² + log-determinant terms = −2 ln L.
+        let e = vec![0.3, -0.1, 0.25, 0.4, -0.2, 0.05];
+        let p = Ar1 { sigma: 0.2, phi: 0.6 };
+        let mut w = e.clone();
+        p.whiten(&mut w);
+        let n = e.len() as f64;
+        let q: f64 = w.iter().map(|v| v * v).sum();
+        let ll = n * (LN_2PI + 2.0 * p.sigma.ln()) - (1.0 - p.phi * p.phi).ln() + q;
+        assert!((ll - p.neg2ll(&e)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn unwhitening_inverts_whitening() {
+        let e = vec![0.3, -0.1, 0.25, 0.4, -0.2, 0.05];
+        let p = Ar1 { sigma: 0.2, phi: 0.6 };
+        let mut w = e.clone();
+        p.whiten(&mut w);
+        p.unwhiten_strided(&mut w, 6, 1);
+        for (a, b) in w.iter().zip(&e) {
+            assert!((a - b).abs() < 1e-14);
+        }
+    }
+
+    #[test]
+    fn estimates_recover_the_process() {
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        for (sd, phi) in [(1e-4, 0.0), (3e-4, 0.5), (5e-5, 0.9), (2e-4, -0.3)] {
+            let truth = Ar1::with_marginal(sd, phi);
+            let e = truth.simulate(20_000, &mut rng);
+            let est = Ar1::estimate(&e);
+            assert!((est.phi - phi).abs() < 0.02, "phi {} vs {phi}", est.phi);
+            assert!(
+                (est.marginal_sd() / sd - 1.0).abs() < 0.05,
+                "sd {} vs {sd}",
+                est.marginal_sd()
+            );
+            // The estimate maximises the likelihood: the truth is not better.
+            assert!(est.neg2ll(&e) <= truth.neg2ll(&e) + 1e-9);
+        }
+    }
+
+    #[test]
+    fn mean_variance_matches_simulation_and_closed_forms() {
+        let p = Ar1::with_marginal(1.0, 0.0);
+        assert!((p.mean_variance(25) - 1.0 / 25.0).abs() < 1e-15);
+        let p = Ar1::with_marginal(2.0, 0.6);
+        // k = 2: σ_m²(2 + 2φ)/4.
+        assert!((p.mean_variance(2) - 4.0 * (2.0 + 1.2) / 4.0).abs() < 1e-12);
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let k = 10;
+        let means: Vec<f64> = (0..20_000)
+            .map(|_| p.simulate(k, &mut rng).iter().sum::<f64>() / k as f64)
+            .collect();
+        let v = means.iter().map(|m| m * m).sum::<f64>() / means.len() as f64;
+        assert!((v / p.mean_variance(k) - 1.0).abs() < 0.05, "{v}");
+    }
+
+    #[test]
+    fn lifetime_scatter_has_a_floor() {
+        let res = Residuals {
+            strain: vec![vec![0.0, 1e-4, -1e-4]],
+            lifetime: vec![Some(1e-4), None],
+        };
+        let m = ErrorModel::estimate(&res, 0.01);
+        assert_eq!(m.lifetime_sd, 0.01);
+        let res2 = Residuals {
+            strain: vec![vec![0.0; 3]],
+            lifetime: vec![Some(0.3), Some(-0.4)],
+        };
+        let m2 = ErrorModel::estimate(&res2, 0.01);
+        assert!((m2.lifetime_sd - (0.125f64).sqrt()).abs() < 1e-12);
+        // The lifetime part is a Gaussian in ln t.
+        let [_, l] = m2.neg2ll_parts(&res2);
+        let s = m2.lifetime_sd;
+        let want = 2.0 * (LN_2PI + 2.0 * s.ln()) + (0.09 + 0.16) / (s * s);
+        assert!((l - want).abs() < 1e-12);
+    }
+}

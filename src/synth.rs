@@ -1,0 +1,550 @@
+//! Synthetic creep data sets for measuring `diagnose` (and anything else) on data it was not
+//! made from: material families with jittered constants, 3–5 stresses, digitised-like or
+//! logged sampling that ends before rupture (95–100 % of life), some curves cut at a strain
+//! limit, white or AR(1) reading error of 0.005–0.03 % strain, ≈ 1 % scatter of rupture
+//! times, shuffled rows — with every catalogued extension over a range of sizes, no effect,
+//! and two effects outside the catalogue. Every set is written in the input formats (curves
+//! CSV, ruptures CSV, a run configuration) with its truth (`truth.json`).
+//!
+//! The generator shares the crate's model code (the true curves are the crate's simulations
+//! of the true model), but not its estimation: sampling, noise, cut-offs and the effects
+//! outside the catalogue are built here independently of what `diagnose` assumes.
+
+use std::path::Path;
+
+use rand::seq::SliceRandom;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rand_distr::StandardNormal;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use crate::model::{build, Load};
+use crate::ode::OdeOptions;
+
+/// A material family: KHD constants [A, B, H*, h, Kc, C], a stress range and a search box.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Family {
+    /// Name in `truth.json`.
+    pub name: &'static str,
+    /// Test temperature written to the files, °C.
+    pub temperature_c: f64,
+    /// Central constants [A 1/h, B 1/MPa, H*, h MPa, Kc 1/h, C].
+    pub constants: [f64; 6],
+    /// Stress range, MPa.
+    pub stress: (f64, f64),
+    /// Bounds [lb, ub] of the configuration written with each set.
+    pub bounds: [(f64, f64); 6],
+}
+
+/// The families: the 0.5CrMoV steel of the seed paper at 560 °C and at 590 °C (constants of
+/// `creepfit fit` on the seed data, h moved inside the box at 590 °C), and a stronger,
+/// more ductile steel (a 9Cr-like family: lower A, higher stresses, C ≈ 2.5).
+pub const FAMILIES: [Family; 3] = [
+    Family {
+        name: "cmv560",
+        temperature_c: 560.0,
+        constants: [1.0e-10, 0.1749, 0.563, 5.9e4, 2.21e-5, 4.03],
+        stress: (80.0, 115.0),
+        bounds: BOX,
+    },
+    Family {
+        name: "cmv590",
+        temperature_c: 590.0,
+        constants: [5.0e-9, 0.1062, 0.30, 1.5e5, 6.9e-5, 3.0],
+        stress: (95.0, 125.0),
+        bounds: BOX,
+    },
+    Family {
+        name: "p91like",
+        temperature_c: 600.0,
+        constants: [2.0e-11, 0.085, 0.45, 8.0e4, 1.0e-5, 2.5],
+        stress: (130.0, 180.0),
+        bounds: BOX,
+    },
+];
+
+/// The search box of the generated configurations: wide around every family.
+const BOX: [(f64, f64); 6] = [
+    (1e-13, 1e-7),
+    (0.03, 0.4),
+    (0.1, 0.9),
+    (5e3, 1e6),
+    (1e-7, 1e-3),
+    (1.0, 15.0),
+];
+
+/// The effect hidden in a data set, with its size.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Effect {
+    /// The base model as it is.
+    None,
+    /// Constant-load tests (catalogued; no size parameter: the effect grows with the rupture
+    /// strain).
+    ConstantLoad,
+    /// Strain on loading σ/E_L (catalogued), E_L in MPa.
+    LoadingStrain { e_l: f64 },
+    /// Dislocation multiplication, rate × (1 + C_d ε) (catalogued).
+    DislocationDamage { c_d: f64 },
+    /// Ductility (σ/100 MPa)^−ν (catalogued).
+    StressDuctility { nu: f64 },
+    /// Outside the catalogue: an extra transient primary strain amp·ε_f·(1 − e^(−t/(τ t_r)))
+    /// (anelastic recovery strain, a second primary mechanism).
+    PrimaryTransient { amp: f64, tau: f64 },
+    /// Outside the catalogue: a sudden extra strain amp·ε_f at mid-life, a logistic step of
+    /// width 4 % of life (a microstructural instability or a furnace excursion).
+    MidLifeStep { amp: f64 },
+}
+
+impl Effect {
+    /// Scenario name: `none`, the extension's name, or the effect's.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Effect::None => "none",
+            Effect::ConstantLoad => "constant_load",
+            Effect::LoadingStrain { .. } => "loading_strain",
+            Effect::DislocationDamage { .. } => "dislocation_damage",
+            Effect::StressDuctility { .. } => "stress_ductility",
+            Effect::PrimaryTransient { .. } => "primary_transient",
+            Effect::MidLifeStep { .. } => "mid_life_step",
+        }
+    }
+    /// Whether the effect is in the extension catalogue.
+    pub fn catalogued(&self) -> bool {
+        crate::model::ext::CATALOGUE.contains(&self.name())
+    }
+    /// The effect's size as one number (for power-versus-size tables): E_L in MPa, C_d, ν,
+    /// amp (fraction of ε_f); 0 for none and constant load.
+    pub fn size(&self) -> f64 {
+        match *self {
+            Effect::None | Effect::ConstantLoad => 0.0,
+            Effect::LoadingStrain { e_l } => e_l,
+            Effect::DislocationDamage { c_d } => c_d,
+            Effect::StressDuctility { nu } => nu,
+            Effect::PrimaryTransient { amp, .. } => amp,
+            Effect::MidLifeStep { amp } => amp,
+        }
+    }
+}
+
+/// The scenarios of a battery, in the order sets are assigned to them.
+pub const SCENARIOS: [&str; 7] = [
+    "none",
+    "constant_load",
+    "loading_strain",
+    "dislocation_damage",
+    "stress_ductility",
+    "primary_transient",
+    "mid_life_step",
+];
+
+/// How the curves were sampled.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Sampling {
+    /// Points clicked along the plotted curve: 25–70 per curve, about evenly along its arc
+    /// length in the normalised plot, jittered.
+    Digitised,
+    /// A data logger: 200–600 points per curve at regular intervals of time.
+    Logged,
+}
+
+/// Everything that defines a generated set (the truth).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Truth {
+    /// Set name.
+    pub name: String,
+    /// Seed it was generated from.
+    pub seed: u64,
+    /// Family name.
+    pub family: String,
+    /// Temperature, °C.
+    pub temperature_c: f64,
+    /// The hidden effect.
+    pub effect: Effect,
+    /// True KHD constants [A, B, H*, h, Kc, C].
+    pub constants: Vec<f64>,
+    /// Stresses, MPa.
+    pub stresses: Vec<f64>,
+    /// Sampling.
+    pub sampling: Sampling,
+    /// Reading error: marginal sd per curve (strain fraction) and AR(1) correlation.
+    pub noise_sd: Vec<f64>,
+    pub noise_phi: f64,
+    /// Scatter of rupture times (sd of ln t).
+    pub lifetime_sd: f64,
+    /// Strain limit (fraction) the curves were cut at, if any.
+    pub strain_cut: Option<f64>,
+    /// Per curve: the true rupture time (h) and the measured one.
+    pub true_rupture_h: Vec<f64>,
+    pub rupture_h: Vec<f64>,
+    /// Per curve: the noise-free strain at the sampled times (fraction).
+    pub true_strain: Vec<Vec<f64>>,
+    /// Per curve: the sampled times (h).
+    pub times_h: Vec<Vec<f64>>,
+}
+
+/// One generated data set: its files' contents and its truth.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SynthSet {
+    /// The truth.
+    pub truth: Truth,
+    /// `curves.csv`.
+    pub curves_csv: String,
+    /// `ruptures.csv`.
+    pub ruptures_csv: String,
+    /// `config.toml` (paths relative to the set's folder).
+    pub config_toml: String,
+}
+
+fn normal<R: Rng>(rng: &mut R) -> f64 {
+    rng.sample(StandardNormal)
+}
+
+fn log_uniform<R: Rng>(rng: &mut R, lo: f64, hi: f64) -> f64 {
+    (lo.ln() + rng.gen::<f64>() * (hi.ln() - lo.ln())).exp()
+}
+
+/// Draw the effect of a scenario with a random size.
+pub fn draw_effect<R: Rng>(scenario: &str, rng: &mut R) -> Effect {
+    match scenario {
+        "constant_load" => Effect::ConstantLoad,
+        // E_L so that σ/E_L spans about 0.03–1.5 % strain at 100 MPa.
+        "loading_strain" => Effect::LoadingStrain {
+            e_l: log_uniform(rng, 7e3, 3e5),
+        },
+        "dislocation_damage" => Effect::DislocationDamage {
+            c_d: log_uniform(rng, 0.5, 40.0),
+        },
+        "stress_ductility" => {
+            let m = 0.3 + 3.7 * rng.gen::<f64>();
+            Effect::StressDuctility {
+                nu: if rng.gen::<bool>() { m } else { -m },
+            }
+        }
+        "primary_transient" => Effect::PrimaryTransient {
+            amp: log_uniform(rng, 0.01, 0.1),
+            tau: 0.02 + 0.08 * rng.gen::<f64>(),
+        },
+        "mid_life_step" => Effect::MidLifeStep {
+            amp: log_uniform(rng, 0.01, 0.08),
+        },
+        _ => Effect::None,
+    }
+}
+
+/// Jittered constants of a family, inside its box.
+fn jitter<R: Rng>(f: &Family, rng: &mut R) -> [f64; 6] {
+    let c = f.constants;
+    let mut x = [
+        c[0] * (0.3 * normal(rng)).exp(),
+        c[1] * (1.0 + 0.05 * normal(rng)),
+        c[2] + 0.05 * normal(rng),
+        c[3] * (0.3 * normal(rng)).exp(),
+        c[4] * (0.3 * normal(rng)).exp(),
+        c[5] * (1.0 + 0.1 * normal(rng)),
+    ];
+    for (v, (lo, hi)) in x.iter_mut().zip(f.bounds) {
+        // Keep 2 % of the (log) box away from the bounds.
+        let (l, h) = if lo > 0.0 && hi / lo > 50.0 {
+            let (a, b) = (lo.ln(), hi.ln());
+            ((a + 0.02 * (b - a)).exp(), (b - 0.02 * (b - a)).exp())
+        } else {
+            (lo + 0.02 * (hi - lo), hi - 0.02 * (hi - lo))
+        };
+        *v = v.clamp(l, h);
+    }
+    x
+}
+
+/// Normalised arc-length positions → times: `n` points about evenly along the curve
+/// (t/t_last, ε/ε_last) with jitter, first at t = 0.
+fn digitised_times<R: Rng>(dense_t: &[f64], dense_e: &[f64], n: usize, rng: &mut R) -> Vec<f64> {
+    let m = dense_t.len();
+    let (tl, el) = (dense_t[m - 1], dense_e[m - 1].max(1e-12));
+    let mut s = vec![0.0; m];
+    for k in 1..m {
+        let dt = (dense_t[k] - dense_t[k - 1]) / tl;
+        let de = (dense_e[k] - dense_e[k - 1]) / el;
+        s[k] = s[k - 1] + (dt * dt + de * de).sqrt();
+    }
+    let total = s[m - 1];
+    let mut out = vec![0.0];
+    for k in 1..n - 1 {
+        let target = (k as f64 + 0.35 * (2.0 * rng.gen::<f64>() - 1.0)) / (n - 1) as f64 * total;
+        let j = s.partition_point(|v| *v < target).clamp(1, m - 1);
+        let f = (target - s[j - 1]) / (s[j] - s[j - 1]).max(1e-300);
+        out.push(dense_t[j - 1] + f.clamp(0.0, 1.0) * (dense_t[j] - dense_t[j - 1]));
+    }
+    out.push(tl);
+    out.sort_by(|a, b| a.total_cmp(b));
+    out
+}
+
+/// Generate the set `name` of `scenario` from `seed`.
+pub fn generate(name: &str, scenario: &str, seed: u64) -> Result<SynthSet> {
+    generate_inner(name, scenario, None, seed)
+}
+
+/// [`generate`] with the effect (and its size) given instead of drawn; everything else is
+/// drawn from `seed` as for the effect's scenario.
+pub fn generate_with_effect(name: &str, effect: Effect, seed: u64) -> Result<SynthSet> {
+    generate_inner(name, effect.name(), Some(effect), seed)
+}
+
+fn generate_inner(
+    name: &str,
+    scenario: &str,
+    effect: Option<Effect>,
+    seed: u64,
+) -> Result<SynthSet> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let family = FAMILIES[rng.gen_range(0..FAMILIES.len())];
+    let drawn = draw_effect(scenario, &mut rng);
+    let effect = effect.unwrap_or(drawn);
+    let base = jitter(&family, &mut rng);
+    let n_stress = rng.gen_range(3..=5);
+    let (lo, hi) = family.stress;
+    let stresses: Vec<f64> = (0..n_stress)
+        .map(|k| {
+            let s = lo + (hi - lo) * k as f64 / (n_stress - 1) as f64;
+            (s + 2.0 * (2.0 * rng.gen::<f64>() - 1.0)).round()
+        })
+        .collect();
+    let sampling = if rng.gen::<f64>() < 0.75 {
+        Sampling::Digitised
+    } else {
+        Sampling::Logged
+    };
+    let noise_level = 5e-5 + 2.5e-4 * rng.gen::<f64>();
+    let noise_phi = if rng.gen::<bool>() {
+        0.0
+    } else {
+        0.3 + 0.6 * rng.gen::<f64>()
+    };
+    let cut = rng.gen::<f64>() < 0.2;
+    let lifetime_sd = 0.01;
+
+    // The true model.
+    let (exts, extra): (Vec<String>, Vec<f64>) = match effect {
+        Effect::ConstantLoad => (vec!["constant_load".into()], vec![]),
+        Effect::LoadingStrain { e_l } => (vec!["loading_strain".into()], vec![e_l]),
+        Effect::DislocationDamage { c_d } => (vec!["dislocation_damage".into()], vec![c_d]),
+        Effect::StressDuctility { nu } => (vec!["stress_ductility".into()], vec![nu]),
+        _ => (vec![], vec![]),
+    };
+    let model = build("khd", &exts)?;
+    let mut params = base.to_vec();
+    params.extend(extra);
+    let ode = OdeOptions {
+        rtol: 1e-11,
+        atol: 1e-15,
+        ..OdeOptions::default()
+    };
+    let mut truth = Truth {
+        name: name.to_string(),
+        seed,
+        family: family.name.to_string(),
+        temperature_c: family.temperature_c,
+        effect,
+        constants: base.to_vec(),
+        stresses: stresses.clone(),
+        sampling,
+        noise_sd: vec![],
+        noise_phi,
+        lifetime_sd,
+        strain_cut: None,
+        true_rupture_h: vec![],
+        rupture_h: vec![],
+        true_strain: vec![],
+        times_h: vec![],
+    };
+    let mut rows: Vec<(f64, f64)> = Vec::new(); // (stress, time, strain) via parallel vecs
+    let mut row_stress: Vec<f64> = Vec::new();
+    let mut ruptures = String::from("temperature_C,stress_MPa,rupture_time_h\n");
+    // Simulate every curve densely to its rupture.
+    let mut dense: Vec<(f64, Vec<f64>, Vec<f64>)> = Vec::new();
+    for &s in &stresses {
+        let load = Load {
+            stress_mpa: s,
+            omega_f: 1.0 / 3.0,
+        };
+        let r = model.simulate(&params, &load, &[], &mut [], &ode);
+        if !r.ruptured() || !(r.t_end > 1.0 && r.t_end < 1e7) {
+            return Err(Error::Invalid(format!(
+                "synth {name}: the true model does not rupture in [1 h, 1e7 h] at {s} MPa"
+            )));
+        }
+        let t_r = r.t_end;
+        let grid: Vec<f64> = (0..=2000)
+            .map(|k| t_r * (1.0 - (1.0 - k as f64 / 2000.0).powi(2)) * 0.9999)
+            .collect();
+        let mut e = vec![0.0; grid.len()];
+        model.simulate(&params, &load, &grid, &mut e, &ode);
+        dense.push((t_r, grid, e));
+    }
+    let eps_f_min = dense
+        .iter()
+        .map(|d| *d.2.last().unwrap())
+        .fold(f64::INFINITY, f64::min);
+    let strain_cut = cut.then(|| {
+        // A plot edge at a round value below the least ductile curve's end.
+        let lim = 0.7 * eps_f_min * 100.0;
+        let step = if lim > 5.0 { 1.0 } else { 0.5 };
+        ((lim / step).floor() * step).max(step) / 100.0
+    });
+    truth.strain_cut = strain_cut;
+    for (i, &s) in stresses.iter().enumerate() {
+        let (t_r, grid, e) = &dense[i];
+        let load = Load {
+            stress_mpa: s,
+            omega_f: 1.0 / 3.0,
+        };
+        let last = t_r * (0.95 + 0.05 * rng.gen::<f64>());
+        let upto = grid.partition_point(|t| *t <= last).max(2);
+        let mut times = match sampling {
+            Sampling::Digitised => {
+                let n = rng.gen_range(25..=70);
+                digitised_times(&grid[..upto], &e[..upto], n, &mut rng)
+            }
+            Sampling::Logged => {
+                let n = rng.gen_range(200..=600);
+                (0..n).map(|k| last * k as f64 / (n - 1) as f64).collect()
+            }
+        };
+        times[0] = 0.0;
+        let mut strain = vec![0.0; times.len()];
+        model.simulate(&params, &load, &times, &mut strain, &ode);
+        let eps_f = e[upto - 1];
+        for (k, v) in strain.iter_mut().enumerate() {
+            let tau = times[k] / t_r;
+            match effect {
+                Effect::PrimaryTransient { amp, tau: tt } => {
+                    *v += amp * eps_f * (1.0 - (-tau / tt).exp())
+                }
+                Effect::MidLifeStep { amp } => {
+                    *v += amp * eps_f / (1.0 + (-(tau - 0.5) / 0.04).exp())
+                }
+                _ => {}
+            }
+        }
+        if let Some(lim) = strain_cut {
+            let keep = strain.iter().take_while(|v| **v <= lim).count().max(10);
+            times.truncate(keep);
+            strain.truncate(keep);
+        }
+        let sd = noise_level * (0.8 + 0.45 * rng.gen::<f64>());
+        let ar = crate::errmodel::Ar1::with_marginal(sd, noise_phi);
+        let err = ar.simulate(times.len(), &mut rng);
+        for k in 0..times.len() {
+            rows.push((times[k], strain[k] + err[k]));
+            row_stress.push(s);
+        }
+        let t_f = t_r * (lifetime_sd * normal(&mut rng)).exp();
+        ruptures += &format!("{},{},{}\n", family.temperature_c, s, fmt(t_f));
+        truth.noise_sd.push(sd);
+        truth.true_rupture_h.push(*t_r);
+        truth.rupture_h.push(t_f);
+        truth.true_strain.push(strain);
+        truth.times_h.push(times);
+    }
+    // Shuffled rows.
+    let mut order: Vec<usize> = (0..rows.len()).collect();
+    order.shuffle(&mut rng);
+    let mut curves = String::from("temperature_C,stress_MPa,time_h,strain_pct\n");
+    for k in order {
+        curves += &format!(
+            "{},{},{},{}\n",
+            family.temperature_c,
+            row_stress[k],
+            fmt(rows[k].0),
+            fmt(100.0 * rows[k].1)
+        );
+    }
+    let names = ["A", "B", "Hstar", "h", "Kc", "C"];
+    let logs = [true, false, false, true, true, false];
+    let mut config = format!(
+        "# Generated by `creepfit synth` (seed {seed}, scenario {scenario}); truth in truth.json.\n\
+         name = \"{name}\"\ncurves = \"curves.csv\"\nruptures = \"ruptures.csv\"\n\
+         temperature_C = {}\nmodel = \"khd\"\n\n[constants]\n",
+        family.temperature_c
+    );
+    for j in 0..6 {
+        let (l, u) = family.bounds[j];
+        config += &format!(
+            "{:<5} = {{ lb = {l:e}, ub = {u:e}{} }}\n",
+            names[j],
+            if logs[j] { ", scale = \"log\"" } else { "" }
+        );
+    }
+    Ok(SynthSet {
+        truth,
+        curves_csv: curves,
+        ruptures_csv: ruptures,
+        config_toml: config,
+    })
+}
+
+/// Shortest round-trip text of a number.
+fn fmt(v: f64) -> String {
+    format!("{v}")
+}
+
+/// Write `set` into folder `dir` (created): curves.csv, ruptures.csv, config.toml, truth.json.
+pub fn write_set(set: &SynthSet, dir: &Path) -> Result<()> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let w = |f: &str, text: &str| -> Result<()> {
+        let p = dir.join(f);
+        std::fs::write(&p, text).map_err(|e| Error::io(&p, e))
+    };
+    w("curves.csv", &set.curves_csv)?;
+    w("ruptures.csv", &set.ruptures_csv)?;
+    w("config.toml", &set.config_toml)?;
+    w(
+        "truth.json",
+        &serde_json::to_string_pretty(&set.truth).expect("plain values"),
+    )
+}
+
+/// The scenario of set `i` of a battery: sets cycle through [`SCENARIOS`] with `none` twice
+/// as often (a quarter of a battery is null data, for the false-alarm rate).
+pub fn scenario_of(i: usize) -> &'static str {
+    const CYCLE: [&str; 8] = [
+        "none",
+        "constant_load",
+        "loading_strain",
+        "dislocation_damage",
+        "none",
+        "stress_ductility",
+        "primary_transient",
+        "mid_life_step",
+    ];
+    CYCLE[i % CYCLE.len()]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sets_are_reproducible_and_end_before_rupture() {
+        for (i, sc) in SCENARIOS.iter().enumerate() {
+            let a = generate("t", sc, 100 + i as u64).unwrap();
+            let b = generate("t", sc, 100 + i as u64).unwrap();
+            assert_eq!(a, b);
+            let t = &a.truth;
+            assert_eq!(t.effect.name(), *sc);
+            for (k, times) in t.times_h.iter().enumerate() {
+                let last = *times.last().unwrap();
+                assert!(last <= t.true_rupture_h[k] * 1.0 + 1e-9);
+                if t.strain_cut.is_none() {
+                    assert!(last >= 0.95 * t.true_rupture_h[k] * 0.9999, "{sc}");
+                }
+                assert_eq!(times[0], 0.0);
+            }
+            assert!((3..=5).contains(&t.stresses.len()));
+            assert!(t.noise_sd.iter().all(|s| (4e-5..=3.7e-4).contains(s)));
+        }
+    }
+}
