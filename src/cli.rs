@@ -218,7 +218,7 @@ fn diagnose_cmd(config: &Path, out: Option<PathBuf>, opts: &DiagnoseOptions) -> 
                     .map(|k| {
                         (
                             cu.times_h[k] / cu.life_h(),
-                            100.0 * (cu.strains[k] - p.strain[k]) / cu.rupture_strain,
+                            100.0 * (p.strain[k] - cu.strains[k]) / cu.rupture_strain,
                         )
                     })
                     .collect(),
@@ -230,7 +230,7 @@ fn diagnose_cmd(config: &Path, out: Option<PathBuf>, opts: &DiagnoseOptions) -> 
             &format!("{}: residuals of {}", cfg.name, c.name),
             &series,
             "t / t_f",
-            "measured − predicted, % of rupture strain",
+            "predicted − measured, % of rupture strain",
         ) {
             eprintln!("warning: {e}");
         }

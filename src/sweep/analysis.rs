@@ -319,13 +319,9 @@ pub fn write(
             .expect("plain JSON"),
     )?;
 
-    // Plots last: a failure is reported but loses nothing.
-    let objs: Vec<f64> = a
-        .ranked
-        .iter()
-        .filter(|s| s.ok())
-        .map(|s| s.objective)
-        .collect();
+    // Plots last: a failure is reported but loses nothing. The waterfall gets every fit,
+    // failed ones (no objective, ranked last) included, so that its counts add up.
+    let objs: Vec<f64> = a.ranked.iter().map(|s| s.objective).collect();
     let scaled: Vec<Vec<f64>> = a
         .ranked
         .iter()
