@@ -376,6 +376,12 @@ fn stopped_sweep_resumes_to_the_same_files() {
     assert!(err.contains("interrupted"), "{err}");
     let journal = read(&d.path().join("journal.jsonl"));
     assert_eq!(journal.lines().count(), 1 + 5, "header + 5 solutions");
+    // Its outputs say they are partial.
+    let s = summary(d.path());
+    assert_eq!(s["complete"], false);
+    assert_eq!(s["missing"][0]["state"], "incomplete");
+    assert_eq!(s["missing"][0]["fits_done"], 5);
+    assert_eq!(s["missing"][0]["fits_expected"], 18);
     let o = sweep(d.path(), &["--threads", "1"]);
     ok(&o);
     let out = String::from_utf8_lossy(&o.stdout);
@@ -385,6 +391,7 @@ fn stopped_sweep_resumes_to_the_same_files() {
     );
     assert_eq!(read(&d.path().join("ranked.csv")), ranked);
     assert_eq!(read(&d.path().join("minima.csv")), minima);
+    assert_eq!(summary(d.path())["complete"], true);
 }
 
 #[test]

@@ -215,8 +215,21 @@ PartitionName=$partition Nodes=$node Default=YES MaxTime=INFINITE State=UP
 EOF
 }
 
+# Start a daemon (NAME COMMAND…) that writes $state/run/NAME.pid, and wait up to 5 s for it.
+start_daemon() {
+    local name=$1 pid="" i
+    shift
+    "$@" || fail "$name did not start"
+    for i in $(seq 1 50); do
+        pid=$(live_pid "$state/run/$name.pid" "$name") && break
+        sleep 0.1
+    done
+    [ -n "$pid" ] || fail "$name did not start (no live process in $state/run/$name.pid)"
+    started+=("$pid")
+}
+
 start_cluster() {
-    local t0 pid i st
+    local t0 pid i st=""
     t0=$(date +%s)
     stop_cluster # leftovers of an earlier run of this folder, if any
     rm -rf "$state/spool" "$state/run"
@@ -239,21 +252,8 @@ start_cluster() {
     started+=("$pid")
     munge --socket="$state/run/munge.socket" -n | unmunge --socket="$state/run/munge.socket" >/dev/null ||
         fail "munge cannot encode and decode a credential"
-    slurmctld || fail "slurmctld did not start"
-    for i in $(seq 1 50); do
-        pid=$(live_pid "$state/run/slurmctld.pid" slurmctld) && break
-        sleep 0.1
-    done
-    [ -n "${pid:-}" ] || fail "slurmctld did not start"
-    started+=("$pid")
-    slurmd -N "$node" || fail "slurmd did not start"
-    pid=""
-    for i in $(seq 1 50); do
-        pid=$(live_pid "$state/run/slurmd.pid" slurmd) && break
-        sleep 0.1
-    done
-    [ -n "$pid" ] || fail "slurmd did not start"
-    started+=("$pid")
+    start_daemon slurmctld slurmctld
+    start_daemon slurmd slurmd -N "$node"
     for i in $(seq 1 120); do
         st=$(sinfo -h -n "$node" -o %t 2>/dev/null || true)
         [ "$st" = idle ] && break

@@ -347,16 +347,7 @@ fn creep_curves(path: &Path, title: &str, curves: &[CurvePlot]) -> Result<Drawn>
 
     let mut keys = Vec::new();
     render(path, title, |area, drawn| {
-        let mut chart = chart_builder(area).build_cartesian_2d(
-            FixedTicks::new(
-                RangedCoordf64::from(x_range.0..x_range.1),
-                xt.values.clone(),
-            ),
-            FixedTicks::new(
-                RangedCoordf64::from(y_range.0..y_range.1),
-                yt.values.clone(),
-            ),
-        )?;
+        let mut chart = linear_chart(area, (x_range, &xt), (y_range, &yt))?;
         configure_mesh(&mut chart, "time (h)", "strain (%)", &xt, &yt, drawn)?;
 
         for (i, curve) in curves.iter().enumerate() {
@@ -428,16 +419,7 @@ fn residuals(
     );
 
     render(path, title, |area, drawn| {
-        let mut chart = chart_builder(area).build_cartesian_2d(
-            FixedTicks::new(
-                RangedCoordf64::from(x_range.0..x_range.1),
-                xt.values.clone(),
-            ),
-            FixedTicks::new(
-                RangedCoordf64::from(y_range.0..y_range.1),
-                yt.values.clone(),
-            ),
-        )?;
+        let mut chart = linear_chart(area, (x_range, &xt), (y_range, &yt))?;
         configure_mesh(&mut chart, x_label, y_label, &xt, &yt, drawn)?;
         chart.draw_series(std::iter::once(PathElement::new(
             vec![(x_range.0, 0.0), (x_range.1, 0.0)],
@@ -707,13 +689,7 @@ fn parameters(
     );
 
     render(path, title, |area, drawn| {
-        let mut chart = chart_builder(area).build_cartesian_2d(
-            FixedTicks::new(
-                RangedCoordf64::from(x_range.0..x_range.1),
-                xt.values.clone(),
-            ),
-            FixedTicks::new(RangedCoordf64::from(lo..hi), yt.values.clone()),
-        )?;
+        let mut chart = linear_chart(area, (x_range, &xt), ((lo, hi), &yt))?;
         configure_mesh(
             &mut chart,
             "constant",
@@ -876,6 +852,30 @@ fn chart_builder<'a, 'b>(area: &'a Root<'b>) -> ChartBuilder<'a, 'b, BitMapBacke
         .x_label_area_size(65)
         .y_label_area_size(95);
     builder
+}
+
+type LinearChart<'a, 'b> = ChartContext<
+    'a,
+    BitMapBackend<'b>,
+    Cartesian2d<FixedTicks<RangedCoordf64>, FixedTicks<RangedCoordf64>>,
+>;
+
+/// A chart with linear axes over the ranges, ticked at the given ticks.
+fn linear_chart<'a, 'b>(
+    area: &'a Root<'b>,
+    (x_range, xt): ((f64, f64), &Ticks),
+    (y_range, yt): ((f64, f64), &Ticks),
+) -> DrawResult<LinearChart<'a, 'b>> {
+    Ok(chart_builder(area).build_cartesian_2d(
+        FixedTicks::new(
+            RangedCoordf64::from(x_range.0..x_range.1),
+            xt.values.clone(),
+        ),
+        FixedTicks::new(
+            RangedCoordf64::from(y_range.0..y_range.1),
+            yt.values.clone(),
+        ),
+    )?)
 }
 
 fn pixel_rect<DB: DrawingBackend, CT: CoordTranslate>(area: &DrawingArea<DB, CT>) -> PxRect {
