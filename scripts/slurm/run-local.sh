@@ -25,12 +25,13 @@
 #     On a failure it prints the reason and the tails of the slurmctld, slurmd and munged logs
 #     and of the job logs, and exits non-zero.
 #
-# The configuration that works in a container (measured in this project's CI machine, a gVisor
-# sandbox with cgroup v1 controllers it does not let Slurm use): ProctrackType=
-# proctrack/linuxproc (processes tracked by parent pid, no cgroups), TaskPlugin=task/none (no
-# CPU binding), JobAcctGatherType=jobacct_gather/none, no accounting database (slurmdbd), no
-# cgroup.conf, select/cons_tres with CR_Core (CPUs are the consumable resource; memory is not
-# enforced), SlurmUser=root, munge authentication over a private socket (AuthInfo=socket=…).
+# The configuration, which runs jobs on this project's machines (Debian 12, Slurm 22.05.8, a
+# gVisor sandbox as root) and needs nothing a container may withhold: no cgroups at all
+# (ProctrackType=proctrack/linuxproc tracks job processes by parent pid; TaskPlugin=task/none,
+# no CPU binding; JobAcctGatherType=jobacct_gather/none; no cgroup.conf; the cgroup plugins
+# were not tried), no accounting database (slurmdbd), select/cons_tres with CR_Core (CPUs are
+# the consumable resource; memory is not enforced), SlurmUser=root, munge authentication over
+# a private socket (AuthInfo=socket=…).
 #
 # Environment: CREEPFIT_SLURM_STATE (state folder), CREEPFIT_SLURM_PORT (slurmctld port;
 # slurmd uses the next), CREEPFIT_SLURM_KEEP=1 (leave the cluster running for the next run),
