@@ -54,10 +54,13 @@ pub enum Command {
         /// Worker threads (default: all cores).
         #[arg(long)]
         threads: Option<usize>,
-        /// Run the I-th of N disjoint parts of the start set, e.g. 2/3.
+        /// Run the I-th of N disjoint parts of the start set, e.g. 2/3; `auto`: I and N of this
+        /// task of a job array (Slurm, Grid Engine, AWS Batch), written into
+        /// OUT/shard-I-of-N/.
         #[arg(long, value_parser = parse_shard)]
-        shard: Option<(usize, usize)>,
-        /// Output folder (default results/<name>/sweep/).
+        shard: Option<sweep::ShardArg>,
+        /// Output folder (default results/<name>/sweep/; with --shard, its shard-I-of-N/
+        /// unless --shard I/N names the folder with --out).
         #[arg(long)]
         out: Option<PathBuf>,
         /// Stop after this many new fits, as if interrupted (for tests of resumption).
@@ -72,6 +75,10 @@ pub enum Command {
         /// Output folder of the merged result.
         #[arg(long)]
         out: PathBuf,
+        /// Refuse (exit non-zero, write nothing) unless every shard is complete. Without it,
+        /// the complete shards are merged and summary.json says `complete: false`.
+        #[arg(long)]
+        require_all: bool,
     },
     /// What the calibrated model gets wrong, the named cause, and what an extension gains.
     Diagnose {
@@ -177,19 +184,33 @@ pub fn run(cli: Cli) -> Result<()> {
             out,
             stop_after,
         } => {
+            let auto = shard == Some(sweep::ShardArg::Auto);
+            let shard = match shard {
+                None => None,
+                Some(sweep::ShardArg::Part(i, n)) => Some((i, n)),
+                Some(sweep::ShardArg::Auto) => Some(sweep::array::shard_from_process_env()?),
+            };
             let (cfg, data) = load(&config)?;
+            let out = sweep::part_dir(shard, auto, out, default_out(&cfg.name, "sweep"));
+            if let (true, Some((i, n))) = (auto, shard) {
+                println!("shard {i}/{n} of the job array into {}", out.display());
+            }
             let opts = SweepOptions {
                 starts: starts.unwrap_or(cfg.sweep.starts),
                 seed: seed.unwrap_or(cfg.sweep.seed),
                 threads,
                 shard,
-                out: out.unwrap_or_else(|| default_out(&cfg.name, "sweep")),
+                out,
                 stop_after,
                 progress: true,
             };
             sweep_cmd(&cfg, &data, &opts)
         }
-        Command::Merge { dirs, out } => merge_cmd(&dirs, &out),
+        Command::Merge {
+            dirs,
+            out,
+            require_all,
+        } => merge_cmd(&dirs, &out, require_all),
         Command::Synth {
             out,
             sets,
@@ -352,8 +373,11 @@ fn synth_cmd(out: &Path, sets: usize, seed: u64, scenario: Option<&str>) -> Resu
     Ok(())
 }
 
-fn parse_shard(s: &str) -> std::result::Result<(usize, usize), String> {
-    let (i, n) = s.split_once('/').ok_or("expected I/N, e.g. 2/3")?;
+fn parse_shard(s: &str) -> std::result::Result<sweep::ShardArg, String> {
+    if s.trim() == "auto" {
+        return Ok(sweep::ShardArg::Auto);
+    }
+    let (i, n) = s.split_once('/').ok_or("expected I/N, e.g. 2/3, or auto")?;
     let i: usize = i
         .trim()
         .parse()
@@ -365,7 +389,7 @@ fn parse_shard(s: &str) -> std::result::Result<(usize, usize), String> {
     if i == 0 || n == 0 || i > n {
         return Err(format!("shard {i}/{n}: need 1 <= I <= N"));
     }
-    Ok((i, n))
+    Ok(sweep::ShardArg::Part(i, n))
 }
 
 fn sweep_cmd(cfg: &RunConfig, data: &Dataset, opts: &SweepOptions) -> Result<()> {
@@ -373,7 +397,15 @@ fn sweep_cmd(cfg: &RunConfig, data: &Dataset, opts: &SweepOptions) -> Result<()>
     let (plan, run) = sweep::run_sweep(cfg, data, opts)?;
     let mut header = plan.header.clone();
     header.shard = opts.shard.unwrap_or((1, 1));
-    let a = sweep::write_outputs(&header, &run.solutions, &opts.out, run.wall_s, run.threads)?;
+    let coverage = sweep::part_coverage(&header, header.shard, run.solutions.len(), &opts.out);
+    let a = sweep::write_outputs(
+        &header,
+        &run.solutions,
+        &opts.out,
+        run.wall_s,
+        run.threads,
+        &coverage,
+    )?;
     print_sweep(&header, &a);
     println!(
         "{} fits computed now in {:.1} s on {} threads ({:.2} fits/s); {} in the folder",
@@ -395,12 +427,59 @@ fn sweep_cmd(cfg: &RunConfig, data: &Dataset, opts: &SweepOptions) -> Result<()>
     Ok(())
 }
 
-fn merge_cmd(dirs: &[PathBuf], out: &Path) -> Result<()> {
-    let (header, sols) = sweep::merge(dirs)?;
+fn merge_cmd(dirs: &[PathBuf], out: &Path, require_all: bool) -> Result<()> {
+    let m = sweep::merge(dirs)?;
+    for d in &m.skipped {
+        eprintln!("merge: {}: no sweep journal, skipped", d.display());
+    }
+    for s in &m.coverage.missing {
+        let state = match s.state {
+            sweep::ShardState::Incomplete => "incomplete",
+            sweep::ShardState::Absent => "absent",
+        };
+        let dir = s.dir.as_ref().map(|d| format!(" ({})", d.display()));
+        eprintln!(
+            "merge: shard {}/{} {state}: {} of {} fits{}",
+            s.shard,
+            s.of,
+            s.fits_done,
+            s.fits_expected,
+            dir.unwrap_or_default()
+        );
+    }
+    let n = m.merged.len() + m.coverage.missing.len();
+    let list = |v: Vec<usize>| {
+        v.iter()
+            .map(|i| i.to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    if !m.coverage.complete && (require_all || m.merged.is_empty()) {
+        return Err(crate::Error::Invalid(format!(
+            "merge{}: {} of {n} shards complete (missing or incomplete: {}); nothing written",
+            if require_all { " --require-all" } else { "" },
+            m.merged.len(),
+            list(m.coverage.missing.iter().map(|s| s.shard).collect())
+        )));
+    }
     ensure_dir(out)?;
-    let a = sweep::write_outputs(&header, &sols, out, 0.0, 0)?;
-    print_sweep(&header, &a);
-    println!("merged {} folders into {}", dirs.len(), out.display());
+    let a = sweep::write_outputs(&m.header, &m.solutions, out, 0.0, 0, &m.coverage)?;
+    print_sweep(&m.header, &a);
+    if m.coverage.complete {
+        println!("merged {n} of {n} shards into {}", out.display());
+    } else {
+        let expected = m.header.n_starts_total() * m.header.w.len();
+        eprintln!(
+            "merge: partial result: shards {} of {n} ({} of {expected} fits); summary.json says complete: false",
+            list(m.merged.iter().map(|p| p.0).collect()),
+            m.solutions.len()
+        );
+        println!(
+            "merged {} of {n} shards into {} (partial)",
+            m.merged.len(),
+            out.display()
+        );
+    }
     Ok(())
 }
 

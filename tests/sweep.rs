@@ -125,17 +125,245 @@ fn three_shards_merge_into_the_unsharded_result() {
     ok(&o);
     assert_eq!(read(&merged.path().join("ranked.csv")), ranked);
     assert_eq!(read(&merged.path().join("minima.csv")), minima);
-    // A missing shard is an error, not a silently smaller result.
-    let o = Command::new(env!("CARGO_BIN_EXE_creepfit"))
+    let s = summary(merged.path());
+    assert_eq!(s["complete"], true);
+    assert_eq!(s["missing"], serde_json::json!([]));
+    // A shard folder alone is not the sweep: it says so, naming the shards it lacks.
+    let s = summary(parts[1].path());
+    assert_eq!(s["complete"], false);
+    let missing: Vec<u64> = s["missing"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| m["shard"].as_u64().unwrap())
+        .collect();
+    assert_eq!(missing, vec![1, 3]);
+    // --require-all is satisfied by a complete set.
+    let again = TempDir::new().unwrap();
+    let dirs: Vec<&Path> = parts.iter().map(|p| p.path()).collect();
+    ok(&merge(&dirs, again.path(), &["--require-all"]));
+    assert_eq!(read(&again.path().join("ranked.csv")), ranked);
+}
+
+fn merge(dirs: &[&Path], out: &Path, extra: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_creepfit"))
         .arg("merge")
-        .arg(parts[0].path())
-        .arg(parts[1].path())
+        .args(dirs)
         .arg("--out")
-        .arg(merged.path().join("x"))
+        .arg(out)
+        .args(extra)
         .output()
-        .unwrap();
+        .expect("binary runs")
+}
+
+fn summary(dir: &Path) -> serde_json::Value {
+    serde_json::from_str(&read(&dir.join("summary.json"))).unwrap()
+}
+
+/// (start_id, w) → the row of ranked.csv without its rank and cluster columns (which depend
+/// on the other rows).
+fn rows_by_fit(ranked: &str) -> std::collections::BTreeMap<(u64, String), Vec<String>> {
+    ranked
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let c: Vec<String> = l.split(',').map(str::to_string).collect();
+            let key = (c[1].parse().unwrap(), c[2].clone());
+            let mut v = c[3..10].to_vec();
+            v.extend_from_slice(&c[12..]);
+            (key, v)
+        })
+        .collect()
+}
+
+#[test]
+fn merge_of_an_incomplete_shard_set() {
+    let (_d, ranked, _) = reference();
+    let reference_rows = rows_by_fit(&ranked);
+    let parts: Vec<TempDir> = (1..=3).map(|_| TempDir::new().unwrap()).collect();
+    ok(&sweep(
+        parts[0].path(),
+        &["--shard", "1/3", "--threads", "1"],
+    ));
+    // Shard 2 is interrupted after 2 of its 6 fits (3 starts × 2 w).
+    let o = sweep(
+        parts[1].path(),
+        &["--shard", "2/3", "--threads", "1", "--stop-after", "2"],
+    );
     assert!(!o.status.success());
-    assert!(String::from_utf8_lossy(&o.stderr).starts_with("error: "));
+    ok(&sweep(
+        parts[2].path(),
+        &["--shard", "3/3", "--threads", "1"],
+    ));
+    let dirs: Vec<&Path> = parts.iter().map(|p| p.path()).collect();
+
+    // Without --require-all: the complete shards 1 and 3, reported as partial.
+    let out = TempDir::new().unwrap();
+    let o = merge(&dirs, out.path(), &[]);
+    ok(&o);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("shard 2/3 incomplete: 2 of 6 fits"),
+        "stderr names the shard and its fit count: {err}"
+    );
+    assert!(
+        err.contains("partial result: shards 1, 3 of 3 (12 of 18 fits)"),
+        "{err}"
+    );
+    let s = summary(out.path());
+    assert_eq!(s["complete"], false);
+    assert_eq!(s["fits"], 12);
+    let missing = s["missing"].as_array().unwrap();
+    assert_eq!(missing.len(), 1);
+    assert_eq!(missing[0]["shard"], 2);
+    assert_eq!(missing[0]["of"], 3);
+    assert_eq!(missing[0]["state"], "incomplete");
+    assert_eq!(missing[0]["fits_done"], 2);
+    assert_eq!(missing[0]["fits_expected"], 6);
+    // Exactly the fits of shards 1 and 3 (start_id % 3 ∈ {0, 2}), each as in the full sweep.
+    let rows = rows_by_fit(&read(&out.path().join("ranked.csv")));
+    let want: std::collections::BTreeMap<_, _> = reference_rows
+        .iter()
+        .filter(|((start, _), _)| start % 3 != 1)
+        .map(|(k, v)| (k.clone(), v.clone()))
+        .collect();
+    assert_eq!(rows, want);
+
+    // An absent shard (its folder not given, or never created) is named too.
+    let out2 = TempDir::new().unwrap();
+    let o = merge(
+        &[dirs[0], dirs[2], &out2.path().join("no-such-shard")],
+        out2.path(),
+        &[],
+    );
+    ok(&o);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("shard 2/3 absent: 0 of 6 fits"), "{err}");
+    assert!(
+        err.contains("no-such-shard: no sweep journal, skipped"),
+        "{err}"
+    );
+    assert_eq!(summary(out2.path())["missing"][0]["state"], "absent");
+
+    // --require-all refuses, in one line, and writes nothing.
+    let out3 = TempDir::new().unwrap();
+    let o = merge(&dirs, &out3.path().join("m"), &["--require-all"]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    let last = err.lines().last().unwrap();
+    assert!(
+        last.starts_with(
+            "error: merge --require-all: 2 of 3 shards complete (missing or incomplete: 2)"
+        ),
+        "{err}"
+    );
+    assert_eq!(err.lines().filter(|l| l.starts_with("error")).count(), 1);
+    assert!(!out3.path().join("m").exists());
+
+    // Resuming shard 2 completes the set: the merge is then the full sweep's.
+    ok(&sweep(
+        parts[1].path(),
+        &["--shard", "2/3", "--threads", "1"],
+    ));
+    let out4 = TempDir::new().unwrap();
+    ok(&merge(&dirs, out4.path(), &["--require-all"]));
+    assert_eq!(read(&out4.path().join("ranked.csv")), ranked);
+}
+
+#[test]
+fn merge_refuses_shards_of_another_sweep_or_split() {
+    let a = TempDir::new().unwrap();
+    let b = TempDir::new().unwrap();
+    let c = TempDir::new().unwrap();
+    ok(&sweep(a.path(), &["--shard", "1/2", "--starts", "2"]));
+    ok(&sweep(b.path(), &["--shard", "2/2", "--starts", "3"]));
+    ok(&sweep(c.path(), &["--shard", "2/3", "--starts", "2"]));
+    let out = TempDir::new().unwrap();
+    for (other, what) in [
+        (b.path(), "a different sweep"),
+        (c.path(), "split into 3 parts"),
+    ] {
+        let o = merge(&[a.path(), other], &out.path().join("m"), &[]);
+        assert!(!o.status.success());
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.starts_with("error: ") && err.contains(what), "{err}");
+        assert!(!out.path().join("m").exists());
+    }
+    // Nothing to merge at all.
+    let o = merge(&[out.path()], &out.path().join("m"), &[]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("holds a sweep journal"));
+}
+
+/// A sweep task with the given job-array environment (the rest of the environment cleared of
+/// other runners' variables).
+fn array_task(out: &Path, vars: &[(&str, String)]) -> Output {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_creepfit"));
+    for (k, _) in std::env::vars() {
+        if k.starts_with("SLURM_") || k.starts_with("SGE_") || k.starts_with("AWS_BATCH_") {
+            cmd.env_remove(k);
+        }
+    }
+    cmd.args([
+        "sweep",
+        CONFIG,
+        "--shard",
+        "auto",
+        "--threads",
+        "1",
+        "--out",
+    ])
+    .arg(out)
+    .envs(vars.iter().map(|(k, v)| (*k, v.as_str())))
+    .current_dir(root())
+    .output()
+    .expect("binary runs")
+}
+
+#[test]
+fn shard_auto_from_a_slurm_array_merges_into_the_unsharded_result() {
+    let (_d, ranked, _) = reference();
+    let out = TempDir::new().unwrap();
+    // sbatch --array=0-2: task ids 0, 1, 2 are shards 1/3, 2/3, 3/3.
+    for id in 0..3 {
+        let o = array_task(
+            out.path(),
+            &[
+                ("SLURM_ARRAY_TASK_ID", id.to_string()),
+                ("SLURM_ARRAY_TASK_MIN", "0".into()),
+                ("SLURM_ARRAY_TASK_MAX", "2".into()),
+                ("SLURM_ARRAY_TASK_STEP", "1".into()),
+                ("SLURM_ARRAY_TASK_COUNT", "3".into()),
+            ],
+        );
+        ok(&o);
+        let shard = out.path().join(format!("shard-{}-of-3", id + 1));
+        assert!(shard.join("journal.jsonl").exists(), "{}", shard.display());
+    }
+    let dirs: Vec<PathBuf> = (1..=3)
+        .map(|i| out.path().join(format!("shard-{i}-of-3")))
+        .collect();
+    let dirs: Vec<&Path> = dirs.iter().map(|p| p.as_path()).collect();
+    ok(&merge(&dirs, out.path(), &["--require-all"]));
+    assert_eq!(read(&out.path().join("ranked.csv")), ranked);
+
+    // Outside a job array, or with inconsistent variables: a one-line error, no folder.
+    let bad = TempDir::new().unwrap();
+    for vars in [
+        vec![],
+        vec![
+            ("SLURM_ARRAY_TASK_ID", "4".to_string()),
+            ("SLURM_ARRAY_TASK_MIN", "1".into()),
+            ("SLURM_ARRAY_TASK_COUNT", "3".into()),
+        ],
+    ] {
+        let o = array_task(bad.path(), &vars);
+        assert!(!o.status.success());
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.starts_with("error: --shard auto: "), "{err}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert_eq!(std::fs::read_dir(bad.path()).unwrap().count(), 0);
+    }
 }
 
 #[test]
@@ -148,6 +376,12 @@ fn stopped_sweep_resumes_to_the_same_files() {
     assert!(err.contains("interrupted"), "{err}");
     let journal = read(&d.path().join("journal.jsonl"));
     assert_eq!(journal.lines().count(), 1 + 5, "header + 5 solutions");
+    // Its outputs say they are partial.
+    let s = summary(d.path());
+    assert_eq!(s["complete"], false);
+    assert_eq!(s["missing"][0]["state"], "incomplete");
+    assert_eq!(s["missing"][0]["fits_done"], 5);
+    assert_eq!(s["missing"][0]["fits_expected"], 18);
     let o = sweep(d.path(), &["--threads", "1"]);
     ok(&o);
     let out = String::from_utf8_lossy(&o.stdout);
@@ -157,6 +391,7 @@ fn stopped_sweep_resumes_to_the_same_files() {
     );
     assert_eq!(read(&d.path().join("ranked.csv")), ranked);
     assert_eq!(read(&d.path().join("minima.csv")), minima);
+    assert_eq!(summary(d.path())["complete"], true);
 }
 
 #[test]

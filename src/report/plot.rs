@@ -2,8 +2,13 @@
 //! the multistart "waterfall" of objectives and the spread of the best constants within
 //! their bounds.
 //!
-//! Every plot is 1000×700 px and is drawn with the DejaVu Sans font embedded in the binary
-//! (registered with plotters' `ab_glyph` support), so no system fonts are needed.
+//! Every plot is 1200×700 px and is drawn with the DejaVu Sans font embedded in the binary
+//! (registered with plotters' `ab_glyph` support), so no system fonts are needed. The chart
+//! takes the left part of the image and its legend a panel of its own on the right
+//! ([`LEGEND_WIDTH`]), so a legend never covers data. Every axis is labelled by
+//! [`axis_ticks`]: at least two labelled ticks for any finite range, on linear and log axes
+//! alike (a log axis spanning less than a decade gets intermediate or linear ticks instead of
+//! none).
 //!
 //! Robustness: non-finite points (and points with a magnitude above 1e150) are skipped,
 //! lines are broken at them and clipped to the axes, degenerate ranges (one point, all
@@ -12,6 +17,7 @@
 //! panic inside plotters, is returned as [`Error::Plot`]; nothing is written unless the
 //! whole image was drawn.
 
+use std::cell::RefCell;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
 use std::sync::OnceLock;
@@ -26,9 +32,11 @@ use plotters::style::{register_font, FontStyle};
 use crate::error::{Error, Result};
 
 /// Image width in pixels.
-pub const WIDTH: u32 = 1000;
+pub const WIDTH: u32 = 1200;
 /// Image height in pixels.
 pub const HEIGHT: u32 = 700;
+/// Width of the legend panel at the right of every image, px.
+pub const LEGEND_WIDTH: u32 = 250;
 
 /// The embedded font (DejaVu Sans, see `assets/DejaVu-LICENSE.txt`).
 static FONT_BYTES: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
@@ -38,7 +46,9 @@ const FONT: &str = "sans-serif";
 const TITLE_SIZE: f64 = 28.0;
 const AXIS_DESC_SIZE: f64 = 22.0;
 const TICK_SIZE: f64 = 17.0;
-const LEGEND_SIZE: f64 = 18.0;
+const LEGEND_SIZE: f64 = 17.0;
+/// At most this many labelled ticks on a linear or log axis.
+const MAX_TICKS: usize = 10;
 
 /// Coordinates with a larger magnitude are treated like non-finite ones (skipped).
 const MAX_ABS: f64 = 1e150;
@@ -82,12 +92,245 @@ pub struct CurvePlot {
     pub predicted: Vec<(f64, f64)>,
 }
 
+/// Scale of a plot axis.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AxisScale {
+    Linear,
+    Log,
+}
+
+/// Tick positions and labels for an axis over `[lo, hi]`: between 2 and `max` ticks (max ≥ 5)
+/// inside the range for any finite range with lo < hi (lo > 0 on a log axis), every label
+/// distinct and with the digits its spacing needs. Linear: multiples of 1, 2 or 5 × 10^k.
+/// Log: powers of ten when at least three fall inside (every 2nd, 5th … when too many); else
+/// 1, 2, 5 × 10^k or 1…9 × 10^k when at least three fall inside; else linear ticks (a range
+/// within one decade, such as 0.24–0.40, gets 0.24, 0.26, …, 0.40). A degenerate or
+/// non-finite range gives no ticks.
+pub fn axis_ticks(lo: f64, hi: f64, scale: AxisScale, max: usize) -> Vec<(f64, String)> {
+    let max = max.max(5);
+    if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+        return Vec::new();
+    }
+    match scale {
+        AxisScale::Linear => {
+            let (values, step) = linear_ticks(lo, hi, max);
+            let labels = linear_labels(&values, step);
+            values.into_iter().zip(labels).collect()
+        }
+        AxisScale::Log => {
+            if !(lo > 0.0) {
+                return Vec::new();
+            }
+            let values = log_ticks(lo, hi, max);
+            match values {
+                Some(v) => v.iter().map(|&x| (x, log_label(x))).collect(),
+                None => {
+                    let (values, step) = linear_ticks(lo, hi, max);
+                    let labels = linear_labels(&values, step);
+                    values.into_iter().zip(labels).collect()
+                }
+            }
+        }
+    }
+}
+
+/// The multiples of the smallest 1-2-5 step that gives at most `max` of them in `[lo, hi]`,
+/// and that step.
+fn linear_ticks(lo: f64, hi: f64, max: usize) -> (Vec<f64>, f64) {
+    let span = hi - lo;
+    let count = |step: f64| -> f64 {
+        ((hi / step + 1e-9).floor() - (lo / step - 1e-9).ceil() + 1.0).max(0.0)
+    };
+    // From a step at least the span (≤ 2 ticks) downwards, while the count stays ≤ max.
+    let mut exp = span.log10().ceil() as i32;
+    let mut best = 10f64.powi(exp);
+    'down: loop {
+        for m in [5.0, 2.0, 1.0] {
+            let step = m * 10f64.powi(exp - 1);
+            if !(step > 0.0) || count(step) > max as f64 {
+                break 'down;
+            }
+            best = step;
+        }
+        exp -= 1;
+        if exp < -330 {
+            break;
+        }
+    }
+    let first = (lo / best - 1e-9).ceil();
+    let last = (hi / best + 1e-9).floor();
+    let values = (0..=(last - first).max(0.0) as usize)
+        .map(|k| ((first + k as f64) * best).clamp(lo, hi))
+        .collect();
+    (values, best)
+}
+
+/// Labels of linear ticks: one number of decimals for all, the fewest that state each tick to
+/// 1e-6 of the step; scientific notation for magnitudes ≥ 1e5 or steps < 1e-4.
+fn linear_labels(values: &[f64], step: f64) -> Vec<String> {
+    let tol = 1e-6 * step;
+    let big = values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let clean = |v: f64| if v.abs() < tol { 0.0 } else { v };
+    if big >= 1e5 || step < 1e-4 {
+        return values
+            .iter()
+            .map(|&v| shortest_sci(clean(v), tol))
+            .collect();
+    }
+    let decimals = (0..=12)
+        .find(|&d| {
+            values
+                .iter()
+                .all(|&v| (format!("{:.*}", d, clean(v)).parse::<f64>().unwrap() - v).abs() <= tol)
+        })
+        .unwrap_or(12);
+    values
+        .iter()
+        .map(|&v| format!("{:.*}", decimals, clean(v)))
+        .collect()
+}
+
+/// The shortest scientific form of `v` within `tol` ("0" for zero).
+fn shortest_sci(v: f64, tol: f64) -> String {
+    if v == 0.0 {
+        return "0".to_string();
+    }
+    (0..=15)
+        .map(|d| format!("{:.*e}", d, v))
+        .find(|s| (s.parse::<f64>().unwrap() - v).abs() <= tol)
+        .unwrap_or_else(|| format!("{v:e}"))
+}
+
+/// Ticks of a log axis over `[lo, hi]` (lo > 0) from powers of ten or their 1-2-5 / 1…9
+/// multiples; `None` when fewer than three of them fall inside (use linear ticks).
+fn log_ticks(lo: f64, hi: f64, max: usize) -> Option<Vec<f64>> {
+    let (a, b) = (lo.log10(), hi.log10());
+    let inside = |v: f64| v >= lo * (1.0 - 1e-12) && v <= hi * (1.0 + 1e-12);
+    let (k0, k1) = ((a - 1e-9).ceil() as i64, (b + 1e-9).floor() as i64);
+    let decades = k1 - k0 + 1;
+    if decades >= 3 {
+        let every = [1i64, 2, 5, 10, 20, 50, 100]
+            .into_iter()
+            .find(|d| (decades + d - 1) / d <= max as i64)
+            .unwrap_or(100);
+        let start = k0.div_euclid(every) * every;
+        let v: Vec<f64> = (0..)
+            .map(|i| start + i * every)
+            .take_while(|k| *k <= k1)
+            .filter(|k| *k >= k0)
+            .map(|k| 10f64.powi(k as i32))
+            .collect();
+        if v.len() >= 2 {
+            return Some(v);
+        }
+    }
+    for mantissas in [
+        &[1.0, 2.0, 5.0][..],
+        &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0],
+    ] {
+        let v: Vec<f64> = ((a.floor() as i64)..=(b.ceil() as i64))
+            .flat_map(|k| mantissas.iter().map(move |m| m * 10f64.powi(k as i32)))
+            .filter(|v| inside(*v))
+            .collect();
+        if v.len() >= 3 && v.len() <= max {
+            return Some(v);
+        }
+    }
+    None
+}
+
+/// Label of a log tick (a power of ten or a small multiple of one): plain for 1e-3 ≤ v < 1e5,
+/// else scientific.
+fn log_label(v: f64) -> String {
+    let tol = 1e-9 * v;
+    if (1e-3..1e5).contains(&v) {
+        (0..=6)
+            .map(|d| format!("{:.*}", d, v))
+            .find(|s| (s.parse::<f64>().unwrap() - v).abs() <= tol)
+            .unwrap_or_else(|| format!("{v}"))
+    } else {
+        shortest_sci(v, tol)
+    }
+}
+
+/// A labelled tick set for one axis.
+#[derive(Debug, Clone, Default, PartialEq)]
+struct Ticks {
+    values: Vec<f64>,
+    labels: Vec<String>,
+}
+
+impl Ticks {
+    fn of(pairs: Vec<(f64, String)>) -> Ticks {
+        let (values, labels) = pairs.into_iter().unzip();
+        Ticks { values, labels }
+    }
+    fn auto((lo, hi): (f64, f64), scale: AxisScale) -> Ticks {
+        Ticks::of(axis_ticks(lo, hi, scale, MAX_TICKS))
+    }
+    /// The label of the tick at `v`.
+    fn label(&self, v: f64) -> String {
+        self.values
+            .iter()
+            .position(|t| (t - v).abs() <= 1e-9 * t.abs().max(1e-300))
+            .map(|i| self.labels[i].clone())
+            .unwrap_or_else(|| format!("{v}"))
+    }
+}
+
+/// A pixel rectangle of the image: (x0, x1), (y0, y1).
+type PxRect = ((i32, i32), (i32, i32));
+
+/// What a plot drew, for tests: the tick labels plotters formatted on each axis, and the pixel
+/// rectangles (x range, y range) of the chart's plotting area and of the legend box.
+#[derive(Debug, Clone, Default, PartialEq)]
+struct Drawn {
+    x_labels: Vec<String>,
+    y_labels: Vec<String>,
+    plot_px: PxRect,
+    legend_px: Option<PxRect>,
+}
+
+/// The legend symbol of an entry.
+#[derive(Clone, Copy)]
+enum Glyph {
+    /// A line segment.
+    Line(ShapeStyle),
+    /// A filled circle of the given radius.
+    Marker(RGBColor, i32),
+    /// A line segment with a filled circle on it.
+    LineMarker(ShapeStyle, RGBColor, i32),
+    /// A filled triangle.
+    Triangle(RGBColor),
+    /// Two circles: a colour range.
+    Pair(RGBColor, RGBColor),
+    /// No symbol: a note.
+    Note,
+}
+
+/// One legend entry.
+struct Key {
+    label: String,
+    glyph: Glyph,
+}
+
+fn key(label: impl Into<String>, glyph: Glyph) -> Key {
+    Key {
+        label: label.into(),
+        glyph,
+    }
+}
+
 /// Measured (markers) against predicted (lines) creep curves, one colour per stress: the
 /// paper's Figures 6/7. Axes: "time (h)" and "strain (%)", both starting at 0 unless data are
 /// negative. The axes cover every measured point; predicted curves are drawn up to 1.5× the
 /// measured extent on each axis and clipped beyond, so a runaway prediction near rupture
 /// cannot squash the data (without measured points the predictions set the axes).
 pub fn plot_creep_curves(path: &Path, title: &str, curves: &[CurvePlot]) -> Result<()> {
+    creep_curves(path, title, curves).map(|_| ())
+}
+
+fn creep_curves(path: &Path, title: &str, curves: &[CurvePlot]) -> Result<Drawn> {
     let measured_x = curves.iter().flat_map(|c| c.measured.iter().map(|p| p.0));
     let measured_y = curves.iter().flat_map(|c| c.measured.iter().map(|p| p.1));
     let predicted_x = curves.iter().flat_map(|c| c.predicted.iter().map(|p| p.0));
@@ -97,11 +340,15 @@ pub fn plot_creep_curves(path: &Path, title: &str, curves: &[CurvePlot]) -> Resu
     let has_data = curves
         .iter()
         .any(|c| c.measured.iter().chain(&c.predicted).any(|&p| plottable(p)));
+    let (xt, yt) = (
+        Ticks::auto(x_range, AxisScale::Linear),
+        Ticks::auto(y_range, AxisScale::Linear),
+    );
 
-    render(path, |root| {
-        let mut chart = chart_builder(root, title)
-            .build_cartesian_2d(x_range.0..x_range.1, y_range.0..y_range.1)?;
-        configure_mesh(&mut chart, "time (h)", "strain (%)")?;
+    let mut keys = Vec::new();
+    render(path, title, |area, drawn| {
+        let mut chart = linear_chart(area, (x_range, &xt), (y_range, &yt))?;
+        configure_mesh(&mut chart, "time (h)", "strain (%)", &xt, &yt, drawn)?;
 
         for (i, curve) in curves.iter().enumerate() {
             let color = PALETTE[i % PALETTE.len()];
@@ -111,47 +358,37 @@ pub fn plot_creep_curves(path: &Path, title: &str, curves: &[CurvePlot]) -> Resu
                 curve.label.clone()
             };
             let pieces = clip_polyline(&curve.predicted, x_range, y_range);
-            chart
-                .draw_series(
-                    pieces
-                        .into_iter()
-                        .map(|piece| PathElement::new(piece, color.stroke_width(2))),
-                )?
-                .label(label)
-                .legend(move |(x, y)| {
-                    EmptyElement::at((x, y))
-                        + PathElement::new(vec![(0, 0), (24, 0)], color.stroke_width(2))
-                        + Circle::new((12, 0), 4, color.filled())
-                });
+            chart.draw_series(
+                pieces
+                    .into_iter()
+                    .map(|piece| PathElement::new(piece, color.stroke_width(2))),
+            )?;
             chart.draw_series(
                 inside(&curve.measured, x_range, y_range)
                     .map(|p| Circle::new(p, 4, color.filled())),
             )?;
+            keys.push(key(
+                label,
+                Glyph::LineMarker(color.stroke_width(2), color, 4),
+            ));
         }
         if !curves.is_empty() {
             // Style key: markers are measurements, lines are predictions.
-            chart
-                .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())?
-                .label("measured")
-                .legend(|(x, y)| Circle::new((x + 12, y), 4, BLACK.filled()));
-            chart
-                .draw_series(std::iter::empty::<PathElement<(f64, f64)>>())?
-                .label("predicted")
-                .legend(|(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 24, y)], BLACK.stroke_width(2))
-                });
+            keys.push(key("measured", Glyph::Marker(BLACK, 4)));
+            keys.push(key("predicted", Glyph::Line(BLACK.stroke_width(2))));
         }
         if !has_data {
             no_data(&mut chart, (mid(x_range), mid(y_range)))?;
         }
-        draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
-        Ok(())
+        drawn.plot_px = pixel_rect(chart.plotting_area());
+        Ok(std::mem::take(&mut keys))
     })
 }
 
-/// Residuals (measured − predicted, normalised by the caller) against `x` (typically the life
-/// fraction t/t_f), one colour per series: markers joined by a thin line in x order, plus a
-/// black zero line. The y axis always includes 0.
+/// Residuals against `x` (typically the life fraction t/t_f), one colour per series: markers
+/// joined by a thin line in x order, plus a black zero line. The y axis always includes 0.
+/// The residuals are predicted − measured (the sign of the objective's residual vector and of
+/// the biases in diagnose's report.md), normalised by the caller, whose `y_label` states it.
 pub fn plot_residuals(
     path: &Path,
     title: &str,
@@ -159,6 +396,16 @@ pub fn plot_residuals(
     x_label: &str,
     y_label: &str,
 ) -> Result<()> {
+    residuals(path, title, series, x_label, y_label).map(|_| ())
+}
+
+fn residuals(
+    path: &Path,
+    title: &str,
+    series: &[Series],
+    x_label: &str,
+    y_label: &str,
+) -> Result<Drawn> {
     let xs = series.iter().flat_map(|s| s.points.iter().map(|p| p.0));
     let ys = series.iter().flat_map(|s| s.points.iter().map(|p| p.1));
     let x_range = padded(data_range(xs).unwrap_or((0.0, 1.0)), 0.03);
@@ -166,16 +413,20 @@ pub fn plot_residuals(
     let has_data = series
         .iter()
         .any(|s| s.points.iter().any(|&p| plottable(p)));
+    let (xt, yt) = (
+        Ticks::auto(x_range, AxisScale::Linear),
+        Ticks::auto(y_range, AxisScale::Linear),
+    );
 
-    render(path, |root| {
-        let mut chart = chart_builder(root, title)
-            .build_cartesian_2d(x_range.0..x_range.1, y_range.0..y_range.1)?;
-        configure_mesh(&mut chart, x_label, y_label)?;
+    render(path, title, |area, drawn| {
+        let mut chart = linear_chart(area, (x_range, &xt), (y_range, &yt))?;
+        configure_mesh(&mut chart, x_label, y_label, &xt, &yt, drawn)?;
         chart.draw_series(std::iter::once(PathElement::new(
             vec![(x_range.0, 0.0), (x_range.1, 0.0)],
             BLACK.stroke_width(1),
         )))?;
 
+        let mut keys = Vec::new();
         for (i, s) in series.iter().enumerate() {
             let color = PALETTE[i % PALETTE.len()];
             let label = if s.label.trim().is_empty() {
@@ -192,31 +443,61 @@ pub fn plot_residuals(
                     .into_iter()
                     .map(|piece| PathElement::new(piece, line_style)),
             )?;
-            chart
-                .draw_series(
-                    inside(&sorted, x_range, y_range).map(|p| Circle::new(p, 4, color.filled())),
-                )?
-                .label(label)
-                .legend(move |(x, y)| {
-                    EmptyElement::at((x, y))
-                        + PathElement::new(vec![(0, 0), (24, 0)], color.mix(0.45).stroke_width(1))
-                        + Circle::new((12, 0), 4, color.filled())
-                });
+            chart.draw_series(
+                inside(&sorted, x_range, y_range).map(|p| Circle::new(p, 4, color.filled())),
+            )?;
+            keys.push(key(label, Glyph::LineMarker(line_style, color, 4)));
         }
         if !has_data {
             no_data(&mut chart, (mid(x_range), mid(y_range)))?;
         }
-        draw_legend(&mut chart, SeriesLabelPosition::UpperRight)?;
-        Ok(())
+        drawn.plot_px = pixel_rect(chart.plotting_area());
+        Ok(keys)
     })
 }
 
-/// Sorted objective against rank (1 = best), log-scale y: the multistart "waterfall". Ranks
-/// are the 1-based positions in `objectives_sorted`; non-finite values (failed starts) are
-/// skipped, non-positive ones are shown at a floor (100× below the smallest positive value)
-/// as red triangles, the best point is drawn in red.
+/// How many local fits a waterfall shows: `ran` = `finite` + `failed` (no objective).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RunCounts {
+    pub ran: usize,
+    pub finite: usize,
+    pub failed: usize,
+}
+
+/// Counts of a waterfall's input: every value is one fit; a non-finite one failed.
+pub fn run_counts(objectives: &[f64]) -> RunCounts {
+    let finite = objectives.iter().filter(|v| v.is_finite()).count();
+    RunCounts {
+        ran: objectives.len(),
+        finite,
+        failed: objectives.len() - finite,
+    }
+}
+
+/// The waterfall's statement of the counts: how many fits ran, how many have a finite
+/// objective, how many failed.
+fn counts_note(c: RunCounts) -> String {
+    let failed = if c.failed > 0 {
+        format!("{} failed (no objective, not drawn)", c.failed)
+    } else {
+        "0 failed".to_string()
+    };
+    format!("{} fits ran: {} finite, {failed}", c.ran, c.finite)
+}
+
+/// Sorted objective against rank (1 = best), log-scale y: the multistart "waterfall".
+/// `objectives_sorted` holds one value per local fit, best first, as in ranked.csv: ranks are
+/// the 1-based positions (the rank column of ranked.csv), non-finite values are failed fits
+/// (counted in the legend, not drawn), non-positive ones are shown at a floor (100× below the
+/// smallest positive value) as red triangles; the best point is drawn in red and its value
+/// given in the legend.
 pub fn plot_waterfall(path: &Path, title: &str, objectives_sorted: &[f64]) -> Result<()> {
+    waterfall(path, title, objectives_sorted).map(|_| ())
+}
+
+fn waterfall(path: &Path, title: &str, objectives_sorted: &[f64]) -> Result<Drawn> {
     let n = objectives_sorted.len();
+    let counts = run_counts(objectives_sorted);
     let min_pos = objectives_sorted
         .iter()
         .copied()
@@ -255,25 +536,32 @@ pub fn plot_waterfall(path: &Path, title: &str, objectives_sorted: &[f64]) -> Re
         .collect();
     let line: Vec<(f64, f64)> = pts.iter().map(|p| (p.0, p.1)).collect();
     let n_clamped = pts.iter().filter(|p| p.2).count();
-    let x_ticks = integer_ticks(n.max(1), 10);
+    let xt = Ticks {
+        values: integer_ticks(n.max(1), 10),
+        labels: integer_ticks(n.max(1), 10)
+            .iter()
+            .map(|v| format!("{}", v.round() as i64))
+            .collect(),
+    };
+    let yt = Ticks::auto(y_range, AxisScale::Log);
 
-    render(path, |root| {
-        let mut chart = chart_builder(root, title).build_cartesian_2d(
-            FixedTicks::new(x_range, x_ticks),
-            (y_range.0..y_range.1).log_scale(),
+    render(path, title, |area, drawn| {
+        let y_axis: LogCoord<f64> = (y_range.0..y_range.1).log_scale().into();
+        let mut chart = chart_builder(area).build_cartesian_2d(
+            FixedTicks::new(
+                RangedCoordf64::from(x_range.0..x_range.1),
+                xt.values.clone(),
+            ),
+            FixedTicks::new(y_axis, yt.values.clone()),
         )?;
-        chart
-            .configure_mesh()
-            .x_desc("rank (1 = best)")
-            .y_desc("objective (log scale)")
-            .x_label_formatter(&|v| format!("{}", v.round() as i64))
-            .y_label_formatter(&|v| format!("{v:.0e}"))
-            .y_labels(12)
-            .axis_desc_style((FONT, AXIS_DESC_SIZE))
-            .label_style((FONT, TICK_SIZE))
-            .bold_line_style(BLACK.mix(0.12))
-            .light_line_style(BLACK.mix(0.04))
-            .draw()?;
+        configure_mesh(
+            &mut chart,
+            "rank (1 = best)",
+            "objective (log scale)",
+            &xt,
+            &yt,
+            drawn,
+        )?;
 
         let color = PALETTE[0];
         chart.draw_series(std::iter::once(PathElement::new(
@@ -281,44 +569,58 @@ pub fn plot_waterfall(path: &Path, title: &str, objectives_sorted: &[f64]) -> Re
             color.stroke_width(2),
         )))?;
         let marker = if n <= 200 { 4 } else { 2 };
-        chart
-            .draw_series(
-                pts.iter()
-                    .filter(|p| !p.2)
-                    .map(|p| Circle::new((p.0, p.1), marker, color.filled())),
-            )?
-            .label(format!("objective ({} of {n} runs finite)", pts.len()))
-            .legend(move |(x, y)| {
-                EmptyElement::at((x, y))
-                    + PathElement::new(vec![(0, 0), (24, 0)], color.stroke_width(2))
-                    + Circle::new((12, 0), 4, color.filled())
-            });
+        chart.draw_series(
+            pts.iter()
+                .filter(|p| !p.2)
+                .map(|p| Circle::new((p.0, p.1), marker, color.filled())),
+        )?;
+        let mut keys = vec![key(
+            "objective of each fit",
+            Glyph::LineMarker(color.stroke_width(2), color, 4),
+        )];
         if let Some(best) = pts.first().filter(|p| p.0 == 1.0) {
-            chart
-                .draw_series(std::iter::once(Circle::new(
-                    (best.0, best.1),
-                    7,
-                    PALETTE[3].filled(),
-                )))?
-                .label("best")
-                .legend(|(x, y)| Circle::new((x + 12, y), 6, PALETTE[3].filled()));
+            chart.draw_series(std::iter::once(Circle::new(
+                (best.0, best.1),
+                7,
+                PALETTE[3].filled(),
+            )))?;
+            keys.push(key(
+                format!("best: {}", significant(objectives_sorted[0], 6)),
+                Glyph::Marker(PALETTE[3], 6),
+            ));
         }
         if n_clamped > 0 {
-            chart
-                .draw_series(
-                    pts.iter()
-                        .filter(|p| p.2)
-                        .map(|p| TriangleMarker::new((p.0, p.1), 6, PALETTE[3].filled())),
-                )?
-                .label(format!("{n_clamped} value(s) ≤ 0, shown at {floor:.1e}"))
-                .legend(|(x, y)| TriangleMarker::new((x + 12, y), 6, PALETTE[3].filled()));
+            chart.draw_series(
+                pts.iter()
+                    .filter(|p| p.2)
+                    .map(|p| TriangleMarker::new((p.0, p.1), 6, PALETTE[3].filled())),
+            )?;
+            keys.push(key(
+                format!("{n_clamped} value(s) ≤ 0, shown at {floor:.1e}"),
+                Glyph::Triangle(PALETTE[3]),
+            ));
         }
+        keys.push(key(counts_note(counts), Glyph::Note));
         if pts.is_empty() {
             no_data(&mut chart, (mid(x_range), (y_range.0 * y_range.1).sqrt()))?;
         }
-        draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
-        Ok(())
+        drawn.plot_px = pixel_rect(chart.plotting_area());
+        Ok(keys)
     })
+}
+
+/// `v` with `digits` significant digits (plain notation for 1e-4 ≤ |v| < 1e6).
+fn significant(v: f64, digits: usize) -> String {
+    if !v.is_finite() || v == 0.0 {
+        return format!("{v}");
+    }
+    let mag = v.abs().log10().floor() as i64;
+    if (-4..6).contains(&mag) {
+        let decimals = (digits as i64 - 1 - mag).max(0) as usize;
+        format!("{:.*}", decimals, v)
+    } else {
+        format!("{:.*e}", digits.saturating_sub(1), v)
+    }
 }
 
 /// Each constant of the best-k solutions within its bounds (a parallel-coordinates plot): one
@@ -334,6 +636,15 @@ pub fn plot_parameters(
     names: &[String],
     scaled_solutions: &[Vec<f64>],
 ) -> Result<()> {
+    parameters(path, title, names, scaled_solutions).map(|_| ())
+}
+
+fn parameters(
+    path: &Path,
+    title: &str,
+    names: &[String],
+    scaled_solutions: &[Vec<f64>],
+) -> Result<Drawn> {
     let n = names.len();
     if let Some((i, s)) = scaled_solutions
         .iter()
@@ -366,33 +677,27 @@ pub fn plot_parameters(
             })
             .collect()
     };
-    let names: Vec<String> = names.to_vec();
+    let xt = Ticks {
+        values: (0..n).map(|j| j as f64).collect(),
+        labels: names.to_vec(),
+    };
+    let yt = Ticks::of(
+        [0.0, 0.25, 0.5, 0.75, 1.0]
+            .iter()
+            .map(|&v| (v, format!("{v:.2}")))
+            .collect(),
+    );
 
-    render(path, |root| {
-        let x_ticks: Vec<f64> = (0..n).map(|j| j as f64).collect();
-        let mut chart = chart_builder(root, title).build_cartesian_2d(
-            FixedTicks::new(x_range, x_ticks),
-            FixedTicks::new((lo, hi), vec![0.0, 0.25, 0.5, 0.75, 1.0]),
+    render(path, title, |area, drawn| {
+        let mut chart = linear_chart(area, (x_range, &xt), ((lo, hi), &yt))?;
+        configure_mesh(
+            &mut chart,
+            "constant",
+            "scaled position u in bounds",
+            &xt,
+            &yt,
+            drawn,
         )?;
-        let formatter = |v: &f64| {
-            let j = v.round();
-            if (v - j).abs() < 1e-6 && j >= 0.0 {
-                names.get(j as usize).cloned().unwrap_or_default()
-            } else {
-                String::new()
-            }
-        };
-        chart
-            .configure_mesh()
-            .x_desc("constant")
-            .y_desc("scaled position u in bounds")
-            .x_label_formatter(&formatter)
-            .y_label_formatter(&|v| format!("{v:.2}"))
-            .axis_desc_style((FONT, AXIS_DESC_SIZE))
-            .label_style((FONT, TICK_SIZE))
-            .bold_line_style(BLACK.mix(0.12))
-            .light_line_style(BLACK.mix(0.0))
-            .draw()?;
         for (u, text) in [(0.0, "lower bound"), (1.0, "upper bound")] {
             chart.draw_series(DashedLineSeries::new(
                 vec![(x_range.0, u), (x_range.1, u)],
@@ -410,6 +715,7 @@ pub fn plot_parameters(
             ))?;
         }
 
+        let mut keys = Vec::new();
         // Worst first so that better solutions are drawn on top.
         for r in (1..k).rev() {
             let t = if k > 2 {
@@ -424,23 +730,9 @@ pub fn plot_parameters(
                     .into_iter()
                     .map(|piece| PathElement::new(piece, color.stroke_width(1))),
             )?;
-            let anno = chart.draw_series(
+            chart.draw_series(
                 inside(&pts, x_range, (lo, hi)).map(|p| Circle::new(p, 4, color.filled())),
             )?;
-            if r == 1 {
-                let label = if k > 2 {
-                    format!("ranks 2–{k}")
-                } else {
-                    "rank 2".to_string()
-                };
-                let c0 = rank_color(0.0);
-                let c1 = rank_color(1.0);
-                anno.label(label).legend(move |(x, y)| {
-                    EmptyElement::at((x, y))
-                        + Circle::new((4, 0), 4, c0.filled())
-                        + Circle::new((20, 0), 4, c1.filled())
-                });
-            }
         }
         if let Some(best) = scaled_solutions.first() {
             let red = PALETTE[3];
@@ -450,29 +742,31 @@ pub fn plot_parameters(
                     .into_iter()
                     .map(|piece| PathElement::new(piece, red.stroke_width(3))),
             )?;
-            chart
-                .draw_series(
-                    inside(&pts, x_range, (lo, hi)).map(|p| Circle::new(p, 6, red.filled())),
-                )?
-                .label("best")
-                .legend(move |(x, y)| {
-                    EmptyElement::at((x, y))
-                        + PathElement::new(vec![(0, 0), (24, 0)], red.stroke_width(3))
-                        + Circle::new((12, 0), 6, red.filled())
-                });
+            chart.draw_series(
+                inside(&pts, x_range, (lo, hi)).map(|p| Circle::new(p, 6, red.filled())),
+            )?;
+            keys.push(key("best", Glyph::LineMarker(red.stroke_width(3), red, 6)));
+        }
+        if k > 1 {
+            let label = if k > 2 {
+                format!("ranks 2–{k} (dark to light)")
+            } else {
+                "rank 2".to_string()
+            };
+            keys.push(key(label, Glyph::Pair(rank_color(0.0), rank_color(1.0))));
         }
         if n == 0 || k == 0 {
             no_data(&mut chart, (mid(x_range), 0.5))?;
         }
-        draw_legend(&mut chart, SeriesLabelPosition::UpperRight)?;
-        Ok(())
+        drawn.plot_px = pixel_rect(chart.plotting_area());
+        Ok(keys)
     })
 }
 
 // ---------------------------------------------------------------------------------------------
 // Drawing infrastructure
 
-type DrawResult = std::result::Result<(), Box<dyn std::error::Error>>;
+type DrawResult<T = ()> = std::result::Result<T, Box<dyn std::error::Error>>;
 type Root<'a> = DrawingArea<BitMapBackend<'a>, Shift>;
 
 /// Registers the embedded font once; the result of the first attempt is kept.
@@ -492,10 +786,12 @@ fn ensure_font() -> std::result::Result<(), String> {
 }
 
 /// Draws into an in-memory RGB buffer (catching panics) and only then writes the PNG, so a
-/// failed plot leaves no half-drawn file behind.
-fn render<F>(path: &Path, draw: F) -> Result<()>
+/// failed plot leaves no half-drawn file behind. The title goes across the top; `draw` gets
+/// the chart's area (left) and returns the legend entries, which are drawn into the panel on
+/// the right.
+fn render<F>(path: &Path, title: &str, draw: F) -> Result<Drawn>
 where
-    F: FnOnce(&Root<'_>) -> DrawResult,
+    F: FnOnce(&Root<'_>, &mut Drawn) -> DrawResult<Vec<Key>>,
 {
     let is_png = path
         .extension()
@@ -507,14 +803,22 @@ where
     ensure_font().map_err(|m| Error::plot(path, m))?;
 
     let mut buffer = vec![255u8; (WIDTH * HEIGHT * 3) as usize];
-    let drawn = catch_unwind(AssertUnwindSafe(|| -> DrawResult {
+    let mut drawn = Drawn::default();
+    let result = catch_unwind(AssertUnwindSafe(|| -> DrawResult {
         let root = BitMapBackend::with_buffer(&mut buffer, (WIDTH, HEIGHT)).into_drawing_area();
         root.fill(&WHITE)?;
-        draw(&root)?;
+        let body = if title.trim().is_empty() {
+            root.margin(10, 0, 0, 0)
+        } else {
+            root.margin(8, 0, 0, 0).titled(title, (FONT, TITLE_SIZE))?
+        };
+        let (chart_area, legend_area) = body.split_horizontally(WIDTH - LEGEND_WIDTH);
+        let keys = draw(&chart_area, &mut drawn)?;
+        drawn.legend_px = draw_keys(&legend_area, &keys)?;
         root.present()?;
         Ok(())
     }));
-    match drawn {
+    match result {
         Ok(Ok(())) => {}
         Ok(Err(e)) => return Err(Error::plot(path, e.to_string())),
         Err(panic) => {
@@ -534,78 +838,217 @@ where
         Ok(())
     }));
     match written {
-        Ok(Ok(())) => Ok(()),
+        Ok(Ok(())) => Ok(drawn),
         Ok(Err(e)) => Err(Error::plot(path, e.to_string())),
         Err(_) => Err(Error::plot(path, "panic while writing the PNG")),
     }
 }
 
-fn chart_builder<'a, 'b>(
-    root: &'a Root<'b>,
-    title: &str,
-) -> ChartBuilder<'a, 'b, BitMapBackend<'b>> {
-    let mut builder = ChartBuilder::on(root);
+fn chart_builder<'a, 'b>(area: &'a Root<'b>) -> ChartBuilder<'a, 'b, BitMapBackend<'b>> {
+    let mut builder = ChartBuilder::on(area);
     builder
         .margin(20)
+        .margin_right(10)
         .x_label_area_size(65)
         .y_label_area_size(95);
-    if !title.trim().is_empty() {
-        builder.caption(title, (FONT, TITLE_SIZE));
-    }
     builder
 }
 
-type Chart2d<'a, 'b> =
-    ChartContext<'a, BitMapBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+type LinearChart<'a, 'b> = ChartContext<
+    'a,
+    BitMapBackend<'b>,
+    Cartesian2d<FixedTicks<RangedCoordf64>, FixedTicks<RangedCoordf64>>,
+>;
 
-fn configure_mesh(chart: &mut Chart2d<'_, '_>, x_desc: &str, y_desc: &str) -> DrawResult {
+/// A chart with linear axes over the ranges, ticked at the given ticks.
+fn linear_chart<'a, 'b>(
+    area: &'a Root<'b>,
+    (x_range, xt): ((f64, f64), &Ticks),
+    (y_range, yt): ((f64, f64), &Ticks),
+) -> DrawResult<LinearChart<'a, 'b>> {
+    Ok(chart_builder(area).build_cartesian_2d(
+        FixedTicks::new(
+            RangedCoordf64::from(x_range.0..x_range.1),
+            xt.values.clone(),
+        ),
+        FixedTicks::new(
+            RangedCoordf64::from(y_range.0..y_range.1),
+            yt.values.clone(),
+        ),
+    )?)
+}
+
+fn pixel_rect<DB: DrawingBackend, CT: CoordTranslate>(area: &DrawingArea<DB, CT>) -> PxRect {
+    let (x, y) = area.get_pixel_range();
+    ((x.start, x.end), (y.start, y.end))
+}
+
+/// Axis descriptions and the tick labels of `xt` and `yt` (recorded in `drawn` as plotters
+/// asks for them), with grid lines at the ticks.
+fn configure_mesh<X, Y>(
+    chart: &mut ChartContext<'_, BitMapBackend<'_>, Cartesian2d<FixedTicks<X>, FixedTicks<Y>>>,
+    x_desc: &str,
+    y_desc: &str,
+    xt: &Ticks,
+    yt: &Ticks,
+    drawn: &mut Drawn,
+) -> DrawResult
+where
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    let seen_x = RefCell::new(Vec::new());
+    let seen_y = RefCell::new(Vec::new());
+    let fx = |v: &f64| {
+        let s = xt.label(*v);
+        seen_x.borrow_mut().push(s.clone());
+        s
+    };
+    let fy = |v: &f64| {
+        let s = yt.label(*v);
+        seen_y.borrow_mut().push(s.clone());
+        s
+    };
     chart
         .configure_mesh()
         .x_desc(x_desc)
         .y_desc(y_desc)
-        .x_labels(10)
-        .y_labels(10)
+        .x_label_formatter(&fx)
+        .y_label_formatter(&fy)
         .axis_desc_style((FONT, AXIS_DESC_SIZE))
         .label_style((FONT, TICK_SIZE))
         .bold_line_style(BLACK.mix(0.12))
-        .light_line_style(BLACK.mix(0.04))
+        .light_line_style(BLACK.mix(0.0))
         .draw()?;
+    let unique = |v: Vec<String>| {
+        let mut out: Vec<String> = Vec::new();
+        for s in v {
+            if !out.contains(&s) {
+                out.push(s);
+            }
+        }
+        out
+    };
+    drawn.x_labels = unique(seen_x.into_inner());
+    drawn.y_labels = unique(seen_y.into_inner());
     Ok(())
 }
 
-fn draw_legend<'a, 'b: 'a, X, Y>(
-    chart: &mut ChartContext<'a, BitMapBackend<'b>, Cartesian2d<X, Y>>,
-    position: SeriesLabelPosition,
-) -> DrawResult
-where
-    X: Ranged,
-    Y: Ranged,
-{
-    chart
-        .configure_series_labels()
-        .position(position)
-        .margin(12)
-        .legend_area_size(34)
-        .label_font((FONT, LEGEND_SIZE))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK.mix(0.5))
-        .draw()?;
+/// Draws the legend entries into `area` (the panel right of the chart): a symbol and the
+/// label, wrapped to the panel's width, in a light box; entries that do not fit are counted
+/// in a last line. Returns the box's pixel rectangle.
+fn draw_keys(area: &Root<'_>, keys: &[Key]) -> DrawResult<Option<PxRect>> {
+    if keys.is_empty() {
+        return Ok(None);
+    }
+    let (w, h) = area.dim_in_pixel();
+    let (w, h) = (w as i32, h as i32);
+    let style = TextStyle::from((FONT, LEGEND_SIZE)).pos(Pos::new(HPos::Left, VPos::Center));
+    let (x_box, y_box) = (4, 20);
+    let text_x = x_box + 44;
+    let max_text = (w - text_x - 10).max(40) as u32;
+    let line_h = LEGEND_SIZE as i32 + 5;
+    // Lay out: wrapped lines of each entry.
+    let mut rows: Vec<(usize, Vec<String>)> = Vec::new();
+    let mut y = y_box + 10;
+    let mut hidden = 0;
+    for (i, k) in keys.iter().enumerate() {
+        let lines = wrap(area, &k.label, &style, max_text)?;
+        let need = lines.len() as i32 * line_h + 6;
+        if y + need + line_h > h - 10 && i + 1 < keys.len() {
+            hidden = keys.len() - i;
+            break;
+        }
+        rows.push((i, lines));
+        y += need;
+    }
+    let y_end = y + if hidden > 0 { line_h } else { 0 } + 4;
+    area.draw(&Rectangle::new(
+        [(x_box, y_box), (w - 6, y_end)],
+        WHITE.mix(0.9).filled(),
+    ))?;
+    area.draw(&Rectangle::new(
+        [(x_box, y_box), (w - 6, y_end)],
+        BLACK.mix(0.5).stroke_width(1),
+    ))?;
+    let mut y = y_box + 10;
+    for (i, lines) in &rows {
+        let yc = y + line_h / 2;
+        draw_glyph(area, keys[*i].glyph, (x_box + 22, yc))?;
+        for (j, line) in lines.iter().enumerate() {
+            area.draw(&Text::new(
+                line.clone(),
+                (text_x, yc + j as i32 * line_h),
+                style.clone(),
+            ))?;
+        }
+        y += lines.len() as i32 * line_h + 6;
+    }
+    if hidden > 0 {
+        area.draw(&Text::new(
+            format!("… and {hidden} more"),
+            (text_x, y + line_h / 2),
+            style.clone(),
+        ))?;
+    }
+    let ((x0, _), (y0, _)) = pixel_rect(area);
+    Ok(Some(((x0 + x_box, x0 + w - 6), (y0 + y_box, y0 + y_end))))
+}
+
+/// Greedy word wrap of `text` to lines at most `width` px wide (a longer word stands alone).
+fn wrap(area: &Root<'_>, text: &str, style: &TextStyle, width: u32) -> DrawResult<Vec<String>> {
+    let mut lines: Vec<String> = Vec::new();
+    let mut current = String::new();
+    for word in text.split_whitespace() {
+        let candidate = if current.is_empty() {
+            word.to_string()
+        } else {
+            format!("{current} {word}")
+        };
+        if current.is_empty() || area.estimate_text_size(&candidate, style)?.0 <= width {
+            current = candidate;
+        } else {
+            lines.push(std::mem::replace(&mut current, word.to_string()));
+        }
+    }
+    if !current.is_empty() || lines.is_empty() {
+        lines.push(current);
+    }
+    Ok(lines)
+}
+
+fn draw_glyph(area: &Root<'_>, glyph: Glyph, (x, y): (i32, i32)) -> DrawResult {
+    match glyph {
+        Glyph::Line(s) => area.draw(&PathElement::new(vec![(x - 14, y), (x + 14, y)], s))?,
+        Glyph::Marker(c, r) => area.draw(&Circle::new((x, y), r, c.filled()))?,
+        Glyph::LineMarker(s, c, r) => {
+            area.draw(&PathElement::new(vec![(x - 14, y), (x + 14, y)], s))?;
+            area.draw(&Circle::new((x, y), r, c.filled()))?;
+        }
+        Glyph::Triangle(c) => area.draw(&TriangleMarker::new((x, y), 6, c.filled()))?,
+        Glyph::Pair(a, b) => {
+            area.draw(&Circle::new((x - 8, y), 4, a.filled()))?;
+            area.draw(&Circle::new((x + 8, y), 4, b.filled()))?;
+        }
+        Glyph::Note => {}
+    }
     Ok(())
 }
 
-/// A linear f64 axis whose ticks (and vertical/horizontal grid lines) are exactly the given
+/// An f64 axis (linear or log, `inner`) whose ticks (and grid lines) are exactly the given
 /// values, with no light grid lines. (plotters' `with_key_points` cannot be used with
 /// `configure_mesh` for f64 axes.)
-#[derive(Clone)]
-struct FixedTicks {
-    inner: RangedCoordf64,
+struct FixedTicks<C> {
+    inner: C,
     ticks: Vec<f64>,
 }
 
-impl FixedTicks {
-    fn new((lo, hi): (f64, f64), ticks: Vec<f64>) -> Self {
+impl<C: Ranged<ValueType = f64>> FixedTicks<C> {
+    fn new(inner: C, ticks: Vec<f64>) -> Self {
+        let r = inner.range();
+        let (lo, hi) = (r.start.min(r.end), r.start.max(r.end));
         FixedTicks {
-            inner: (lo..hi).into(),
+            inner,
             ticks: ticks
                 .into_iter()
                 .filter(|t| (lo..=hi).contains(t))
@@ -614,7 +1057,7 @@ impl FixedTicks {
     }
 }
 
-impl Ranged for FixedTicks {
+impl<C: Ranged<ValueType = f64>> Ranged for FixedTicks<C> {
     type FormatOption = NoDefaultFormatting;
     type ValueType = f64;
     fn map(&self, value: &f64, limit: (i32, i32)) -> i32 {
@@ -632,9 +1075,9 @@ impl Ranged for FixedTicks {
     }
 }
 
-impl ValueFormatter<f64> for FixedTicks {
+impl<C: Ranged<ValueType = f64>> ValueFormatter<f64> for FixedTicks<C> {
     fn format(value: &f64) -> String {
-        RangedCoordf64::format(value)
+        format!("{value}")
     }
 }
 
@@ -1144,11 +1587,228 @@ mod tests {
     fn drawing_errors_and_panics_become_errors() {
         let dir = TempDir::new().unwrap();
         let path = dir.path().join("boom.png");
-        let err = render(&path, |_| panic!("inside plotters")).unwrap_err();
+        let err = render(&path, "", |_, _| panic!("inside plotters")).unwrap_err();
         assert!(err.to_string().contains("inside plotters"), "{err}");
-        let err = render(&path, |_| Err("drawing failed".into())).unwrap_err();
+        let err = render(&path, "", |_, _| Err("drawing failed".into())).unwrap_err();
         assert!(err.to_string().contains("drawing failed"), "{err}");
         assert!(!path.exists(), "no file is written for a failed plot");
+    }
+
+    /// Every non-degenerate tick set: 2..=max ticks inside the range, increasing, distinct
+    /// labels that state their values.
+    fn check_ticks(lo: f64, hi: f64, scale: AxisScale, t: &[(f64, String)]) {
+        assert!(
+            (2..=MAX_TICKS).contains(&t.len()),
+            "[{lo}, {hi}] {scale:?}: {} ticks {t:?}",
+            t.len()
+        );
+        assert!(t.iter().all(|(v, _)| *v >= lo && *v <= hi), "{t:?}");
+        assert!(t.windows(2).all(|w| w[0].0 < w[1].0), "{t:?}");
+        let spacing = t
+            .windows(2)
+            .map(|w| w[1].0 - w[0].0)
+            .fold(f64::INFINITY, f64::min);
+        for (i, (v, label)) in t.iter().enumerate() {
+            assert!(
+                t[i + 1..].iter().all(|(_, l)| l != label),
+                "labels repeat: {t:?}"
+            );
+            let parsed: f64 = label.parse().unwrap_or_else(|_| panic!("'{label}'"));
+            assert!(
+                (parsed - v).abs() <= 1e-3 * spacing,
+                "label '{label}' for {v} (spacing {spacing})"
+            );
+        }
+    }
+
+    #[test]
+    fn axis_ticks_table() {
+        use AxisScale::{Linear, Log};
+        let s = |v: &[&str]| v.iter().map(|x| x.to_string()).collect::<Vec<_>>();
+        // (lo, hi, scale, expected labels, or None to check only the invariants)
+        let cases: Vec<(f64, f64, AxisScale, Option<Vec<String>>)> = vec![
+            (
+                0.0,
+                1.0,
+                Linear,
+                Some(s(&["0.0", "0.2", "0.4", "0.6", "0.8", "1.0"])),
+            ),
+            (
+                -20.6,
+                19.9,
+                Linear,
+                Some(s(&["-20", "-15", "-10", "-5", "0", "5", "10", "15"])),
+            ),
+            (
+                0.0,
+                91_000.0,
+                Linear,
+                Some(s(&[
+                    "0", "10000", "20000", "30000", "40000", "50000", "60000", "70000", "80000",
+                    "90000",
+                ])),
+            ),
+            (-0.03, 0.97, Linear, None),
+            (1e6, 1e6 + 1.0, Linear, None),
+            (1e-9, 3e-9, Linear, None),
+            (-1e-12, 1e-12, Linear, None),
+            (
+                -1.1e-7,
+                1.1e-7,
+                Linear,
+                Some(s(&["-1e-7", "-5e-8", "0", "5e-8", "1e-7"])),
+            ),
+            (123.456, 123.457, Linear, None),
+            // The 560 °C waterfall: minima 0.2527 and 0.3809 within one decade (padded).
+            (
+                0.2007,
+                0.4795,
+                Log,
+                Some(s(&["0.25", "0.30", "0.35", "0.40", "0.45"])),
+            ),
+            // 590 °C: minima 1.1252 and 1.1260, padded by 0.1 decade.
+            (
+                0.8938,
+                1.4167,
+                Log,
+                Some(s(&["0.9", "1.0", "1.1", "1.2", "1.3", "1.4"])),
+            ),
+            (
+                1e-3,
+                1e3,
+                Log,
+                Some(s(&["0.001", "0.01", "0.1", "1", "10", "100", "1000"])),
+            ),
+            (
+                0.05,
+                5.0,
+                Log,
+                Some(s(&["0.05", "0.1", "0.2", "0.5", "1", "2", "5"])),
+            ),
+            (1e-31, 1e9, Log, None),
+            (1.1251, 1.1262, Log, None),
+            (3.0e7, 4.5e7, Log, None),
+        ];
+        for (lo, hi, scale, want) in cases {
+            let t = axis_ticks(lo, hi, scale, MAX_TICKS);
+            check_ticks(lo, hi, scale, &t);
+            if let Some(want) = want {
+                let labels: Vec<String> = t.iter().map(|p| p.1.clone()).collect();
+                assert_eq!(labels, want, "[{lo}, {hi}] {scale:?}");
+            }
+        }
+        // Wide log ranges are thinned to at most MAX_TICKS decades.
+        let t = axis_ticks(1e-31, 1e9, Log, MAX_TICKS);
+        assert!(t
+            .iter()
+            .all(|(v, _)| (v.log10() - v.log10().round()).abs() < 1e-9));
+        // Degenerate ranges give no ticks (the plots widen them first).
+        assert!(axis_ticks(1.0, 1.0, Linear, 10).is_empty());
+        assert!(axis_ticks(f64::NAN, 1.0, Linear, 10).is_empty());
+        assert!(axis_ticks(0.0, 1.0, Log, 10).is_empty());
+    }
+
+    #[test]
+    fn waterfall_counts_add_up_and_a_narrow_log_axis_is_labelled() {
+        // The 590 °C sweep's shape: 2211 fits, 11 of them failed (ranked last), two minima
+        // 0.07 % apart; and the 560 °C one: minima 0.2527 and 0.3809.
+        let mut obj: Vec<f64> = (0..2200)
+            .map(|i| if i < 1100 { 1.125188 } else { 1.12596 })
+            .collect();
+        obj.extend([f64::NAN; 11]);
+        let c = run_counts(&obj);
+        assert_eq!((c.ran, c.finite, c.failed), (2211, 2200, 11));
+        assert_eq!(
+            counts_note(c),
+            "2211 fits ran: 2200 finite, 11 failed (no objective, not drawn)"
+        );
+        let dir = TempDir::new().unwrap();
+        let drawn = waterfall(&dir.path().join("w590.png"), "590", &obj).unwrap();
+        assert!(drawn.y_labels.len() >= 2, "{:?}", drawn.y_labels);
+        let obj560: Vec<f64> = (0..610)
+            .map(|i| if i < 251 { 0.252655 } else { 0.38094 })
+            .collect();
+        let drawn = waterfall(&dir.path().join("w560.png"), "560", &obj560).unwrap();
+        assert!(drawn.y_labels.len() >= 3, "{:?}", drawn.y_labels);
+        assert!(
+            drawn.y_labels.contains(&"0.25".to_string()),
+            "{:?}",
+            drawn.y_labels
+        );
+        assert!(
+            drawn.y_labels.contains(&"0.40".to_string()),
+            "{:?}",
+            drawn.y_labels
+        );
+        assert!(drawn.x_labels.len() >= 2, "{:?}", drawn.x_labels);
+        assert_eq!(
+            counts_note(run_counts(&obj560)),
+            "610 fits ran: 610 finite, 0 failed"
+        );
+    }
+
+    #[test]
+    fn every_plot_labels_both_axes_and_keeps_its_legend_outside_the_data() {
+        let dir = TempDir::new().unwrap();
+        let p = |n: &str| dir.path().join(format!("{n}.png"));
+        let narrow: Vec<Series> = (0..3)
+            .map(|k| Series {
+                label: format!("{} MPa", 85 + 10 * k),
+                points: (0..30)
+                    .map(|i| (i as f64 / 29.0, 1e-7 * ((i + k) as f64).sin()))
+                    .collect(),
+            })
+            .collect();
+        let drawings = [
+            (
+                "creep",
+                creep_curves(&p("creep"), "t", &example_curves()).unwrap(),
+            ),
+            (
+                "residuals",
+                residuals(&p("res"), "t", &narrow, "t / t_f", "predicted − measured").unwrap(),
+            ),
+            (
+                "waterfall",
+                waterfall(&p("water"), "t", &[1e-3, 2e-3, 5e-1, f64::NAN]).unwrap(),
+            ),
+            (
+                "parameters",
+                parameters(
+                    &p("par"),
+                    "t",
+                    &["A".to_string(), "B".to_string()],
+                    &[vec![0.2, 0.9], vec![0.3, 0.8], vec![0.5, 0.5]],
+                )
+                .unwrap(),
+            ),
+        ];
+        for (what, d) in &drawings {
+            assert!(d.x_labels.len() >= 2, "{what}: x labels {:?}", d.x_labels);
+            assert!(d.y_labels.len() >= 2, "{what}: y labels {:?}", d.y_labels);
+            let ((px0, px1), (py0, py1)) = d.plot_px;
+            assert!(
+                px1 - px0 > 500 && py1 - py0 > 400,
+                "{what}: plot area {:?}",
+                d.plot_px
+            );
+            let ((lx0, lx1), (ly0, ly1)) = d.legend_px.expect("a legend");
+            assert!(
+                lx0 >= px1,
+                "{what}: legend {:?} overlaps the plot {:?}",
+                d.legend_px,
+                d.plot_px
+            );
+            assert!(
+                lx1 <= WIDTH as i32 && ly0 < ly1 && ly1 <= HEIGHT as i32,
+                "{what}"
+            );
+        }
+        // The narrow residual range (1e-7 wide) still gets distinct labels.
+        let res = &drawings[1].1;
+        let mut labels = res.y_labels.clone();
+        labels.dedup();
+        assert_eq!(labels.len(), res.y_labels.len());
     }
 
     #[test]

@@ -6,6 +6,7 @@ use std::path::Path;
 use serde_json::{json, Value};
 
 use super::journal::{Header, Solution};
+use super::Coverage;
 use crate::error::Result;
 use crate::report::plot::{plot_parameters, plot_waterfall};
 use crate::report::tables::{jnum, num, write_csv, write_text};
@@ -245,7 +246,14 @@ fn w_text(w: &[f64]) -> String {
 }
 
 /// Write `ranked.csv`, `minima.csv`, `summary.json` and the plots.
-pub fn write(header: &Header, a: &Analysis, out: &Path, wall_s: f64, threads: usize) -> Result<()> {
+pub fn write(
+    header: &Header,
+    a: &Analysis,
+    out: &Path,
+    wall_s: f64,
+    threads: usize,
+    coverage: &Coverage,
+) -> Result<()> {
     let mut head: Vec<&str> = vec![
         "rank",
         "start_id",
@@ -307,16 +315,13 @@ pub fn write(header: &Header, a: &Analysis, out: &Path, wall_s: f64, threads: us
 
     write_text(
         &out.join("summary.json"),
-        &serde_json::to_string_pretty(&summary(header, a, wall_s, threads)).expect("plain JSON"),
+        &serde_json::to_string_pretty(&summary(header, a, wall_s, threads, coverage))
+            .expect("plain JSON"),
     )?;
 
-    // Plots last: a failure is reported but loses nothing.
-    let objs: Vec<f64> = a
-        .ranked
-        .iter()
-        .filter(|s| s.ok())
-        .map(|s| s.objective)
-        .collect();
+    // Plots last: a failure is reported but loses nothing. The waterfall gets every fit,
+    // failed ones (no objective, ranked last) included, so that its counts add up.
+    let objs: Vec<f64> = a.ranked.iter().map(|s| s.objective).collect();
     let scaled: Vec<Vec<f64>> = a
         .ranked
         .iter()
@@ -355,8 +360,15 @@ fn constants_json(header: &Header, p: &[f64]) -> Value {
     Value::Object(m)
 }
 
-/// `summary.json` of a sweep.
-pub fn summary(header: &Header, a: &Analysis, wall_s: f64, threads: usize) -> Value {
+/// `summary.json` of a sweep. `complete` says whether every fit of the sweep is in it;
+/// `missing` lists the shards left out (see [`super::MissingShard`]).
+pub fn summary(
+    header: &Header,
+    a: &Analysis,
+    wall_s: f64,
+    threads: usize,
+    coverage: &Coverage,
+) -> Value {
     let sol_json = |i: usize| {
         let s = &a.ranked[i];
         json!({
@@ -393,6 +405,8 @@ pub fn summary(header: &Header, a: &Analysis, wall_s: f64, threads: usize) -> Va
         "extra_start": header.extra_start,
         "seed": header.seed,
         "w_candidates": header.w.len(),
+        "complete": coverage.complete,
+        "missing": coverage.missing,
         "fits": a.ranked.len(),
         "completed": a.completed,
         "failed": a.failed,

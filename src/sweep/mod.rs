@@ -5,11 +5,13 @@
 //! Reproducible and resumable: all starts are drawn serially from one seed before any
 //! parallel work, every fit is deterministic, and each finished fit is appended (flushed) to
 //! `journal.jsonl` in the output folder. A rerun on the same folder computes only what is
-//! missing; `--shard I/N` computes the starts with `start_id % N == I − 1`; [`merge`] unites
-//! shard journals. The final files are a function of the set of solutions alone, so they are
+//! missing; `--shard I/N` computes the starts with `start_id % N == I − 1` (`--shard auto`
+//! takes I and N from a scheduler's job array, [`array`]); [`merge`] unites the shard
+//! journals, also of an incomplete set. The final files are a function of the set of solutions alone, so they are
 //! identical for any thread count, shard split or interruption history.
 
 mod analysis;
+pub mod array;
 mod journal;
 
 pub use analysis::{analyse, Analysis, Cluster, Spread};
@@ -24,6 +26,7 @@ use std::time::Instant;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
+use serde::Serialize;
 
 use crate::config::RunConfig;
 use crate::data::Dataset;
@@ -50,6 +53,38 @@ pub struct SweepOptions {
     pub stop_after: Option<usize>,
     /// Show a progress bar (only drawn when stderr is a terminal).
     pub progress: bool,
+}
+
+/// The part of a sweep the command line asks for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ShardArg {
+    /// `--shard I/N`: the I-th (1-based) of N parts.
+    Part(usize, usize),
+    /// `--shard auto`: I and N from the job array's environment ([`array::shard_from_env`]).
+    Auto,
+}
+
+/// Folder of shard I of N inside a sweep folder: `shard-I-of-N`.
+pub fn shard_dir(sweep_dir: &Path, (i, n): (usize, usize)) -> PathBuf {
+    sweep_dir.join(format!("shard-{i}-of-{n}"))
+}
+
+/// Where a sweep part writes, from the resolved shard and the command line's `--out`:
+/// unsharded runs and `--shard I/N --out DIR` write into `--out` (default `default_dir`);
+/// `--shard auto` writes into `shard-I-of-N/` inside it, so that every task of an array can
+/// share one command line; `--shard I/N` without `--out` into `default_dir/shard-I-of-N/`.
+pub fn part_dir(
+    shard: Option<(usize, usize)>,
+    auto: bool,
+    out: Option<PathBuf>,
+    default_dir: PathBuf,
+) -> PathBuf {
+    match (shard, out) {
+        (None, out) => out.unwrap_or(default_dir),
+        (Some(s), Some(out)) if auto => shard_dir(&out, s),
+        (Some(_), Some(out)) => out,
+        (Some(s), None) => shard_dir(&default_dir, s),
+    }
 }
 
 /// Set by the SIGINT handler: no new fits start, running ones finish and are journaled.
@@ -278,10 +313,7 @@ pub fn run_sweep(cfg: &RunConfig, data: &Dataset, opts: &SweepOptions) -> Result
     let new = new.into_inner().unwrap();
     let computed = new.len();
     solutions.extend(new);
-    let total_part = (0..plan.starts.len())
-        .filter(|s| s % shard_n == shard_i - 1)
-        .count()
-        * plan.ws.len();
+    let total_part = shard_fits(&plan.header, (shard_i, shard_n));
     let missing = total_part - solutions.len();
     Ok((
         plan,
@@ -310,49 +342,209 @@ fn progress_bar(len: usize, enabled: bool) -> indicatif::ProgressBar {
     bar
 }
 
-/// Read the journals of shard folders, check they belong to one sweep and together cover it,
-/// and return the unsharded header and all solutions.
-pub fn merge(dirs: &[PathBuf]) -> Result<(Header, Vec<Solution>)> {
-    let mut header: Option<Header> = None;
-    let mut all = Vec::new();
-    let mut shards_seen = std::collections::BTreeSet::new();
+/// How far a shard's fits got, for a shard that is not (wholly) in a result.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ShardState {
+    /// Its journal holds some but not all of its fits (an interrupted or failed task).
+    Incomplete,
+    /// None of the folders holds its journal (a task that never started, or whose folder
+    /// was not given).
+    Absent,
+}
+
+/// A shard that the result leaves out: summary.json's `missing` entries.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MissingShard {
+    /// I of `--shard I/N`.
+    pub shard: usize,
+    /// N of `--shard I/N`.
+    pub of: usize,
+    pub state: ShardState,
+    /// Fits its journal holds.
+    pub fits_done: usize,
+    /// Fits the shard has in all.
+    pub fits_expected: usize,
+    /// Its folder, where one was found.
+    pub dir: Option<PathBuf>,
+}
+
+/// How much of the sweep a result covers: summary.json's `complete` (every fit of the sweep
+/// is in it) and `missing` (the shards left out).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Coverage {
+    pub complete: bool,
+    pub missing: Vec<MissingShard>,
+}
+
+/// Number of fits of shard `i` of `n` (1-based `i`): its starts (`start_id % n == i − 1`) × w.
+pub fn shard_fits(header: &Header, (i, n): (usize, usize)) -> usize {
+    (0..header.n_starts_total())
+        .filter(|s| s % n == i - 1)
+        .count()
+        * header.w.len()
+}
+
+/// The coverage of one sweep run's folder, shard `(i, n)` of which holds `done` fits: the
+/// shard itself if unfinished, and the other shards, which are absent from it.
+pub fn part_coverage(header: &Header, (i, n): (usize, usize), done: usize, dir: &Path) -> Coverage {
+    let mut missing = Vec::new();
+    for k in 1..=n {
+        let expected = shard_fits(header, (k, n));
+        let (state, fits_done, dir) = if k == i {
+            (ShardState::Incomplete, done, Some(dir.to_path_buf()))
+        } else {
+            (ShardState::Absent, 0, None)
+        };
+        if fits_done < expected {
+            missing.push(MissingShard {
+                shard: k,
+                of: n,
+                state,
+                fits_done,
+                fits_expected: expected,
+                dir,
+            });
+        }
+    }
+    Coverage {
+        complete: missing.is_empty(),
+        missing,
+    }
+}
+
+/// What [`merge`] found: the unsharded header, the solutions of the complete shards, and
+/// what is left out.
+#[derive(Debug, Clone)]
+pub struct Merged {
+    /// The sweep's header, shard set to 1/1.
+    pub header: Header,
+    /// All solutions of the complete shards.
+    pub solutions: Vec<Solution>,
+    /// The complete shards that entered the result: (I, folder).
+    pub merged: Vec<(usize, PathBuf)>,
+    /// Incomplete and absent shards.
+    pub coverage: Coverage,
+    /// Folders given that hold no journal (or an empty one): skipped.
+    pub skipped: Vec<PathBuf>,
+}
+
+/// Read the journals of shard folders, check they belong to one sweep (the same fingerprint
+/// and the same N), and unite the shards whose journals hold all of their fits. Incomplete
+/// shards (an interrupted task) are left out whole, so the result is a function of the set
+/// of complete shards alone; they and the shards no folder holds are listed in the returned
+/// coverage. A folder without a journal (or with an empty one, a task killed at its start)
+/// is skipped and listed.
+pub fn merge(dirs: &[PathBuf]) -> Result<Merged> {
+    let mut header: Option<(Header, &PathBuf)> = None;
+    let mut parts: std::collections::BTreeMap<usize, (&PathBuf, Vec<Solution>)> =
+        Default::default();
+    let mut skipped = Vec::new();
     for d in dirs {
         let path = d.join(journal::FILE);
-        let (h, sols) = journal::read(&path)?
-            .ok_or_else(|| Error::Invalid(format!("{}: no sweep journal here", path.display())))?;
-        if let Some(h0) = &header {
+        let empty = std::fs::metadata(&path).is_ok_and(|m| m.len() == 0);
+        let Some((h, sols)) = (if empty { None } else { journal::read(&path)? }) else {
+            skipped.push(d.clone());
+            continue;
+        };
+        if let Some((h0, d0)) = &header {
             if h0.fingerprint != h.fingerprint {
                 return Err(Error::Invalid(format!(
-                    "{}: a different sweep than {}",
+                    "{}: a different sweep than {} (configuration, data, starts or seed differ)",
                     path.display(),
-                    dirs[0].display()
+                    d0.display()
+                )));
+            }
+            if h0.shard.1 != h.shard.1 {
+                return Err(Error::Invalid(format!(
+                    "{}: shard {}/{} of a split into {} parts, but {} holds shard {}/{}",
+                    path.display(),
+                    h.shard.0,
+                    h.shard.1,
+                    h.shard.1,
+                    d0.display(),
+                    h0.shard.0,
+                    h0.shard.1
                 )));
             }
         }
-        if !shards_seen.insert(h.shard) {
+        let (i, n) = h.shard;
+        if i == 0 || n == 0 || i > n {
+            return Err(Error::data(
+                &path,
+                1,
+                format!("shard {i}/{n}: need 1 <= I <= N"),
+            ));
+        }
+        if let Some(s) = sols.iter().find(|s| {
+            s.start_id % n != i - 1 || s.start_id >= h.n_starts_total() || s.w_idx >= h.w.len()
+        }) {
+            return Err(Error::data(
+                &path,
+                0,
+                format!(
+                    "holds start {} at w index {}, which is not a fit of shard {i}/{n}",
+                    s.start_id, s.w_idx
+                ),
+            ));
+        }
+        if let Some((other, _)) = parts.get(&i) {
             return Err(Error::Invalid(format!(
-                "{}: shard {}/{} given twice",
+                "{}: shard {i}/{n} given twice (also {})",
                 path.display(),
-                h.shard.0,
-                h.shard.1
+                other.display()
             )));
         }
-        all.extend(sols);
-        header.get_or_insert(h);
+        parts.insert(i, (d, sols));
+        header.get_or_insert((h, d));
     }
-    let mut header =
-        header.ok_or_else(|| Error::Invalid("merge needs at least one folder".into()))?;
-    let mut keys = std::collections::HashSet::new();
-    all.retain(|s| keys.insert((s.start_id, s.w_idx)));
-    let expected = header.n_starts_total() * header.w.len();
-    if all.len() != expected {
-        return Err(Error::Invalid(format!(
-            "the shards hold {} of the sweep's {expected} fits: a shard is missing or unfinished",
-            all.len()
-        )));
+    let (mut header, _) = header.ok_or_else(|| {
+        Error::Invalid(format!(
+            "none of the {} folder(s) holds a sweep journal ({})",
+            dirs.len(),
+            journal::FILE
+        ))
+    })?;
+    let n = header.shard.1;
+    let mut solutions = Vec::new();
+    let mut merged = Vec::new();
+    let mut missing = Vec::new();
+    for i in 1..=n {
+        let expected = shard_fits(&header, (i, n));
+        match parts.remove(&i) {
+            Some((d, sols)) if sols.len() == expected => {
+                solutions.extend(sols);
+                merged.push((i, d.clone()));
+            }
+            Some((d, sols)) => missing.push(MissingShard {
+                shard: i,
+                of: n,
+                state: ShardState::Incomplete,
+                fits_done: sols.len(),
+                fits_expected: expected,
+                dir: Some(d.clone()),
+            }),
+            None => missing.push(MissingShard {
+                shard: i,
+                of: n,
+                state: ShardState::Absent,
+                fits_done: 0,
+                fits_expected: expected,
+                dir: None,
+            }),
+        }
     }
     header.shard = (1, 1);
-    Ok((header, all))
+    Ok(Merged {
+        header,
+        solutions,
+        merged,
+        coverage: Coverage {
+            complete: missing.is_empty(),
+            missing,
+        },
+        skipped,
+    })
 }
 
 /// Write the final files of a (complete or partial) set of solutions into `out`.
@@ -362,8 +554,31 @@ pub fn write_outputs(
     out: &Path,
     wall_s: f64,
     threads: usize,
+    coverage: &Coverage,
 ) -> Result<Analysis> {
     let analysis = analyse(header, solutions);
-    analysis::write(header, &analysis, out, wall_s, threads)?;
+    analysis::write(header, &analysis, out, wall_s, threads, coverage)?;
     Ok(analysis)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn where_a_part_writes() {
+        let d = || PathBuf::from("results/x/sweep");
+        let o = || Some(PathBuf::from("o"));
+        let cases = [
+            (None, false, None, "results/x/sweep"),
+            (None, false, o(), "o"),
+            (Some((2, 3)), false, None, "results/x/sweep/shard-2-of-3"),
+            (Some((2, 3)), false, o(), "o"),
+            (Some((2, 3)), true, None, "results/x/sweep/shard-2-of-3"),
+            (Some((2, 3)), true, o(), "o/shard-2-of-3"),
+        ];
+        for (shard, auto, out, want) in cases {
+            assert_eq!(part_dir(shard, auto, out, d()), PathBuf::from(want));
+        }
+    }
 }
