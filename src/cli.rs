@@ -5,16 +5,18 @@ use std::path::{Path, PathBuf};
 
 use clap::{Parser, Subcommand};
 
-use crate::config::RunConfig;
-use crate::data::{self, Dataset};
+use crate::config::{Overrides, RunConfig, RunOptions, StartChoice};
+use crate::data::Dataset;
 use crate::diagnose::{diagnose, DiagnoseOptions};
-use crate::error::Result;
-use crate::fit::{run_fit_with, FitRequest, StartChoice};
+use crate::error::{Error, Result};
+use crate::fit::{run_fit, FitSettings};
 use crate::model::{build, Load};
+use crate::objective::Objective;
 use crate::ode::OdeOptions;
+use crate::output::lock_folder;
 use crate::report::plot::{plot_creep_curves, plot_residuals, CurvePlot, Series};
-use crate::report::tables::{self, default_out, ensure_dir, num, write_csv, write_text};
-use crate::sweep::{self, SweepOptions};
+use crate::report::tables::{self, num, write_csv, write_text};
+use crate::sweep;
 
 /// creepfit: calibrate creep-damage constitutive equations against measured creep curves.
 #[derive(Debug, Parser)]
@@ -103,14 +105,37 @@ pub enum Command {
     },
 }
 
-/// Load a configuration and its data.
-pub fn load(config: &Path) -> Result<(RunConfig, Dataset)> {
-    let cfg = RunConfig::load(config)?;
-    let data = data::load(&cfg.curves, &cfg.ruptures, &cfg.load_options())?;
-    for w in &data.warnings {
+/// Resolve the run configuration (file + command line) and load its data: the one place
+/// the binary builds them.
+pub fn load(config: &Path, cli: &Overrides) -> Result<(RunConfig, Dataset)> {
+    let (cfg, data) = RunConfig::resolve(config, cli)?;
+    for w in cfg.warnings.iter().chain(&data.warnings) {
         eprintln!("warning: {w}");
     }
     Ok((cfg, data))
+}
+
+/// Command-line settings that only say where the outputs go.
+fn out_only(out: Option<PathBuf>) -> Overrides {
+    Overrides {
+        run: RunOptions {
+            out,
+            ..RunOptions::default()
+        },
+        ..Overrides::default()
+    }
+}
+
+/// `Ok` if every plot was written, else the error saying the numbers are in `out`.
+fn plots_done(out: &Path, failures: Vec<String>) -> Result<()> {
+    if failures.is_empty() {
+        Ok(())
+    } else {
+        Err(Error::PlotsNotWritten {
+            out: out.to_path_buf(),
+            failures,
+        })
+    }
 }
 
 /// Run a parsed command line.
@@ -121,13 +146,20 @@ pub fn run(cli: Cli) -> Result<()> {
             out,
             start,
             w,
-        } => fit(&config, out, &FitRequest { starts: start, w }),
+        } => {
+            let cli = Overrides {
+                w,
+                fit_starts: Some(start),
+                ..out_only(out)
+            };
+            fit(&config, &cli)
+        }
         Command::Simulate {
             config,
             constants,
             out,
             w,
-        } => simulate(&config, constants, out, w),
+        } => simulate(&config, constants, &out_only(out), w),
         Command::Sweep {
             config,
             starts,
@@ -137,17 +169,20 @@ pub fn run(cli: Cli) -> Result<()> {
             out,
             stop_after,
         } => {
-            let (cfg, data) = load(&config)?;
-            let opts = SweepOptions {
-                starts: starts.unwrap_or(cfg.sweep.starts),
-                seed: seed.unwrap_or(cfg.sweep.seed),
-                threads,
-                shard,
-                out: out.unwrap_or_else(|| default_out(&cfg.name, "sweep")),
-                stop_after,
-                progress: true,
+            let cli = Overrides {
+                starts,
+                seed,
+                run: RunOptions {
+                    out,
+                    threads,
+                    shard,
+                    stop_after,
+                    progress: true,
+                },
+                ..Overrides::default()
             };
-            sweep_cmd(&cfg, &data, &opts)
+            let (cfg, data) = load(&config, &cli)?;
+            sweep_cmd(&cfg, &data)
         }
         Command::Merge { dirs, out } => merge_cmd(&dirs, &out),
         Command::Diagnose {
@@ -155,15 +190,15 @@ pub fn run(cli: Cli) -> Result<()> {
             out,
             starts,
             seed,
-        } => diagnose_cmd(&config, out, &DiagnoseOptions { starts, seed }),
+        } => diagnose_cmd(&config, &out_only(out), &DiagnoseOptions { starts, seed }),
     }
 }
 
-fn diagnose_cmd(config: &Path, out: Option<PathBuf>, opts: &DiagnoseOptions) -> Result<()> {
-    let (cfg, data) = load(config)?;
+fn diagnose_cmd(config: &Path, cli: &Overrides, opts: &DiagnoseOptions) -> Result<()> {
+    let (cfg, data) = load(config, cli)?;
+    let out = cfg.out_dir("diagnose");
+    let _lock = lock_folder(&out)?;
     let d = diagnose(&cfg, &data, opts)?;
-    let out = out.unwrap_or_else(|| default_out(&cfg.name, "diagnose"));
-    ensure_dir(&out)?;
     write_text(
         &out.join("diagnosis.json"),
         &serde_json::to_string_pretty(&d).expect("JSON of plain values"),
@@ -171,6 +206,7 @@ fn diagnose_cmd(config: &Path, out: Option<PathBuf>, opts: &DiagnoseOptions) -> 
     let md = crate::diagnose::report_md(&cfg, &d);
     write_text(&out.join("report.md"), &md)?;
     // Residual plots of the base model and of the chosen (else best-BIC) extension.
+    let mut failures = Vec::new();
     let chosen = d
         .candidates
         .iter()
@@ -184,7 +220,7 @@ fn diagnose_cmd(config: &Path, out: Option<PathBuf>, opts: &DiagnoseOptions) -> 
         };
         let model = build(&cfg.model, &exts)?;
         let x: Vec<f64> = c.constants.iter().map(|p| p.1).collect();
-        let settings = crate::fit::FitSettings::from_config(&cfg);
+        let settings = FitSettings::from_config(&cfg);
         let obj = crate::diagnose::objective(model.as_ref(), &data.curves, &settings);
         let ev = obj.evaluate(&x);
         let series: Vec<Series> = data
@@ -211,12 +247,12 @@ fn diagnose_cmd(config: &Path, out: Option<PathBuf>, opts: &DiagnoseOptions) -> 
             "t / t_f",
             "measured − predicted, % of rupture strain",
         ) {
-            eprintln!("warning: {e}");
+            failures.push(e.to_string());
         }
     }
     print!("{md}");
     println!("wrote {}", out.display());
-    Ok(())
+    plots_done(&out, failures)
 }
 
 fn parse_shard(s: &str) -> std::result::Result<(usize, usize), String> {
@@ -235,12 +271,14 @@ fn parse_shard(s: &str) -> std::result::Result<(usize, usize), String> {
     Ok((i, n))
 }
 
-fn sweep_cmd(cfg: &RunConfig, data: &Dataset, opts: &SweepOptions) -> Result<()> {
+fn sweep_cmd(cfg: &RunConfig, data: &Dataset) -> Result<()> {
     sweep::install_sigint_handler();
-    let (plan, run) = sweep::run_sweep(cfg, data, opts)?;
+    let out = cfg.out_dir("sweep");
+    let (plan, run) = sweep::run_sweep(cfg, data)?;
     let mut header = plan.header.clone();
-    header.shard = opts.shard.unwrap_or((1, 1));
-    let a = sweep::write_outputs(&header, &run.solutions, &opts.out, run.wall_s, run.threads)?;
+    header.shard = cfg.run.shard.unwrap_or((1, 1));
+    let (a, failures) =
+        sweep::write_outputs(&header, &run.solutions, &out, run.wall_s, run.threads)?;
     print_sweep(&header, &a);
     println!(
         "{} fits computed now in {:.1} s on {} threads ({:.2} fits/s); {} in the folder",
@@ -251,24 +289,24 @@ fn sweep_cmd(cfg: &RunConfig, data: &Dataset, opts: &SweepOptions) -> Result<()>
         run.solutions.len()
     );
     if run.missing > 0 {
-        return Err(crate::Error::Invalid(format!(
-            "interrupted: {} of {} fits missing; rerun the same command to resume ({})",
+        return Err(Error::Invalid(format!(
+            "interrupted: {} of {} fits missing (summary.json: \"complete\": false); rerun the same command to resume ({})",
             run.missing,
             run.missing + run.solutions.len(),
-            opts.out.display()
+            out.display()
         )));
     }
-    println!("wrote {}", opts.out.display());
-    Ok(())
+    println!("wrote {}", out.display());
+    plots_done(&out, failures)
 }
 
 fn merge_cmd(dirs: &[PathBuf], out: &Path) -> Result<()> {
     let (header, sols) = sweep::merge(dirs)?;
-    ensure_dir(out)?;
-    let a = sweep::write_outputs(&header, &sols, out, 0.0, 0)?;
+    let _lock = lock_folder(out)?;
+    let (a, failures) = sweep::write_outputs(&header, &sols, out, 0.0, 0)?;
     print_sweep(&header, &a);
     println!("merged {} folders into {}", dirs.len(), out.display());
-    Ok(())
+    plots_done(out, failures)
 }
 
 fn print_sweep(h: &sweep::Header, a: &sweep::Analysis) {
@@ -339,11 +377,11 @@ fn dense_grid(t_end: f64, n: usize) -> Vec<f64> {
     g
 }
 
-fn fit(config: &Path, out: Option<PathBuf>, req: &FitRequest) -> Result<()> {
-    let (cfg, data) = load(config)?;
-    let run = run_fit_with(&cfg, &data, req)?;
-    let out = out.unwrap_or_else(|| default_out(&cfg.name, "fit"));
-    ensure_dir(&out)?;
+fn fit(config: &Path, cli: &Overrides) -> Result<()> {
+    let (cfg, data) = load(config, cli)?;
+    let out = cfg.out_dir("fit");
+    let _lock = lock_folder(&out)?;
+    let run = run_fit(&cfg, &data)?;
     let best = &run.fits[run.best];
     let curves = &data.curves;
     tables::write_constants(
@@ -355,7 +393,7 @@ fn fit(config: &Path, out: Option<PathBuf>, req: &FitRequest) -> Result<()> {
     let rows = tables::error_rows(best, curves);
     tables::write_errors(&out.join("errors.csv"), &rows)?;
     tables::write_fit_curves(&out.join("curves.csv"), best, curves)?;
-    let summary = tables::fit_summary(&run, curves);
+    let summary = tables::fit_summary(&cfg, &run, curves);
     write_text(
         &out.join("summary.json"),
         &serde_json::to_string_pretty(&summary).expect("JSON of plain values"),
@@ -401,18 +439,16 @@ fn fit(config: &Path, out: Option<PathBuf>, req: &FitRequest) -> Result<()> {
         &run.settings.ode,
         run.model.as_ref(),
     );
-    match plot_creep_curves(
+    let plotted = plot_creep_curves(
         &plot_path,
         &format!("{} — measured (points) and fitted (lines)", cfg.name),
         &plots,
-    ) {
-        Ok(()) => println!("wrote {}", out.display()),
-        Err(e) => {
-            eprintln!("warning: plot not written: {e}");
-            println!("wrote {} (without plot)", out.display());
-        }
-    }
-    Ok(())
+    );
+    println!("wrote {}", out.display());
+    plots_done(
+        &out,
+        plotted.err().map(|e| e.to_string()).into_iter().collect(),
+    )
 }
 
 /// Measured points and dense predicted curves for a plot.
@@ -458,27 +494,31 @@ fn curve_plots(
 fn simulate(
     config: &Path,
     constants: Option<PathBuf>,
-    out: Option<PathBuf>,
+    cli: &Overrides,
     w: Option<f64>,
 ) -> Result<()> {
-    let (cfg, data) = load(config)?;
+    if let Some(w) = w {
+        if !(0.0..=1.0).contains(&w) {
+            return Err(Error::Invalid(format!(
+                "--w: must be a weight in [0, 1], not {w}"
+            )));
+        }
+    }
+    let (cfg, data) = load(config, cli)?;
     let model = build(&cfg.model, &cfg.extensions)?;
     let params = match constants {
         Some(path) => tables::read_constants(&path, model.as_ref())?,
         None => cfg.starts_all_given().ok_or_else(|| {
-            crate::Error::config(
+            Error::config(
                 &cfg.path,
                 "simulate needs --constants FILE or a start value for every constant",
             )
         })?,
     };
-    let out = out.unwrap_or_else(|| default_out(&cfg.name, "simulate"));
-    ensure_dir(&out)?;
-    let ode = OdeOptions {
-        rtol: cfg.solver.rtol,
-        atol: cfg.solver.atol,
-        ..OdeOptions::default()
-    };
+    let out = cfg.out_dir("simulate");
+    let _lock = lock_folder(&out)?;
+    let settings = FitSettings::from_config(&cfg);
+    let ode = settings.ode;
     let names = model.state_names();
     let idx = |n: &str| names.iter().position(|s| *s == n);
     let (ih, iphi, iom) = (idx("H"), idx("Phi"), idx("omega"));
@@ -565,14 +605,12 @@ fn simulate(
         &rupture_rows,
     )?;
     if let Some(w) = w {
-        let objective = crate::objective::Objective {
-            model: model.as_ref(),
-            curves: &data.curves,
-            w: vec![w; data.curves.len()],
-            lifetime: cfg.objective.lifetime_term,
-            omega_f: cfg.objective.omega_f,
-            ode,
-        };
+        let objective = Objective::new(
+            model.as_ref(),
+            &data.curves,
+            vec![w; data.curves.len()],
+            settings.objective(),
+        );
         let e = objective.evaluate(&params);
         println!(
             "objective {:.12e} at w = {w} (normalised residual {:.12e})",
@@ -590,13 +628,14 @@ fn simulate(
         )?;
     }
     let plots = curve_plots(&cfg, &data, &params, &ode, model.as_ref());
-    if let Err(e) = plot_creep_curves(
+    let plotted = plot_creep_curves(
         &out.join("simulate.png"),
         &format!("{} — simulated", cfg.name),
         &plots,
-    ) {
-        eprintln!("warning: plot not written: {e}");
-    }
+    );
     println!("wrote {}", out.display());
-    Ok(())
+    plots_done(
+        &out,
+        plotted.err().map(|e| e.to_string()).into_iter().collect(),
+    )
 }

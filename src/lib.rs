@@ -16,10 +16,12 @@ pub mod dual;
 pub mod error;
 pub mod fit;
 pub mod guess;
+pub mod identity;
 pub mod lsq;
 pub mod model;
 pub mod objective;
 pub mod ode;
+pub mod output;
 pub mod report;
 pub mod sweep;
 

@@ -161,6 +161,11 @@ const CURVES: &str = "temperature_C,stress_MPa,time_h,strain_pct\n\
                       600,100,0,0\n600,100,10,1\n600,100,20,2\n600,100,24,4\n\
                       600,120,0,0\n600,120,5,1\n600,120,10,2\n600,120,12,4\n";
 const RUPTURES: &str = "temperature_C,stress_MPa,rupture_time_h\n600,100,25\n600,120,12.5\n";
+/// Every base-model constant needs its bounds in [constants] (a missing one is an error).
+const CONSTANTS: &str = "[constants]\n\
+    A = { lb = 1e-10, ub = 1e-6, scale = \"log\" }\nB = { lb = 0.05, ub = 0.2 }\n\
+    Hstar = { lb = 0.3, ub = 0.8 }\nh = { lb = 1e3, ub = 3e5, scale = \"log\" }\n\
+    Kc = { lb = 1e-6, ub = 1e-3, scale = \"log\" }\nC = { lb = 1, ub = 20 }\n";
 const CONFIG: &str = "name = \"bad\"\ncurves = \"curves.csv\"\nruptures = \"ruptures.csv\"\n";
 
 /// Run `fit` on a folder with the given files; return stderr, asserting the contract.
@@ -168,9 +173,15 @@ fn fails(files: &[(&str, &str)], config_extra: &str) -> String {
     let dir = TempDir::new().unwrap();
     std::fs::write(dir.path().join("curves.csv"), CURVES).unwrap();
     std::fs::write(dir.path().join("ruptures.csv"), RUPTURES).unwrap();
+    // config_extra may hold a [constants] table of its own; the others come after it
+    let constants = if config_extra.contains("[constants]") {
+        ""
+    } else {
+        CONSTANTS
+    };
     std::fs::write(
         dir.path().join("run.toml"),
-        format!("{CONFIG}{config_extra}"),
+        format!("{CONFIG}{config_extra}{constants}"),
     )
     .unwrap();
     for (name, text) in files {
@@ -211,7 +222,7 @@ fn missing_data_file() {
     let e = fails(
         &[(
             "run.toml",
-            "curves = \"nope.csv\"\nruptures = \"ruptures.csv\"\n",
+            &format!("curves = \"nope.csv\"\nruptures = \"ruptures.csv\"\n{CONSTANTS}"),
         )],
         "",
     );

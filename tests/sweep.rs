@@ -53,8 +53,13 @@ fn outputs_and_failed_starts() {
     let (d, ranked, minima) = reference();
     let lines: Vec<&str> = ranked.lines().collect();
     assert!(lines[0].starts_with(
-        "rank,start_id,w,objective,norm_residual,lifetime_err_pct,min_rate_err_pct,status,iterations,evaluations,cluster,pareto,A,B,Hstar,h,Kc,C"
+        "rank,start_id,w,objective,norm_residual,lifetime_err_pct,mean_abs_lifetime_err_pct,min_rate_err_pct,mean_abs_min_rate_err_pct,status,iterations,evaluations,cluster,pareto,A,B,Hstar,h,Kc,C"
     ));
+    // The contract's names and the unambiguous ones hold the same means of absolute errors.
+    for l in &lines[1..] {
+        let f: Vec<&str> = l.split(',').collect();
+        assert_eq!((f[5], f[7]), (f[6], f[8]), "{l}");
+    }
     // 8 LHS starts + the configured start, × 2 weights: every pair is a row.
     assert_eq!(lines.len(), 1 + 9 * 2);
     let failed = lines
@@ -208,5 +213,12 @@ fn a_different_sweep_in_the_same_folder_is_refused() {
     ok(&sweep(d.path(), &["--threads", "2", "--starts", "2"]));
     let o = sweep(d.path(), &["--threads", "2", "--starts", "3"]);
     assert!(!o.status.success());
-    assert!(String::from_utf8_lossy(&o.stderr).contains("different sweep"));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains(
+            "journal.jsonl: this folder holds a sweep with sweep.starts = 2, the configuration asks for 3; use another --out or delete the folder"
+        ),
+        "{err}"
+    );
+    assert_eq!(err.lines().count(), 1, "{err}");
 }

@@ -161,14 +161,12 @@ pub fn objective<'a>(
     curves: &'a [Curve],
     settings: &FitSettings,
 ) -> Objective<'a> {
-    Objective {
+    Objective::new(
         model,
         curves,
-        w: vec![SELECTION_W; curves.len()],
-        lifetime: settings.lifetime,
-        omega_f: settings.omega_f,
-        ode: settings.ode,
-    }
+        vec![SELECTION_W; curves.len()],
+        settings.objective(),
+    )
 }
 
 /// Leave-one-stress-out: (RMS of held-out normalised strain residuals, mean |held-out

@@ -244,8 +244,22 @@ fn w_text(w: &[f64]) -> String {
     w.iter().map(|v| num(*v)).collect::<Vec<_>>().join(";")
 }
 
-/// Write `ranked.csv`, `minima.csv`, `summary.json` and the plots.
-pub fn write(header: &Header, a: &Analysis, out: &Path, wall_s: f64, threads: usize) -> Result<()> {
+/// Write `ranked.csv`, `minima.csv`, `summary.json` (which lists the `missing` (start_id,
+/// w_idx) pairs), then the plots; returns the plots that could not be written (`plot PATH:
+/// why`), after every numeric file is in place.
+///
+/// `ranked.csv`'s `lifetime_err_pct` and `min_rate_err_pct` are means of absolute per-curve
+/// errors (the DESIGN contract's names, kept); `mean_abs_lifetime_err_pct` and
+/// `mean_abs_min_rate_err_pct` repeat them under names that cannot be mistaken for the
+/// signed per-curve errors of `errors.csv`.
+pub fn write(
+    header: &Header,
+    a: &Analysis,
+    missing: &[(usize, usize)],
+    out: &Path,
+    wall_s: f64,
+    threads: usize,
+) -> Result<Vec<String>> {
     let mut head: Vec<&str> = vec![
         "rank",
         "start_id",
@@ -253,7 +267,9 @@ pub fn write(header: &Header, a: &Analysis, out: &Path, wall_s: f64, threads: us
         "objective",
         "norm_residual",
         "lifetime_err_pct",
+        "mean_abs_lifetime_err_pct",
         "min_rate_err_pct",
+        "mean_abs_min_rate_err_pct",
         "status",
         "iterations",
         "evaluations",
@@ -273,6 +289,8 @@ pub fn write(header: &Header, a: &Analysis, out: &Path, wall_s: f64, threads: us
                 num(s.objective),
                 num(s.norm_residual),
                 num(s.lifetime_err_pct),
+                num(s.lifetime_err_pct),
+                num(s.min_rate_err_pct),
                 num(s.min_rate_err_pct),
                 s.status.clone(),
                 s.iterations.to_string(),
@@ -307,10 +325,12 @@ pub fn write(header: &Header, a: &Analysis, out: &Path, wall_s: f64, threads: us
 
     write_text(
         &out.join("summary.json"),
-        &serde_json::to_string_pretty(&summary(header, a, wall_s, threads)).expect("plain JSON"),
+        &serde_json::to_string_pretty(&summary(header, a, missing, wall_s, threads))
+            .expect("plain JSON"),
     )?;
 
-    // Plots last: a failure is reported but loses nothing.
+    // Plots last: a failure is reported after the numbers are safely in place.
+    let mut failures = Vec::new();
     let objs: Vec<f64> = a
         .ranked
         .iter()
@@ -334,7 +354,7 @@ pub fn write(header: &Header, a: &Analysis, out: &Path, wall_s: f64, threads: us
         &format!("{title}: sorted local minima"),
         &objs,
     ) {
-        eprintln!("warning: plot not written: {e}");
+        failures.push(e.to_string());
     }
     if let Err(e) = plot_parameters(
         &out.join("parameters.png"),
@@ -342,9 +362,9 @@ pub fn write(header: &Header, a: &Analysis, out: &Path, wall_s: f64, threads: us
         &header.names,
         &scaled,
     ) {
-        eprintln!("warning: plot not written: {e}");
+        failures.push(e.to_string());
     }
-    Ok(())
+    Ok(failures)
 }
 
 fn constants_json(header: &Header, p: &[f64]) -> Value {
@@ -355,8 +375,15 @@ fn constants_json(header: &Header, p: &[f64]) -> Value {
     Value::Object(m)
 }
 
-/// `summary.json` of a sweep.
-pub fn summary(header: &Header, a: &Analysis, wall_s: f64, threads: usize) -> Value {
+/// `summary.json` of a sweep; `missing` are the (start_id, w_idx) pairs of the sweep (or
+/// of its shard) without a solution: `complete` is true when there are none.
+pub fn summary(
+    header: &Header,
+    a: &Analysis,
+    missing: &[(usize, usize)],
+    wall_s: f64,
+    threads: usize,
+) -> Value {
     let sol_json = |i: usize| {
         let s = &a.ranked[i];
         json!({
@@ -388,6 +415,12 @@ pub fn summary(header: &Header, a: &Analysis, wall_s: f64, threads: usize) -> Va
     json!({
         "name": header.name,
         "model": header.model,
+        "extensions": header.extensions,
+        "run_id": header.fingerprint,
+        "shard": format!("{}/{}", header.shard.0, header.shard.1),
+        "complete": missing.is_empty(),
+        "missing_fits": missing.len(),
+        "missing": missing.iter().map(|(s, w)| json!({"start_id": s, "w_idx": w})).collect::<Vec<_>>(),
         "starts": header.n_starts_total(),
         "lhs_starts": header.n_starts,
         "extra_start": header.extra_start,
