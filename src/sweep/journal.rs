@@ -17,6 +17,9 @@ use crate::model::Scale;
 use crate::objective::ParamSpace;
 use crate::output;
 
+/// Key of the drawn start points' hash in a sweep's identity.
+const START_POINTS: &str = "sweep_start_points";
+
 /// File name of the journal in a sweep folder.
 pub const FILE: &str = "journal.jsonl";
 
@@ -69,7 +72,7 @@ impl Header {
         starts: &[Vec<f64>],
     ) -> Header {
         let mut id = identity(cfg);
-        id["sweep_start_points"] = Value::String(hash_value(&serde_json::json!(starts)));
+        id[START_POINTS] = Value::String(hash_value(&serde_json::json!(starts)));
         Header {
             fingerprint: hash_value(&id),
             identity: id,
@@ -103,13 +106,25 @@ impl Header {
         if other.identity.is_null() {
             return Some(("run identity".into(), self.fingerprint.clone(), old));
         }
-        first_difference(&self.identity, &other.identity).or_else(|| {
-            Some((
-                "run identity".into(),
-                self.fingerprint.clone(),
-                other.fingerprint.clone(),
-            ))
-        })
+        // The configuration's settings first, then what derives from them (start points)
+        // and the version, so that the message names the setting the user changed.
+        let settings = |v: &Value| {
+            let mut v = v.clone();
+            if let Value::Object(m) = &mut v {
+                m.remove(START_POINTS);
+                m.remove("version");
+            }
+            v
+        };
+        first_difference(&settings(&self.identity), &settings(&other.identity))
+            .or_else(|| first_difference(&self.identity, &other.identity))
+            .or_else(|| {
+                Some((
+                    "run identity".into(),
+                    self.fingerprint.clone(),
+                    other.fingerprint.clone(),
+                ))
+            })
     }
 
     /// Number of starts including the extra one.

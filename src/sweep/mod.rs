@@ -161,11 +161,6 @@ pub struct SweepRun {
 pub fn run_sweep(cfg: &RunConfig, data: &Dataset) -> Result<(Plan, SweepRun)> {
     let t0 = Instant::now();
     STOP.store(false, Ordering::SeqCst);
-    if cfg.data_hash != crate::identity::data_hash(data) {
-        return Err(Error::Invalid(
-            "the configuration is not bound to these data (build it with RunConfig::resolve or with_data)".into(),
-        ));
-    }
     let out = cfg.out_dir("sweep");
     let plan = plan(cfg, data)?;
     let model = build(&cfg.model, &cfg.extensions)?;
@@ -204,10 +199,13 @@ pub fn run_sweep(cfg: &RunConfig, data: &Dataset) -> Result<(Plan, SweepRun)> {
             sols
         }
         None => {
+            check_bound(cfg, data)?;
             journal::create(&journal_path, &header)?;
             Vec::new()
         }
     };
+    // After the identity comparison, so that a folder of another sweep is named as such.
+    check_bound(cfg, data)?;
     let done: std::collections::HashSet<(usize, usize)> =
         solutions.iter().map(|s| (s.start_id, s.w_idx)).collect();
     let jobs: Vec<(usize, usize)> = (0..plan.starts.len())
@@ -297,6 +295,16 @@ pub fn run_sweep(cfg: &RunConfig, data: &Dataset) -> Result<(Plan, SweepRun)> {
             lock,
         },
     ))
+}
+
+/// The configuration must have been resolved on these very data (its `data_hash`).
+fn check_bound(cfg: &RunConfig, data: &Dataset) -> Result<()> {
+    if cfg.data_hash != crate::identity::data_hash(data) {
+        return Err(Error::Invalid(
+            "the configuration is not bound to these data (build it with RunConfig::resolve or with_data)".into(),
+        ));
+    }
+    Ok(())
 }
 
 fn progress_bar(len: usize, enabled: bool) -> indicatif::ProgressBar {
