@@ -530,7 +530,10 @@ where
 
     // Encoded into a temporary file beside `path` and renamed into place: the old PNG or
     // the new one, never a truncated one (crate::output).
-    let plot_err = |e: Error| Error::plot(path, e.to_string());
+    let plot_err = |e: Error| match e {
+        Error::Io { source, .. } => Error::plot(path, source.to_string()),
+        other => Error::plot(path, other.to_string()),
+    };
     let tmp = output::temp_beside(path, ".png").map_err(plot_err)?;
     let written = catch_unwind(AssertUnwindSafe(|| -> DrawResult {
         let mut out = BitMapBackend::new(tmp.path(), (WIDTH, HEIGHT));
