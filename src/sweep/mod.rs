@@ -206,13 +206,7 @@ pub fn run_sweep(cfg: &RunConfig, data: &Dataset) -> Result<(Plan, SweepRun)> {
     };
     // After the identity comparison, so that a folder of another sweep is named as such.
     check_bound(cfg, data)?;
-    let done: std::collections::HashSet<(usize, usize)> =
-        solutions.iter().map(|s| (s.start_id, s.w_idx)).collect();
-    let jobs: Vec<(usize, usize)> = (0..plan.starts.len())
-        .filter(|s| s % shard_n == shard_i - 1)
-        .flat_map(|s| (0..plan.ws.len()).map(move |w| (s, w)))
-        .filter(|j| !done.contains(j))
-        .collect();
+    let jobs = missing(&header, &solutions);
 
     let threads = cfg
         .run
@@ -279,11 +273,7 @@ pub fn run_sweep(cfg: &RunConfig, data: &Dataset) -> Result<(Plan, SweepRun)> {
     let new = new.into_inner().unwrap();
     let computed = new.len();
     solutions.extend(new);
-    let total_part = (0..plan.starts.len())
-        .filter(|s| s % shard_n == shard_i - 1)
-        .count()
-        * plan.ws.len();
-    let missing = total_part - solutions.len();
+    let missing = missing(&header, &solutions).len();
     Ok((
         plan,
         SweepRun {
