@@ -62,14 +62,12 @@ fn bench(c: &mut Criterion) {
     c.bench_function("simulate_curve_560C_100MPa_dual", |b| {
         b.iter(|| model.simulate_sens(black_box(&xd), &load, &curve.times_h, &mut outd, &ode))
     });
-    let objective = Objective {
-        model: model.as_ref(),
-        curves: &data.curves,
-        w: vec![1.0; 3],
-        lifetime: settings.lifetime,
-        omega_f: settings.omega_f,
-        ode: settings.ode,
-    };
+    let objective = Objective::new(
+        model.as_ref(),
+        &data.curves,
+        vec![1.0; 3],
+        settings.objective(),
+    );
     let mut r = vec![0.0; objective.n_residuals()];
     c.bench_function("residuals_560C", |b| {
         b.iter(|| objective.residuals(black_box(&start), &mut r).unwrap())

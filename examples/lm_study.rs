@@ -9,7 +9,7 @@ use std::io::Write;
 use std::path::Path;
 use std::time::Instant;
 
-use creepfit::config::RunConfig;
+use creepfit::config::{Overrides, RunConfig};
 use creepfit::fit::{local_fit, param_space, FitSettings};
 use creepfit::model::build;
 use creepfit::sweep::plan;
@@ -20,11 +20,14 @@ fn main() -> anyhow::Result<()> {
     if args.len() < 4 {
         anyhow::bail!("usage: lm_study CONFIG STARTS STRIDE [OUT.csv]");
     }
-    let cfg = RunConfig::load(Path::new(&args[1]))?;
     let starts: usize = args[2].parse()?;
     let stride: usize = args[3].parse()?;
-    let data = cfg.load_data()?;
-    let p = plan(&cfg, &data, starts, cfg.sweep.seed)?;
+    let cli = Overrides {
+        starts: Some(starts),
+        ..Overrides::default()
+    };
+    let (cfg, data) = RunConfig::resolve(Path::new(&args[1]), &cli)?;
+    let p = plan(&cfg, &data)?;
     let model = build(&cfg.model, &cfg.extensions)?;
     let space = param_space(&cfg);
     let settings = FitSettings::from_config(&cfg);

@@ -228,7 +228,12 @@ pub fn read_results(dir: &Path) -> Result<BTreeMap<u64, SetResult>> {
 
 /// Run sets `first_seed .. first_seed + n` (set i gets scenario [`scenario_of`]`(i)`) into
 /// `dir`, skipping those already in `results.jsonl`; returns all results, in seed order.
-pub fn run_battery(dir: &Path, first_seed: u64, n: usize, progress: bool) -> Result<Vec<SetResult>> {
+pub fn run_battery(
+    dir: &Path,
+    first_seed: u64,
+    n: usize,
+    progress: bool,
+) -> Result<Vec<SetResult>> {
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     let done = read_results(dir)?;
     let path: PathBuf = dir.join("results.jsonl");
@@ -328,7 +333,11 @@ pub fn rates(results: &[SetResult]) -> Rates {
         .filter(|r| r.verdict != Some(Verdict::Adequate))
         .count();
     let n0 = null.len();
-    let rate = if n0 > 0 { fa as f64 / n0 as f64 } else { f64::NAN };
+    let rate = if n0 > 0 {
+        fa as f64 / n0 as f64
+    } else {
+        f64::NAN
+    };
     let named = crate::model::ext::CATALOGUE
         .iter()
         .map(|e| {
@@ -411,15 +420,31 @@ pub const LAMBDA_BINS: [(f64, f64); 6] = [
     (1e4, f64::INFINITY),
 ];
 
-/// Power table rows: (effect, λ bin, sets, named correctly, any extension significant, mean
-/// size).
-pub fn power(results: &[SetResult]) -> Vec<(String, (f64, f64), usize, usize, usize, f64)> {
+/// One row of the power table.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PowerRow {
+    /// Catalogued effect.
+    pub effect: String,
+    /// λ bin [lo, hi).
+    pub bin: (f64, f64),
+    /// Sets in the bin, named correctly, with any alarm (verdict not `adequate`).
+    pub sets: usize,
+    pub named: usize,
+    pub any_alarm: usize,
+    /// Mean effect size.
+    pub mean_size: f64,
+}
+
+/// Power table: per catalogued effect and λ bin, how many sets named the effect.
+pub fn power(results: &[SetResult]) -> Vec<PowerRow> {
     let mut out = Vec::new();
     for e in crate::model::ext::CATALOGUE {
         for &(lo, hi) in &LAMBDA_BINS {
             let sets: Vec<&SetResult> = results
                 .iter()
-                .filter(|r| r.error.is_none() && r.scenario == *e && r.lambda >= lo && r.lambda < hi)
+                .filter(|r| {
+                    r.error.is_none() && r.scenario == *e && r.lambda >= lo && r.lambda < hi
+                })
                 .collect();
             if sets.is_empty() {
                 continue;
@@ -430,7 +455,14 @@ pub fn power(results: &[SetResult]) -> Vec<(String, (f64, f64), usize, usize, us
                 .filter(|r| r.verdict != Some(Verdict::Adequate))
                 .count();
             let size = sets.iter().map(|r| r.size).sum::<f64>() / sets.len() as f64;
-            out.push((e.to_string(), (lo, hi), sets.len(), named, any, size));
+            out.push(PowerRow {
+                effect: e.to_string(),
+                bin: (lo, hi),
+                sets: sets.len(),
+                named,
+                any_alarm: any,
+                mean_size: size,
+            });
         }
     }
     out
@@ -471,9 +503,23 @@ pub fn write_reports(dir: &Path, results: &[SetResult], first_seed: u64) -> Resu
     write_csv(
         &dir.join("results.csv"),
         &[
-            "name", "seed", "scenario", "family", "size", "sampling", "noise_phi", "curves",
-            "lambda", "detectable", "outcome", "closest", "p_values", "gof_p", "replicates",
-            "wall_s", "error",
+            "name",
+            "seed",
+            "scenario",
+            "family",
+            "size",
+            "sampling",
+            "noise_phi",
+            "curves",
+            "lambda",
+            "detectable",
+            "outcome",
+            "closest",
+            "p_values",
+            "gof_p",
+            "replicates",
+            "wall_s",
+            "error",
         ],
         &rows,
     )?;
@@ -495,10 +541,26 @@ pub fn write_reports(dir: &Path, results: &[SetResult], first_seed: u64) -> Resu
     let pw = power(results);
     write_csv(
         &dir.join("power.csv"),
-        &["effect", "lambda_lo", "lambda_hi", "sets", "named", "any_alarm", "mean_size"],
+        &[
+            "effect",
+            "lambda_lo",
+            "lambda_hi",
+            "sets",
+            "named",
+            "any_alarm",
+            "mean_size",
+        ],
         &pw.iter()
-            .map(|(e, (lo, hi), n, k, a, s)| {
-                vec![e.clone(), num(*lo), num(*hi), n.to_string(), k.to_string(), a.to_string(), num(*s)]
+            .map(|p| {
+                vec![
+                    p.effect.clone(),
+                    num(p.bin.0),
+                    num(p.bin.1),
+                    p.sets.to_string(),
+                    p.named.to_string(),
+                    p.any_alarm.to_string(),
+                    num(p.mean_size),
+                ]
             })
             .collect::<Vec<_>>(),
     )?;
@@ -534,21 +596,41 @@ pub fn write_reports(dir: &Path, results: &[SetResult], first_seed: u64) -> Resu
         100.0 * r.outside_extension as f64 / r.outside_sets.max(1) as f64
     );
     md += &format!("- Sets that failed to generate or diagnose: {}\n", r.errors);
-    for (title, det) in [("all sets", false), ("detectable effect sets (and all no-effect sets)", true)] {
-        md += &format!("\n## Confusion matrix, {title}\n\n| truth \\ outcome | {} |\n|{}\n", labels.join(" | "), "---|".repeat(labels.len() + 1));
+    for (title, det) in [
+        ("all sets", false),
+        ("detectable effect sets (and all no-effect sets)", true),
+    ] {
+        md += &format!(
+            "\n## Confusion matrix, {title}\n\n| truth \\ outcome | {} |\n|{}\n",
+            labels.join(" | "),
+            "---|".repeat(labels.len() + 1)
+        );
         for (s, c) in confusion(results, det) {
             md += &format!(
                 "| {s} | {} |\n",
-                c.iter().map(|x| x.to_string()).collect::<Vec<_>>().join(" | ")
+                c.iter()
+                    .map(|x| x.to_string())
+                    .collect::<Vec<_>>()
+                    .join(" | ")
             );
         }
     }
     md += "\n## Power against the oracle's λ\n\n| effect | λ | sets | named correctly | any alarm | mean size |\n|---|---|---|---|---|---|\n";
-    for (e, (lo, hi), n, k, a, s) in &pw {
+    for p in &pw {
+        let (lo, hi) = p.bin;
         md += &format!(
-            "| {e} | {lo}–{} | {n} | {k} ({:.0} %) | {a} | {s:.3} |\n",
-            if hi.is_finite() { format!("{hi}") } else { "∞".into() },
-            100.0 * *k as f64 / *n as f64
+            "| {} | {lo}–{} | {} | {} ({:.0} %) | {} | {:.3} |\n",
+            p.effect,
+            if hi.is_finite() {
+                format!("{hi}")
+            } else {
+                "∞".into()
+            },
+            p.sets,
+            p.named,
+            100.0 * p.named as f64 / p.sets as f64,
+            p.any_alarm,
+            p.mean_size
         );
     }
     write_text(&dir.join("summary.md"), &md)?;
@@ -559,14 +641,15 @@ pub fn write_reports(dir: &Path, results: &[SetResult], first_seed: u64) -> Resu
             label: e.to_string(),
             points: pw
                 .iter()
-                .filter(|p| p.0 == *e)
-                .map(|(_, (lo, hi), n, k, _, _)| {
+                .filter(|p| p.effect == *e)
+                .map(|p| {
+                    let (lo, hi) = p.bin;
                     let c = if hi.is_finite() {
                         (lo.max(1.0) * hi).sqrt()
                     } else {
                         lo * 3.0
                     };
-                    (c.log10(), 100.0 * *k as f64 / *n as f64)
+                    (c.log10(), 100.0 * p.named as f64 / p.sets as f64)
                 })
                 .collect(),
         })

@@ -5,16 +5,19 @@ use std::path::{Path, PathBuf};
 
 use clap::{Parser, Subcommand};
 
-use crate::config::RunConfig;
-use crate::data::{self, Dataset};
-use crate::diagnose::diagnose_with;
-use crate::error::Result;
-use crate::fit::{run_fit_with, FitRequest, StartChoice};
+use crate::config::DiagnoseOverrides;
+use crate::config::{Overrides, RunConfig, RunOptions, StartChoice};
+use crate::data::Dataset;
+use crate::diagnose::diagnose;
+use crate::error::{Error, Result};
+use crate::fit::{run_fit, FitSettings};
 use crate::model::{build, Load};
+use crate::objective::Objective;
 use crate::ode::OdeOptions;
+use crate::output::lock_folder;
 use crate::report::plot::{plot_creep_curves, plot_residuals, CurvePlot, Series};
-use crate::report::tables::{self, default_out, ensure_dir, num, write_csv, write_text};
-use crate::sweep::{self, SweepOptions};
+use crate::report::tables::{self, num, write_csv, write_text};
+use crate::sweep;
 
 /// creepfit: calibrate creep-damage constitutive equations against measured creep curves.
 #[derive(Debug, Parser)]
@@ -54,13 +57,12 @@ pub enum Command {
         /// Worker threads (default: all cores).
         #[arg(long)]
         threads: Option<usize>,
-        /// Run the I-th of N disjoint parts of the start set, e.g. 2/3; `auto`: I and N of this
-        /// task of a job array (Slurm, Grid Engine, AWS Batch), written into
-        /// OUT/shard-I-of-N/.
+        /// Run the I-th of N disjoint parts of the start set, e.g. 2/3; `auto` takes I and N
+        /// from a job array's environment (Slurm, Grid Engine, AWS Batch) and writes into
+        /// `shard-I-of-N/` inside the output folder.
         #[arg(long, value_parser = parse_shard)]
         shard: Option<sweep::ShardArg>,
-        /// Output folder (default results/<name>/sweep/; with --shard, its shard-I-of-N/
-        /// unless --shard I/N names the folder with --out).
+        /// Output folder (default results/<name>/sweep/).
         #[arg(long)]
         out: Option<PathBuf>,
         /// Stop after this many new fits, as if interrupted (for tests of resumption).
@@ -75,8 +77,7 @@ pub enum Command {
         /// Output folder of the merged result.
         #[arg(long)]
         out: PathBuf,
-        /// Refuse (exit non-zero, write nothing) unless every shard is complete. Without it,
-        /// the complete shards are merged and summary.json says `complete: false`.
+        /// Refuse (write nothing, exit non-zero) unless every shard is complete.
         #[arg(long)]
         require_all: bool,
     },
@@ -150,14 +151,37 @@ pub enum Command {
     },
 }
 
-/// Load a configuration and its data.
-pub fn load(config: &Path) -> Result<(RunConfig, Dataset)> {
-    let cfg = RunConfig::load(config)?;
-    let data = data::load(&cfg.curves, &cfg.ruptures, &cfg.load_options())?;
-    for w in &data.warnings {
+/// Resolve the run configuration (file + command line) and load its data: the one place
+/// the binary builds them.
+pub fn load(config: &Path, cli: &Overrides) -> Result<(RunConfig, Dataset)> {
+    let (cfg, data) = RunConfig::resolve(config, cli)?;
+    for w in cfg.warnings.iter().chain(&data.warnings) {
         eprintln!("warning: {w}");
     }
     Ok((cfg, data))
+}
+
+/// Command-line settings that only say where the outputs go.
+fn out_only(out: Option<PathBuf>) -> Overrides {
+    Overrides {
+        run: RunOptions {
+            out,
+            ..RunOptions::default()
+        },
+        ..Overrides::default()
+    }
+}
+
+/// `Ok` if every plot was written, else the error saying the numbers are in `out`.
+fn plots_done(out: &Path, failures: Vec<String>) -> Result<()> {
+    if failures.is_empty() {
+        Ok(())
+    } else {
+        Err(Error::PlotsNotWritten {
+            out: out.to_path_buf(),
+            failures,
+        })
+    }
 }
 
 /// Run a parsed command line.
@@ -168,13 +192,20 @@ pub fn run(cli: Cli) -> Result<()> {
             out,
             start,
             w,
-        } => fit(&config, out, &FitRequest { starts: start, w }),
+        } => {
+            let cli = Overrides {
+                w,
+                fit_starts: Some(start),
+                ..out_only(out)
+            };
+            fit(&config, &cli)
+        }
         Command::Simulate {
             config,
             constants,
             out,
             w,
-        } => simulate(&config, constants, out, w),
+        } => simulate(&config, constants, &out_only(out), w),
         Command::Sweep {
             config,
             starts,
@@ -190,27 +221,59 @@ pub fn run(cli: Cli) -> Result<()> {
                 Some(sweep::ShardArg::Part(i, n)) => Some((i, n)),
                 Some(sweep::ShardArg::Auto) => Some(sweep::array::shard_from_process_env()?),
             };
-            let (cfg, data) = load(&config)?;
-            let out = sweep::part_dir(shard, auto, out, default_out(&cfg.name, "sweep"));
+            let given_out = out.clone();
+            let cli = Overrides {
+                starts,
+                seed,
+                run: RunOptions {
+                    out,
+                    threads,
+                    shard,
+                    stop_after,
+                    progress: true,
+                },
+                ..Overrides::default()
+            };
+            let (mut cfg, data) = load(&config, &cli)?;
+            // Where this part writes: `--shard auto` into shard-I-of-N/ of the output folder.
+            let default_dir = PathBuf::from("results").join(&cfg.name).join("sweep");
+            let out = sweep::part_dir(shard, auto, given_out, default_dir);
             if let (true, Some((i, n))) = (auto, shard) {
                 println!("shard {i}/{n} of the job array into {}", out.display());
             }
-            let opts = SweepOptions {
-                starts: starts.unwrap_or(cfg.sweep.starts),
-                seed: seed.unwrap_or(cfg.sweep.seed),
-                threads,
-                shard,
-                out,
-                stop_after,
-                progress: true,
-            };
-            sweep_cmd(&cfg, &data, &opts)
+            cfg.run.out = Some(out);
+            sweep_cmd(&cfg, &data)
         }
         Command::Merge {
             dirs,
             out,
             require_all,
         } => merge_cmd(&dirs, &out, require_all),
+        Command::Diagnose {
+            config,
+            out,
+            starts,
+            seed,
+            bootstrap,
+            alpha,
+            threads,
+        } => {
+            let cli = Overrides {
+                diagnose: DiagnoseOverrides {
+                    starts,
+                    seed,
+                    bootstrap,
+                    alpha,
+                },
+                run: RunOptions {
+                    out,
+                    threads,
+                    ..RunOptions::default()
+                },
+                ..Overrides::default()
+            };
+            diagnose_cmd(&config, &cli)
+        }
         Command::Synth {
             out,
             sets,
@@ -241,54 +304,38 @@ pub fn run(cli: Cli) -> Result<()> {
             println!("wrote {}", out.display());
             Ok(())
         }),
-        Command::Diagnose {
-            config,
-            out,
-            starts,
-            seed,
-            bootstrap,
-            alpha,
-            threads,
-        } => {
-            let (cfg, data) = load(&config)?;
-            let mut dc = cfg.diagnose.clone();
-            dc.starts = starts.unwrap_or(dc.starts);
-            dc.seed = seed.unwrap_or(dc.seed);
-            dc.bootstrap = bootstrap.unwrap_or(dc.bootstrap);
-            dc.alpha = alpha.unwrap_or(dc.alpha);
-            let out = out.unwrap_or_else(|| default_out(&cfg.name, "diagnose"));
-            with_threads(threads, || diagnose_cmd(&cfg, &data, &out, &dc))
-        }
     }
 }
 
 /// Run `f` on a pool of `threads` workers (rayon's default pool when `None`).
-fn with_threads<T: Send>(threads: Option<usize>, f: impl FnOnce() -> Result<T> + Send) -> Result<T> {
+fn with_threads<T: Send>(
+    threads: Option<usize>,
+    f: impl FnOnce() -> Result<T> + Send,
+) -> Result<T> {
     match threads {
         None => f(),
         Some(n) => rayon::ThreadPoolBuilder::new()
             .num_threads(n)
             .build()
-            .map_err(|e| crate::Error::Invalid(format!("--threads {n}: {e}")))?
+            .map_err(|e| Error::Invalid(format!("--threads {n}: {e}")))?
             .install(f),
     }
 }
 
-fn diagnose_cmd(
-    cfg: &RunConfig,
-    data: &Dataset,
-    out: &Path,
-    dc: &crate::config::DiagnoseConfig,
-) -> Result<()> {
-    let d = diagnose_with(cfg, data, dc)?;
-    ensure_dir(out)?;
+fn diagnose_cmd(config: &Path, cli: &Overrides) -> Result<()> {
+    let (cfg, data) = load(config, cli)?;
+    let out = cfg.out_dir("diagnose");
+    let _lock = lock_folder(&out)?;
+    let d = with_threads(cfg.run.threads, || diagnose(&cfg, &data))?;
     write_text(
         &out.join("diagnosis.json"),
         &serde_json::to_string_pretty(&d).expect("JSON of plain values"),
     )?;
-    let md = crate::diagnose::report::report_md(cfg, &d);
+    let md = crate::diagnose::report::report_md(&cfg, &d);
     write_text(&out.join("report.md"), &md)?;
-    // Residual plots of the base model and of the chosen (else lowest-AIC) extension.
+    // Residual plots of the base model and of the chosen (else lowest-AIC) extension, on
+    // the curves diagnose worked on.
+    let mut failures = Vec::new();
     let chosen = d
         .candidates
         .iter()
@@ -299,27 +346,26 @@ fn diagnose_cmd(
                 .filter(|c| c.aic.is_finite())
                 .min_by(|a, b| a.aic.total_cmp(&b.aic))
         });
+    let curves: Vec<crate::data::Curve> = data
+        .curves
+        .iter()
+        .map(|c| crate::diagnose::binned(c, cfg.diagnose.max_points))
+        .collect();
     for c in std::iter::once(&d.base).chain(chosen) {
-        let model = build(&cfg.model, &[])?;
-        let model = if c.model == model.name() {
-            model
-        } else {
-            let mut exts = cfg.extensions.clone();
-            if c.name != "base" {
-                exts.push(c.name.clone());
-            }
-            build(&cfg.model, &exts)?
-        };
+        let mut exts = cfg.extensions.clone();
+        if c.name != "base" {
+            exts.push(c.name.clone());
+        }
+        let model = build(&cfg.model, &exts)?;
         let x: Vec<f64> = c.constants.iter().map(|p| p.1).collect();
-        let settings = crate::fit::FitSettings::from_config(cfg);
-        let obj = crate::likelihood::raw_objective(model.as_ref(), &data.curves, &settings);
+        let settings = FitSettings::from_config(&cfg);
+        let obj = crate::likelihood::raw_objective(model.as_ref(), &curves, &settings);
         let ev = obj.evaluate(&x);
-        let series: Vec<Series> = data
-            .curves
+        let series: Vec<Series> = curves
             .iter()
             .zip(&ev.curves)
             .map(|(cu, p)| Series {
-                label: format!("{} MPa", cu.stress_mpa),
+                label: cu.label(),
                 points: (0..cu.times_h.len())
                     .map(|k| {
                         (
@@ -338,12 +384,12 @@ fn diagnose_cmd(
             "t / t_f",
             "predicted − measured, % of rupture strain",
         ) {
-            eprintln!("warning: {e}");
+            failures.push(e.to_string());
         }
     }
     print!("{md}");
     println!("wrote {}", out.display());
-    Ok(())
+    plots_done(&out, failures)
 }
 
 fn synth_cmd(out: &Path, sets: usize, seed: u64, scenario: Option<&str>) -> Result<()> {
@@ -392,16 +438,17 @@ fn parse_shard(s: &str) -> std::result::Result<sweep::ShardArg, String> {
     Ok(sweep::ShardArg::Part(i, n))
 }
 
-fn sweep_cmd(cfg: &RunConfig, data: &Dataset, opts: &SweepOptions) -> Result<()> {
+fn sweep_cmd(cfg: &RunConfig, data: &Dataset) -> Result<()> {
     sweep::install_sigint_handler();
-    let (plan, run) = sweep::run_sweep(cfg, data, opts)?;
+    let out = cfg.out_dir("sweep");
+    let (plan, run) = sweep::run_sweep(cfg, data)?;
     let mut header = plan.header.clone();
-    header.shard = opts.shard.unwrap_or((1, 1));
-    let coverage = sweep::part_coverage(&header, header.shard, run.solutions.len(), &opts.out);
-    let a = sweep::write_outputs(
+    header.shard = cfg.run.shard.unwrap_or((1, 1));
+    let coverage = sweep::part_coverage(&header, header.shard, run.solutions.len(), &out);
+    let (a, failures) = sweep::write_outputs(
         &header,
         &run.solutions,
-        &opts.out,
+        &out,
         run.wall_s,
         run.threads,
         &coverage,
@@ -416,15 +463,15 @@ fn sweep_cmd(cfg: &RunConfig, data: &Dataset, opts: &SweepOptions) -> Result<()>
         run.solutions.len()
     );
     if run.missing > 0 {
-        return Err(crate::Error::Invalid(format!(
-            "interrupted: {} of {} fits missing; rerun the same command to resume ({})",
+        return Err(Error::Invalid(format!(
+            "interrupted: {} of {} fits missing (summary.json: \"complete\": false); rerun the same command to resume ({})",
             run.missing,
             run.missing + run.solutions.len(),
-            opts.out.display()
+            out.display()
         )));
     }
-    println!("wrote {}", opts.out.display());
-    Ok(())
+    println!("wrote {}", out.display());
+    plots_done(&out, failures)
 }
 
 fn merge_cmd(dirs: &[PathBuf], out: &Path, require_all: bool) -> Result<()> {
@@ -455,15 +502,15 @@ fn merge_cmd(dirs: &[PathBuf], out: &Path, require_all: bool) -> Result<()> {
             .join(", ")
     };
     if !m.coverage.complete && (require_all || m.merged.is_empty()) {
-        return Err(crate::Error::Invalid(format!(
+        return Err(Error::Invalid(format!(
             "merge{}: {} of {n} shards complete (missing or incomplete: {}); nothing written",
             if require_all { " --require-all" } else { "" },
             m.merged.len(),
             list(m.coverage.missing.iter().map(|s| s.shard).collect())
         )));
     }
-    ensure_dir(out)?;
-    let a = sweep::write_outputs(&m.header, &m.solutions, out, 0.0, 0, &m.coverage)?;
+    let _lock = lock_folder(out)?;
+    let (a, failures) = sweep::write_outputs(&m.header, &m.solutions, out, 0.0, 0, &m.coverage)?;
     print_sweep(&m.header, &a);
     if m.coverage.complete {
         println!("merged {n} of {n} shards into {}", out.display());
@@ -480,7 +527,7 @@ fn merge_cmd(dirs: &[PathBuf], out: &Path, require_all: bool) -> Result<()> {
             out.display()
         );
     }
-    Ok(())
+    plots_done(out, failures)
 }
 
 fn print_sweep(h: &sweep::Header, a: &sweep::Analysis) {
@@ -551,11 +598,11 @@ fn dense_grid(t_end: f64, n: usize) -> Vec<f64> {
     g
 }
 
-fn fit(config: &Path, out: Option<PathBuf>, req: &FitRequest) -> Result<()> {
-    let (cfg, data) = load(config)?;
-    let run = run_fit_with(&cfg, &data, req)?;
-    let out = out.unwrap_or_else(|| default_out(&cfg.name, "fit"));
-    ensure_dir(&out)?;
+fn fit(config: &Path, cli: &Overrides) -> Result<()> {
+    let (cfg, data) = load(config, cli)?;
+    let out = cfg.out_dir("fit");
+    let _lock = lock_folder(&out)?;
+    let run = run_fit(&cfg, &data)?;
     let best = &run.fits[run.best];
     let curves = &data.curves;
     tables::write_constants(
@@ -567,7 +614,7 @@ fn fit(config: &Path, out: Option<PathBuf>, req: &FitRequest) -> Result<()> {
     let rows = tables::error_rows(best, curves);
     tables::write_errors(&out.join("errors.csv"), &rows)?;
     tables::write_fit_curves(&out.join("curves.csv"), best, curves)?;
-    let summary = tables::fit_summary(&run, curves);
+    let summary = tables::fit_summary(&cfg, &run, curves);
     write_text(
         &out.join("summary.json"),
         &serde_json::to_string_pretty(&summary).expect("JSON of plain values"),
@@ -613,18 +660,16 @@ fn fit(config: &Path, out: Option<PathBuf>, req: &FitRequest) -> Result<()> {
         &run.settings.ode,
         run.model.as_ref(),
     );
-    match plot_creep_curves(
+    let plotted = plot_creep_curves(
         &plot_path,
         &format!("{} — measured (points) and fitted (lines)", cfg.name),
         &plots,
-    ) {
-        Ok(()) => println!("wrote {}", out.display()),
-        Err(e) => {
-            eprintln!("warning: plot not written: {e}");
-            println!("wrote {} (without plot)", out.display());
-        }
-    }
-    Ok(())
+    );
+    println!("wrote {}", out.display());
+    plots_done(
+        &out,
+        plotted.err().map(|e| e.to_string()).into_iter().collect(),
+    )
 }
 
 /// Measured points and dense predicted curves for a plot.
@@ -670,27 +715,31 @@ fn curve_plots(
 fn simulate(
     config: &Path,
     constants: Option<PathBuf>,
-    out: Option<PathBuf>,
+    cli: &Overrides,
     w: Option<f64>,
 ) -> Result<()> {
-    let (cfg, data) = load(config)?;
+    if let Some(w) = w {
+        if !(0.0..=1.0).contains(&w) {
+            return Err(Error::Invalid(format!(
+                "--w: must be a weight in [0, 1], not {w}"
+            )));
+        }
+    }
+    let (cfg, data) = load(config, cli)?;
     let model = build(&cfg.model, &cfg.extensions)?;
     let params = match constants {
         Some(path) => tables::read_constants(&path, model.as_ref())?,
         None => cfg.starts_all_given().ok_or_else(|| {
-            crate::Error::config(
+            Error::config(
                 &cfg.path,
                 "simulate needs --constants FILE or a start value for every constant",
             )
         })?,
     };
-    let out = out.unwrap_or_else(|| default_out(&cfg.name, "simulate"));
-    ensure_dir(&out)?;
-    let ode = OdeOptions {
-        rtol: cfg.solver.rtol,
-        atol: cfg.solver.atol,
-        ..OdeOptions::default()
-    };
+    let out = cfg.out_dir("simulate");
+    let _lock = lock_folder(&out)?;
+    let settings = FitSettings::from_config(&cfg);
+    let ode = settings.ode;
     let names = model.state_names();
     let idx = |n: &str| names.iter().position(|s| *s == n);
     let (ih, iphi, iom) = (idx("H"), idx("Phi"), idx("omega"));
@@ -777,14 +826,12 @@ fn simulate(
         &rupture_rows,
     )?;
     if let Some(w) = w {
-        let objective = crate::objective::Objective {
-            model: model.as_ref(),
-            curves: &data.curves,
-            w: vec![w; data.curves.len()],
-            lifetime: cfg.objective.lifetime_term,
-            omega_f: cfg.objective.omega_f,
-            ode,
-        };
+        let objective = Objective::new(
+            model.as_ref(),
+            &data.curves,
+            vec![w; data.curves.len()],
+            settings.objective(),
+        );
         let e = objective.evaluate(&params);
         println!(
             "objective {:.12e} at w = {w} (normalised residual {:.12e})",
@@ -802,13 +849,14 @@ fn simulate(
         )?;
     }
     let plots = curve_plots(&cfg, &data, &params, &ode, model.as_ref());
-    if let Err(e) = plot_creep_curves(
+    let plotted = plot_creep_curves(
         &out.join("simulate.png"),
         &format!("{} — simulated", cfg.name),
         &plots,
-    ) {
-        eprintln!("warning: plot not written: {e}");
-    }
+    );
     println!("wrote {}", out.display());
-    Ok(())
+    plots_done(
+        &out,
+        plotted.err().map(|e| e.to_string()).into_iter().collect(),
+    )
 }

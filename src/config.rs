@@ -1,8 +1,16 @@
-//! Run configuration (TOML, DESIGN.md §4): serde structures, defaults and validation.
+//! The run configuration: the TOML file (DESIGN.md §4, `docs/FORMATS.md`) and the command line
+//! resolved ONCE into one validated, serialisable [`RunConfig`] that every command takes
+//! (ripgrep's LowArgs → HiArgs: the file's raw form stays private to this module).
 //!
 //! Unknown keys are errors everywhere. Paths are resolved relative to the configuration
-//! file's directory. Constants come out in the model's order, with the ones the file does
-//! not mention filled from the model's defaults (bounds and scale; no start).
+//! file's directory. Constants come out in the model's order. A base-model constant missing
+//! from `[constants]` is an error; an extension's constant missing from it takes the
+//! extension's documented default bounds and scale (no start), and [`RunConfig::warnings`]
+//! says so. Errors read `FILE:LINE: field: what`.
+//!
+//! What identifies a run (the sweep journal's identity, `crate::identity`) is the
+//! serialisation of this type minus the fields listed in [`IDENTITY_EXCLUDED`], so a setting
+//! added here later is covered by construction.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -11,11 +19,20 @@ use serde::{Deserialize, Serialize};
 
 use crate::data::{self, Dataset, LoadOptions};
 use crate::error::{Error, Result};
+use crate::lsq::LmOptions;
 use crate::model::{self, Scale};
 use crate::objective::JacobianMethod;
+use crate::ode::OdeOptions;
 
 /// Names of the extension catalogue (DESIGN.md §6).
 pub const EXTENSION_NAMES: &[&str] = model::ext::CATALOGUE;
+
+/// Top-level fields of [`RunConfig`]'s serialisation that do not change any result and are
+/// therefore left out of the run identity: where the configuration file is (`path`), the run
+/// name (`name`, only a label and the default output folder), where the data files are
+/// (`curves`, `ruptures`: their loaded content is in `data_hash` instead), and how and where
+/// the run is carried out (`run`: output folder, threads, shard, progress bar, test stop).
+pub const IDENTITY_EXCLUDED: &[&str] = &["path", "name", "curves", "ruptures", "run", "diagnose"];
 
 /// Which side of the lifetime error enters the objective (eq. 8).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -28,14 +45,29 @@ pub enum LifetimeTerm {
     Both,
 }
 
+/// Which start points `fit` uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum StartChoice {
+    /// The configuration's start values (if all are given) and the computed initial guess.
+    #[default]
+    Both,
+    /// Only the configuration's start values (an error if one is missing).
+    Config,
+    /// Only the computed initial guess.
+    Guess,
+}
+
 /// One constant as the run uses it.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct ConstantConfig {
     /// Name, as in the model's [`model::ConstantSpec`].
     pub name: String,
-    /// Physical unit, from the model.
+    /// Physical unit, from the model (not a setting: not serialised).
+    #[serde(skip)]
     pub unit: &'static str,
-    /// Lower bound.
+    /// Lower bound (the constant's unit).
     pub lb: f64,
     /// Upper bound.
     pub ub: f64,
@@ -49,10 +81,10 @@ pub struct ConstantConfig {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ObjectiveConfig {
-    /// Weights applied to every curve alike; each gives one fit. Default 0.1, 0.2, …, 1.0.
+    /// Weights in [0, 1] applied to every curve alike; each gives one fit. Default 0.1, …, 1.0.
     pub w_grid: Vec<f64>,
-    /// Explicit per-curve weight vectors (ascending-stress order); each gives one fit, in
-    /// addition to `w_grid`. Default empty.
+    /// Explicit per-curve weight vectors (ascending-stress order), each weight in [0, 1];
+    /// each gives one fit, in addition to `w_grid`. Default empty.
     pub w_sets: Vec<Vec<f64>>,
     /// Lifetime term side. Default `late`.
     pub lifetime_term: LifetimeTerm,
@@ -82,7 +114,7 @@ impl ObjectiveConfig {
                 return Err(Error::config(
                     path,
                     format!(
-                        "objective.w_sets[{k}] has {} weights but the data have {n_curves} curves",
+                        "objective.w_sets[{k}]: has {} weights but the data have {n_curves} curves",
                         set.len()
                     ),
                 ));
@@ -97,9 +129,9 @@ impl ObjectiveConfig {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SweepConfig {
-    /// Number of Latin hypercube starts. Default 256.
+    /// Number of Latin hypercube starts (`--starts` overrides). Default 256.
     pub starts: usize,
-    /// Seed of the start sequence. Default 1.
+    /// Seed of the start sequence (`--seed` overrides). Default 1.
     pub seed: u64,
     /// Also start from the configured start / initial guess. Default true.
     pub include_guess: bool,
@@ -115,40 +147,103 @@ impl Default for SweepConfig {
     }
 }
 
-/// `[solver]`: the ODE integration and the local least-squares iteration limit.
+/// `fit`'s own choices (command line).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FitConfig {
+    /// Start points of `fit` (`--start`).
+    pub starts: StartChoice,
+}
+
+/// Every numerical setting of the integrator and of the local least-squares fits, resolved:
+/// the `[solver]` keys of the file and the fixed values of the ones the file does not expose
+/// ([`LmOptions`] and [`OdeOptions`] are derived from this in one place).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(deny_unknown_fields)]
 pub struct SolverConfig {
     /// Relative tolerance of the integrator. Default 1e-8, from the accuracy study in README.md
     /// (`scripts/tolerance_study.sh`): the objective is then within 1e-7 relative of its
     /// tight-tolerance value and the fit reaches the same minimum to 1e-7, 1.7× faster than
     /// at 1e-10.
     pub rtol: f64,
-    /// Absolute tolerance of the integrator. Default 1e-13.
+    /// Absolute tolerance of the integrator (strain fraction). Default 1e-13.
     pub atol: f64,
+    /// Most integrator steps (accepted + rejected) per simulation (not in the file).
+    pub max_steps: usize,
     /// Iteration limit of a local fit. Default 200.
     pub max_iterations: usize,
     /// Relative objective change at which a local fit has converged. Default 1e-8: the
     /// objective itself is accurate to about 1e-7 at the default `rtol`, and smaller changes
     /// only chase integration error (README.md, "Speed").
     pub ftol: f64,
+    /// Step convergence of a local fit, relative (not in the file).
+    pub xtol: f64,
+    /// Gradient convergence of a local fit, relative (not in the file).
+    pub gtol: f64,
+    /// Finite-difference step in the unit box (not in the file).
+    pub fd_step: f64,
+    /// Initial Levenberg–Marquardt damping, relative to max diag JᵀJ (not in the file).
+    pub lambda0: f64,
+    /// Largest damping before a fit counts as stalled (not in the file).
+    pub lambda_max: f64,
     /// Geodesic acceleration of the Levenberg–Marquardt steps (Transtrum & Sethna 2012):
     /// follows the curved, nearly flat valleys of this objective in a third of the
     /// iterations. Default true.
     pub geodesic: bool,
+    /// Largest accepted ratio 2‖a‖/‖v‖ of geodesic acceleration to velocity (Transtrum &
+    /// Sethna's 0.75; 0.5 and 1.5 measured no better on the 560 °C sweep; not in the file).
+    pub geodesic_alpha: f64,
+    /// Finite-difference step along v for the acceleration, fraction of v (not in the file).
+    pub geodesic_h: f64,
     /// Jacobian of the local fits: "sensitivity" (default) or "finite_difference".
     pub jacobian: JacobianMethod,
 }
 
 impl Default for SolverConfig {
     fn default() -> Self {
+        let lm = LmOptions::default();
+        let ode = OdeOptions::default();
         SolverConfig {
             rtol: 1e-8,
-            atol: 1e-13,
-            max_iterations: 200,
+            atol: ode.atol,
+            max_steps: ode.max_steps,
+            max_iterations: lm.max_iterations,
             ftol: 1e-8,
+            xtol: lm.xtol,
+            gtol: lm.gtol,
+            fd_step: lm.fd_step,
+            lambda0: lm.lambda0,
+            lambda_max: lm.lambda_max,
             geodesic: true,
+            geodesic_alpha: 0.75,
+            geodesic_h: lm.geodesic_h,
             jacobian: JacobianMethod::default(),
+        }
+    }
+}
+
+impl SolverConfig {
+    /// Levenberg–Marquardt options of every local fit.
+    pub fn lm_options(&self) -> LmOptions {
+        LmOptions {
+            max_iterations: self.max_iterations,
+            xtol: self.xtol,
+            ftol: self.ftol,
+            gtol: self.gtol,
+            fd_step: self.fd_step,
+            lambda0: self.lambda0,
+            lambda_max: self.lambda_max,
+            geodesic: self.geodesic.then_some(self.geodesic_alpha),
+            geodesic_h: self.geodesic_h,
+        }
+    }
+    /// Integration options (the horizon `t_end` is set per curve by its user).
+    pub fn ode_options(&self) -> OdeOptions {
+        OdeOptions {
+            rtol: self.rtol,
+            atol: self.atol,
+            max_steps: self.max_steps,
+            ..OdeOptions::default()
         }
     }
 }
@@ -205,31 +300,41 @@ impl Default for DiagnoseConfig {
 
 impl DiagnoseConfig {
     /// Check the values; `Err` names the field.
-    pub fn validate(&self) -> std::result::Result<(), String> {
+    pub fn validate(&self) -> std::result::Result<(), Invalid> {
+        let bad = |field: &str, what: String| Err(invalid(format!("diagnose.{field}"), what));
         if !(self.alpha > 0.0 && self.alpha <= 0.5) {
-            return Err(format!("alpha: must be in (0, 0.5] (got {})", self.alpha));
+            return bad("alpha", format!("must be in (0, 0.5] (got {})", self.alpha));
         }
         if self.max_points < 10 {
-            return Err(format!("max_points: must be at least 10 (got {})", self.max_points));
+            return bad(
+                "max_points",
+                format!("must be at least 10 (got {})", self.max_points),
+            );
         }
         if self.replicate_basins == 0 {
-            return Err("replicate_basins: must be at least 1 (the fitted optimum)".into());
+            return bad(
+                "replicate_basins",
+                "must be at least 1 (the fitted optimum)".into(),
+            );
         }
         if !(self.lifetime_sd_floor > 0.0 && self.lifetime_sd_floor.is_finite()) {
-            return Err(format!(
-                "lifetime_sd_floor: must be positive (got {})",
-                self.lifetime_sd_floor
-            ));
+            return bad(
+                "lifetime_sd_floor",
+                format!("must be positive (got {})", self.lifetime_sd_floor),
+            );
         }
         for (i, e) in self.extensions.iter().enumerate() {
             if !EXTENSION_NAMES.contains(&e.as_str()) {
-                return Err(format!(
-                    "extensions: unknown extension '{e}' (known: {})",
-                    EXTENSION_NAMES.join(", ")
-                ));
+                return bad(
+                    "extensions",
+                    format!(
+                        "unknown extension '{e}' (known: {})",
+                        EXTENSION_NAMES.join(", ")
+                    ),
+                );
             }
             if self.extensions[..i].contains(e) {
-                return Err(format!("extensions: '{e}' is listed twice"));
+                return bad("extensions", format!("'{e}' is listed twice"));
             }
         }
         // Holm's first threshold is α/m over m = extensions + 1 tests; the smallest bootstrap
@@ -241,45 +346,112 @@ impl DiagnoseConfig {
         };
         let need = (m as f64 / self.alpha).ceil() as usize - 1;
         if self.bootstrap < need {
-            return Err(format!(
-                "bootstrap: {} replicates can never reject at alpha = {} over {m} tests \
-                 (the smallest p-value is 1/(bootstrap + 1)); use at least {need}",
-                self.bootstrap, self.alpha
-            ));
+            return bad(
+                "bootstrap",
+                format!(
+                    "{} replicates can never reject at alpha = {} over {m} tests (the smallest \
+                     p-value is 1/(bootstrap + 1)); use at least {need}",
+                    self.bootstrap, self.alpha
+                ),
+            );
         }
         Ok(())
     }
 }
 
-/// A validated run configuration.
-#[derive(Debug, Clone, PartialEq)]
+/// How and where a run is carried out: nothing here changes a result, so the run identity
+/// leaves it out ([`IDENTITY_EXCLUDED`]).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RunOptions {
+    /// Output folder (`--out`); `None`: `results/<name>/<command>/`.
+    pub out: Option<PathBuf>,
+    /// Worker threads of a sweep (`--threads`); `None`: all cores.
+    pub threads: Option<usize>,
+    /// (I, N): the I-th (1-based) of N disjoint parts of a sweep (`--shard I/N`).
+    pub shard: Option<(usize, usize)>,
+    /// Stop (as if interrupted) after this many new fits: for tests of resumption.
+    pub stop_after: Option<usize>,
+    /// Draw a progress bar (only when stderr is a terminal).
+    pub progress: bool,
+}
+
+/// What the command line may set over the file; `None` keeps the file's value.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Overrides {
+    /// `--starts`: Latin-hypercube starts of a sweep.
+    pub starts: Option<usize>,
+    /// `--seed`: seed of the sweep's starts.
+    pub seed: Option<u64>,
+    /// `--w`: one lifetime weight for every curve, replacing `w_grid` and `w_sets`.
+    pub w: Option<f64>,
+    /// `--start`: `fit`'s start points.
+    pub fit_starts: Option<StartChoice>,
+    /// `diagnose`'s command-line settings.
+    pub diagnose: DiagnoseOverrides,
+    /// Where and how to run (never part of the identity).
+    pub run: RunOptions,
+}
+
+/// What `diagnose`'s command line may set over `[diagnose]`; `None` keeps the file's value.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct DiagnoseOverrides {
+    /// `--starts`: Latin-hypercube starts per model.
+    pub starts: Option<usize>,
+    /// `--seed`: seed of the starts and the bootstrap.
+    pub seed: Option<u64>,
+    /// `--bootstrap`: most bootstrap replicates.
+    pub bootstrap: Option<usize>,
+    /// `--alpha`: false-alarm level.
+    pub alpha: Option<f64>,
+}
+
+/// The resolved, validated run configuration: built once from the TOML file and the command
+/// line (and bound to the content hash of its data by [`RunConfig::with_data`]), then passed
+/// to every command. Serialisable; see [`IDENTITY_EXCLUDED`] for what the run identity skips.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct RunConfig {
     /// The configuration file itself.
     pub path: PathBuf,
-    /// Run name (outputs go to `results/<name>/`). Default: the file's stem.
+    /// Run name (outputs go to `results/<name>/`). Default: the file's stem. No path
+    /// separators and no `..`.
     pub name: String,
     /// Curves CSV, resolved against the configuration's directory.
     pub curves: PathBuf,
     /// Ruptures CSV, resolved against the configuration's directory.
     pub ruptures: PathBuf,
+    /// Content hash of the loaded data ([`crate::identity::data_hash`]); empty until
+    /// [`RunConfig::with_data`] binds the configuration to its data.
+    pub data_hash: String,
     /// Keep only curves at this temperature (°C).
+    #[serde(rename = "temperature_C")]
     pub temperature_c: Option<f64>,
     /// Model registry name. Default `khd`.
     pub model: String,
-    /// Extension names (none implemented yet).
+    /// Extension names (DESIGN.md §6), in the order given.
     pub extensions: Vec<String>,
     /// Stresses (MPa) of tests declared interrupted.
     pub interrupted: Vec<f64>,
-    /// Constants in the model's order.
+    /// Constants in the model's order (with extension defaults filled in).
     pub constants: Vec<ConstantConfig>,
-    /// `[objective]`.
+    /// `[objective]`, with `--w` applied.
     pub objective: ObjectiveConfig,
-    /// `[sweep]`.
-    pub sweep: SweepConfig,
-    /// `[solver]`.
+    /// `[solver]`, every setting resolved.
     pub solver: SolverConfig,
-    /// `[diagnose]`.
+    /// `[sweep]`, with `--starts` and `--seed` applied.
+    pub sweep: SweepConfig,
+    /// `fit`'s choices.
+    pub fit: FitConfig,
+    /// `[diagnose]`, with the command line applied. Not part of the run identity: no
+    /// journal is kept for `diagnose`, and these settings change no fit or sweep.
     pub diagnose: DiagnoseConfig,
+    /// Where and how the run is carried out (not part of the identity).
+    pub run: RunOptions,
+    /// Notes for the user found while resolving (e.g. an extension constant that took its
+    /// default bounds); printed on stderr by the binary. Not a setting.
+    #[serde(skip)]
+    pub warnings: Vec<String>,
 }
 
 #[derive(Deserialize)]
@@ -303,7 +475,7 @@ struct RawConfig {
     #[serde(default)]
     sweep: SweepConfig,
     #[serde(default)]
-    solver: SolverConfig,
+    solver: RawSolver,
     #[serde(default)]
     diagnose: DiagnoseConfig,
 }
@@ -321,46 +493,113 @@ struct RawConstant {
     scale: Option<Scale>,
 }
 
+/// `[solver]` as the file gives it: the keys a user may set.
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct RawSolver {
+    rtol: Option<f64>,
+    atol: Option<f64>,
+    max_iterations: Option<usize>,
+    ftol: Option<f64>,
+    geodesic: Option<bool>,
+    jacobian: Option<JacobianMethod>,
+}
+
+/// A validation failure: the dotted field (e.g. `constants.B`, `solver.ftol`) and what is
+/// wrong with it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Invalid {
+    /// Dotted field path, as in the TOML file.
+    pub field: String,
+    /// What is wrong, one line.
+    pub what: String,
+}
+
+fn invalid(field: impl Into<String>, what: impl Into<String>) -> Invalid {
+    Invalid {
+        field: field.into(),
+        what: what.into(),
+    }
+}
+
 impl RunConfig {
-    /// Read and validate a configuration file.
+    /// Read and validate a configuration file, with nothing from the command line and no
+    /// data bound (see [`RunConfig::resolve`] for a whole run).
     pub fn load(path: &Path) -> Result<RunConfig> {
+        Self::load_with(path, &Overrides::default())
+    }
+
+    /// Read a configuration file and apply the command line.
+    pub fn load_with(path: &Path, cli: &Overrides) -> Result<RunConfig> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        Self::from_str(&text, path)
+        Self::from_str_with(&text, path, cli)
+    }
+
+    /// A whole run's configuration: the file, the command line and the data, loaded and
+    /// bound (the one way the binary builds it).
+    pub fn resolve(path: &Path, cli: &Overrides) -> Result<(RunConfig, Dataset)> {
+        let cfg = Self::load_with(path, cli)?;
+        let data = cfg.load_data()?;
+        Ok((cfg.with_data(&data), data))
+    }
+
+    /// Bind the configuration to the content hash of its loaded data.
+    pub fn with_data(mut self, data: &Dataset) -> RunConfig {
+        self.data_hash = crate::identity::data_hash(data);
+        self
     }
 
     /// Parse and validate configuration `text`; `path` locates relative data paths and names
     /// the file in errors.
     pub fn from_str(text: &str, path: &Path) -> Result<RunConfig> {
+        Self::from_str_with(text, path, &Overrides::default())
+    }
+
+    /// [`RunConfig::from_str`] with the command line applied.
+    pub fn from_str_with(text: &str, path: &Path, cli: &Overrides) -> Result<RunConfig> {
         let raw: RawConfig = toml::from_str(text).map_err(|e| toml_error(text, path, &e))?;
-        let err = |msg: String| Error::config(path, msg);
+        let at = |inv: Invalid| {
+            Error::config_at(
+                path,
+                field_line(text, &inv.field),
+                format!("{}: {}", inv.field, inv.what),
+            )
+        };
+        let cli_err = |inv: Invalid| Error::Invalid(format!("{}: {}", inv.field, inv.what));
+        validate_overrides(cli).map_err(cli_err)?;
+        let cfg = Self::from_raw(raw, path, cli).map_err(at)?;
+        cfg.validate().map_err(at)?;
+        Ok(cfg)
+    }
 
-        model::registry(&raw.model).map_err(|e| err(format!("model: {e}")))?;
-        for (i, ext) in raw.extensions.iter().enumerate() {
-            if !EXTENSION_NAMES.contains(&ext.as_str()) {
-                return Err(err(format!(
-                    "extensions: unknown extension '{ext}' (known: {})",
-                    EXTENSION_NAMES.join(", ")
-                )));
-            }
-            if raw.extensions[..i].contains(ext) {
-                return Err(err(format!("extensions: '{ext}' is listed twice")));
-            }
-        }
+    fn from_raw(
+        raw: RawConfig,
+        path: &Path,
+        cli: &Overrides,
+    ) -> std::result::Result<RunConfig, Invalid> {
+        model::registry(&raw.model).map_err(|e| invalid("model", e.to_string()))?;
+        validate_extensions(&raw.extensions)?;
+        let base = model::registry(&raw.model).map_err(|e| invalid("model", e.to_string()))?;
+        let n_base = base.constants().len();
         let m = model::build(&raw.model, &raw.extensions)
-            .map_err(|e| err(format!("extensions: {e}")))?;
-
+            .map_err(|e| invalid("extensions", e.to_string()))?;
         let specs = m.constants();
         for name in raw.constants.keys() {
             if !specs.iter().any(|s| s.name == name) {
-                return Err(err(format!(
-                    "constants: unknown constant '{name}' for model '{}' (known: {})",
-                    raw.model,
-                    specs.iter().map(|s| s.name).collect::<Vec<_>>().join(", ")
-                )));
+                return Err(invalid(
+                    "constants",
+                    format!(
+                        "unknown constant '{name}' for model '{}' (known: {})",
+                        m.name(),
+                        specs.iter().map(|s| s.name).collect::<Vec<_>>().join(", ")
+                    ),
+                ));
             }
         }
         let mut constants = Vec::with_capacity(specs.len());
-        for s in specs {
+        let mut missing_base = Vec::new();
+        let mut warnings = Vec::new();
+        for (j, s) in specs.iter().enumerate() {
             let c = match raw.constants.get(s.name) {
                 Some(r) => ConstantConfig {
                     name: s.name.to_string(),
@@ -370,78 +609,162 @@ impl RunConfig {
                     start: r.start,
                     scale: r.scale.unwrap_or(s.scale),
                 },
-                None => ConstantConfig {
-                    name: s.name.to_string(),
-                    unit: s.unit,
-                    lb: s.lb,
-                    ub: s.ub,
-                    start: None,
-                    scale: s.scale,
-                },
+                None => {
+                    if j < n_base {
+                        missing_base.push(s.name);
+                    } else {
+                        warnings.push(format!(
+                            "{}: constants.{}: not in [constants]; the extension's default bounds [{}, {}] ({} scale) apply, without a start",
+                            path.display(),
+                            s.name,
+                            s.lb,
+                            s.ub,
+                            if s.scale == Scale::Log { "log" } else { "linear" }
+                        ));
+                    }
+                    ConstantConfig {
+                        name: s.name.to_string(),
+                        unit: s.unit,
+                        lb: s.lb,
+                        ub: s.ub,
+                        start: None,
+                        scale: s.scale,
+                    }
+                }
             };
-            validate_constant(&c).map_err(|m| err(format!("constants.{}: {m}", c.name)))?;
+            validate_constant(&c).map_err(|m| invalid(format!("constants.{}", c.name), m))?;
             constants.push(c);
         }
-
-        if let Some(t) = raw.temperature_c {
-            if !t.is_finite() {
-                return Err(err(format!("temperature_C: must be finite (got {t})")));
-            }
-        }
-        for &s in &raw.interrupted {
-            if !(s.is_finite() && s > 0.0) {
-                return Err(err(format!(
-                    "interrupted: stresses must be positive and finite (got {s})"
-                )));
-            }
-        }
-        validate_objective(&raw.objective).map_err(|m| err(format!("objective.{m}")))?;
-        if raw.sweep.starts == 0 {
-            return Err(err("sweep.starts: must be at least 1".into()));
-        }
-        let sv = &raw.solver;
-        for (k, v) in [("rtol", sv.rtol), ("atol", sv.atol)] {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(err(format!("solver.{k}: must be positive (got {v})")));
-            }
-        }
-        if !(sv.ftol > 0.0 && sv.ftol < 1.0) {
-            return Err(err(format!(
-                "solver.ftol: must be in (0, 1) (got {})",
-                sv.ftol
-            )));
-        }
-        raw.diagnose
-            .validate()
-            .map_err(|m| err(format!("diagnose.{m}")))?;
-        if sv.max_iterations == 0 {
-            return Err(err("solver.max_iterations: must be at least 1".into()));
+        if !missing_base.is_empty() {
+            return Err(invalid(
+                "constants",
+                format!(
+                    "missing {} (every constant of the base model '{}' needs lb and ub)",
+                    missing_base.join(", "),
+                    raw.model
+                ),
+            ));
         }
 
-        let dir = path.parent().unwrap_or(Path::new(""));
         let name = match raw.name {
-            Some(n) if n.trim().is_empty() => return Err(err("name: must not be empty".into())),
             Some(n) => n,
             None => path
                 .file_stem()
                 .map(|s| s.to_string_lossy().into_owned())
                 .unwrap_or_else(|| "run".into()),
         };
+        let dir = path.parent().unwrap_or(Path::new(""));
+        let mut objective = raw.objective;
+        if let Some(w) = cli.w {
+            objective.w_grid = vec![w];
+            objective.w_sets.clear();
+        }
+        let d = SolverConfig::default();
+        let rs = raw.solver;
+        let solver = SolverConfig {
+            rtol: rs.rtol.unwrap_or(d.rtol),
+            atol: rs.atol.unwrap_or(d.atol),
+            max_iterations: rs.max_iterations.unwrap_or(d.max_iterations),
+            ftol: rs.ftol.unwrap_or(d.ftol),
+            geodesic: rs.geodesic.unwrap_or(d.geodesic),
+            jacobian: rs.jacobian.unwrap_or(d.jacobian),
+            ..d
+        };
+        let sweep = SweepConfig {
+            starts: cli.starts.unwrap_or(raw.sweep.starts),
+            seed: cli.seed.unwrap_or(raw.sweep.seed),
+            ..raw.sweep
+        };
         Ok(RunConfig {
             path: path.to_path_buf(),
             name,
             curves: dir.join(&raw.curves),
             ruptures: dir.join(&raw.ruptures),
+            data_hash: String::new(),
             temperature_c: raw.temperature_c,
             model: raw.model,
             extensions: raw.extensions,
             interrupted: raw.interrupted,
             constants,
-            objective: raw.objective,
-            sweep: raw.sweep,
-            solver: raw.solver,
-            diagnose: raw.diagnose,
+            objective,
+            solver,
+            sweep,
+            fit: FitConfig {
+                starts: cli.fit_starts.unwrap_or_default(),
+            },
+            diagnose: DiagnoseConfig {
+                starts: cli.diagnose.starts.unwrap_or(raw.diagnose.starts),
+                seed: cli.diagnose.seed.unwrap_or(raw.diagnose.seed),
+                bootstrap: cli.diagnose.bootstrap.unwrap_or(raw.diagnose.bootstrap),
+                alpha: cli.diagnose.alpha.unwrap_or(raw.diagnose.alpha),
+                ..raw.diagnose
+            },
+            run: cli.run.clone(),
+            warnings,
         })
+    }
+
+    /// Check every setting; the first problem found, by field.
+    pub fn validate(&self) -> std::result::Result<(), Invalid> {
+        validate_name(&self.name)?;
+        model::registry(&self.model).map_err(|e| invalid("model", e.to_string()))?;
+        validate_extensions(&self.extensions)?;
+        let m = model::build(&self.model, &self.extensions)
+            .map_err(|e| invalid("extensions", e.to_string()))?;
+        let names: Vec<&str> = m.constants().iter().map(|s| s.name).collect();
+        if self.constant_names() != names {
+            return Err(invalid(
+                "constants",
+                format!(
+                    "the model '{}' has the constants {} (in this order), not {}",
+                    m.name(),
+                    names.join(", "),
+                    self.constant_names().join(", ")
+                ),
+            ));
+        }
+        for c in &self.constants {
+            validate_constant(c).map_err(|m| invalid(format!("constants.{}", c.name), m))?;
+        }
+        if let Some(t) = self.temperature_c {
+            if !t.is_finite() {
+                return Err(invalid(
+                    "temperature_C",
+                    format!("must be finite (got {t})"),
+                ));
+            }
+        }
+        for &s in &self.interrupted {
+            if !(s.is_finite() && s > 0.0) {
+                return Err(invalid(
+                    "interrupted",
+                    format!("stresses must be positive and finite (got {s})"),
+                ));
+            }
+        }
+        validate_objective(&self.objective)?;
+        if self.sweep.starts == 0 {
+            return Err(invalid("sweep.starts", "must be at least 1"));
+        }
+        validate_solver(&self.solver)?;
+        self.diagnose.validate()?;
+        validate_run(&self.run)
+    }
+
+    /// The model's full name with its extensions, e.g. `khd+constant_load`.
+    pub fn model_name(&self) -> String {
+        std::iter::once(self.model.as_str())
+            .chain(self.extensions.iter().map(|s| s.as_str()))
+            .collect::<Vec<_>>()
+            .join("+")
+    }
+
+    /// The output folder of `command`: `--out`, else `results/<name>/<command>/`.
+    pub fn out_dir(&self, command: &str) -> PathBuf {
+        self.run
+            .out
+            .clone()
+            .unwrap_or_else(|| PathBuf::from("results").join(&self.name).join(command))
     }
 
     /// Options for [`data::load`]: the temperature filter and the interrupted tests.
@@ -483,6 +806,39 @@ impl RunConfig {
     }
 }
 
+fn validate_name(name: &str) -> std::result::Result<(), Invalid> {
+    if name.trim().is_empty() {
+        return Err(invalid("name", "must not be empty"));
+    }
+    if name.contains(['/', '\\', '\0']) || name.contains("..") {
+        return Err(invalid(
+            "name",
+            format!(
+                "'{name}' must not contain '/', '\\' or '..' (it names the folder results/<name>/)"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+fn validate_extensions(exts: &[String]) -> std::result::Result<(), Invalid> {
+    for (i, ext) in exts.iter().enumerate() {
+        if !EXTENSION_NAMES.contains(&ext.as_str()) {
+            return Err(invalid(
+                "extensions",
+                format!(
+                    "unknown extension '{ext}' (known: {})",
+                    EXTENSION_NAMES.join(", ")
+                ),
+            ));
+        }
+        if exts[..i].contains(ext) {
+            return Err(invalid("extensions", format!("'{ext}' is listed twice")));
+        }
+    }
+    Ok(())
+}
+
 fn validate_constant(c: &ConstantConfig) -> std::result::Result<(), String> {
     if !c.lb.is_finite() || !c.ub.is_finite() {
         return Err(format!(
@@ -507,44 +863,177 @@ fn validate_constant(c: &ConstantConfig) -> std::result::Result<(), String> {
     Ok(())
 }
 
-fn validate_objective(o: &ObjectiveConfig) -> std::result::Result<(), String> {
+fn valid_weight(w: f64) -> bool {
+    (0.0..=1.0).contains(&w)
+}
+
+fn validate_objective(o: &ObjectiveConfig) -> std::result::Result<(), Invalid> {
     if o.w_grid.is_empty() && o.w_sets.is_empty() {
-        return Err("w_grid: w_grid and w_sets are both empty; give at least one weight".into());
+        return Err(invalid(
+            "objective.w_grid",
+            "w_grid and w_sets are both empty; give at least one weight",
+        ));
     }
     for &w in &o.w_grid {
-        if !(w.is_finite() && w >= 0.0) {
-            return Err(format!(
-                "w_grid: weights must be finite and non-negative (got {w})"
+        if !valid_weight(w) {
+            return Err(invalid(
+                "objective.w_grid",
+                format!("weights must be in [0, 1] (got {w})"),
             ));
         }
     }
     for (k, set) in o.w_sets.iter().enumerate() {
         if set.is_empty() {
-            return Err(format!("w_sets[{k}]: empty weight set"));
+            return Err(invalid(
+                format!("objective.w_sets[{k}]"),
+                "empty weight set",
+            ));
         }
         for &w in set {
-            if !(w.is_finite() && w >= 0.0) {
-                return Err(format!(
-                    "w_sets[{k}]: weights must be finite and non-negative (got {w})"
+            if !valid_weight(w) {
+                return Err(invalid(
+                    format!("objective.w_sets[{k}]"),
+                    format!("weights must be in [0, 1] (got {w})"),
                 ));
             }
         }
     }
     if !(o.omega_f > 0.0 && o.omega_f < 1.0) {
-        return Err(format!("omega_f: must be in (0, 1) (got {})", o.omega_f));
+        return Err(invalid(
+            "objective.omega_f",
+            format!("must be in (0, 1) (got {})", o.omega_f),
+        ));
     }
     Ok(())
 }
 
-/// toml's error as one line: `line N: message`.
+fn validate_solver(s: &SolverConfig) -> std::result::Result<(), Invalid> {
+    let positive = [
+        ("rtol", s.rtol),
+        ("atol", s.atol),
+        ("xtol", s.xtol),
+        ("gtol", s.gtol),
+        ("fd_step", s.fd_step),
+        ("lambda0", s.lambda0),
+        ("lambda_max", s.lambda_max),
+        ("geodesic_alpha", s.geodesic_alpha),
+        ("geodesic_h", s.geodesic_h),
+    ];
+    for (k, v) in positive {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(invalid(
+                format!("solver.{k}"),
+                format!("must be positive (got {v})"),
+            ));
+        }
+    }
+    if !(s.ftol > 0.0 && s.ftol < 1.0) {
+        return Err(invalid(
+            "solver.ftol",
+            format!("must be in (0, 1) (got {})", s.ftol),
+        ));
+    }
+    if s.max_iterations == 0 {
+        return Err(invalid("solver.max_iterations", "must be at least 1"));
+    }
+    if s.max_steps == 0 {
+        return Err(invalid("solver.max_steps", "must be at least 1"));
+    }
+    Ok(())
+}
+
+fn validate_run(r: &RunOptions) -> std::result::Result<(), Invalid> {
+    if let Some((i, n)) = r.shard {
+        if i == 0 || n == 0 || i > n {
+            return Err(invalid("--shard", format!("{i}/{n}: need 1 <= I <= N")));
+        }
+    }
+    if r.threads == Some(0) {
+        return Err(invalid("--threads", "must be at least 1"));
+    }
+    Ok(())
+}
+
+fn validate_overrides(cli: &Overrides) -> std::result::Result<(), Invalid> {
+    if cli.starts == Some(0) {
+        return Err(invalid("--starts", "must be at least 1"));
+    }
+    if let Some(w) = cli.w {
+        if !valid_weight(w) {
+            return Err(invalid(
+                "--w",
+                format!("must be a weight in [0, 1], not {w}"),
+            ));
+        }
+    }
+    validate_run(&cli.run)
+}
+
+/// 1-based line of byte offset `pos` in `text`.
+fn line_at(text: &str, pos: usize) -> usize {
+    text[..pos.min(text.len())].matches('\n').count() + 1
+}
+
+/// The line of the TOML file where `field` (dotted, e.g. `constants.B`, `objective.w_sets[0]`)
+/// is given: the deepest part of it that the file contains (its table header when the key
+/// itself is absent); 0 when the file does not mention it at all.
+fn field_line(text: &str, field: &str) -> usize {
+    let Ok(doc) = toml_edit::ImDocument::parse(text) else {
+        return 0;
+    };
+    let mut table: &dyn toml_edit::TableLike = doc.as_table();
+    let mut found = None;
+    for part in field.split('.') {
+        let key = part.split('[').next().unwrap_or(part);
+        let Some((k, item)) = table.get_key_value(key) else {
+            break;
+        };
+        found = k.span().or_else(|| item.span()).or(found);
+        match item.as_table_like() {
+            Some(t) => table = t,
+            None => break,
+        }
+    }
+    found.map_or(0, |r| line_at(text, r.start))
+}
+
+/// The dotted name of the deepest key of the TOML `text` whose key or value covers byte
+/// `pos` (e.g. `sweep.sead` for an unknown key in `[sweep]`).
+fn field_at(text: &str, pos: usize) -> Option<String> {
+    fn walk(t: &dyn toml_edit::TableLike, pos: usize, prefix: &str) -> Option<String> {
+        for (k, item) in t.iter() {
+            let name = if prefix.is_empty() {
+                k.to_string()
+            } else {
+                format!("{prefix}.{k}")
+            };
+            let key_span = t.get_key_value(k).and_then(|(key, _)| key.span());
+            let covers = |r: Option<std::ops::Range<usize>>| r.is_some_and(|r| r.contains(&pos));
+            if let Some(sub) = item.as_table_like() {
+                if let Some(deeper) = walk(sub, pos, &name) {
+                    return Some(deeper);
+                }
+            }
+            if covers(key_span) || covers(item.span()) {
+                return Some(name);
+            }
+        }
+        None
+    }
+    let doc = toml_edit::ImDocument::parse(text).ok()?;
+    walk(doc.as_table(), pos, "")
+}
+
+/// toml's error as one line: `FILE:LINE: field: what`.
 fn toml_error(text: &str, path: &Path, e: &toml::de::Error) -> Error {
     let msg = e.message().trim().replace('\n', " ");
-    match e.span() {
-        Some(span) => {
-            let line = text[..span.start.min(text.len())].matches('\n').count() + 1;
-            Error::config(path, format!("line {line}: {msg}"))
-        }
-        None => Error::config(path, msg),
+    let Some(span) = e.span() else {
+        return Error::config(path, msg);
+    };
+    let line = line_at(text, span.start);
+    match field_at(text, span.start) {
+        Some(field) => Error::config_at(path, line, format!("{field}: {msg}")),
+        None => Error::config_at(path, line, msg),
     }
 }
 
@@ -564,6 +1053,9 @@ interrupted = [70]
 [constants]
 A     = { lb = 1e-10, ub = 1e-9, start = 1e-9,   scale = "log" }
 B     = { lb = 0.1,   ub = 0.2,  start = 0.11 }
+Hstar = { lb = 0.4,   ub = 0.8 }
+h     = { lb = 1e4,   ub = 2e5,  start = 5.05e4, scale = "log" }
+Kc    = { lb = 1e-6,  ub = 3e-5, start = 6.86e-6, scale = "log" }
 C     = { lb = 3,     ub = 10,   start = 4.311 }
 
 [objective]
@@ -579,6 +1071,15 @@ seed = 7
 [solver]
 rtol = 1e-8
 "#;
+
+    /// The six base constants, as a `[constants]` table.
+    const CONSTANTS: &str = "[constants]\n\
+        A     = { lb = 1e-10, ub = 1e-9, scale = \"log\" }\n\
+        B     = { lb = 0.1,   ub = 0.2 }\n\
+        Hstar = { lb = 0.4,   ub = 0.8 }\n\
+        h     = { lb = 1e4,   ub = 2e5, scale = \"log\" }\n\
+        Kc    = { lb = 1e-6,  ub = 3e-5, scale = \"log\" }\n\
+        C     = { lb = 3,     ub = 10 }\n";
 
     fn parse(text: &str) -> Result<RunConfig> {
         RunConfig::from_str(text, Path::new("cfg/run.toml"))
@@ -597,7 +1098,7 @@ rtol = 1e-8
         assert_eq!(c.constants[1].scale, Scale::Linear);
         assert_eq!(c.constants[5].lb, 3.0);
         assert_eq!(c.constants[5].start, Some(4.311));
-        // Hstar not given: spec defaults, no start
+        // Hstar without a start
         assert_eq!(c.constants[2].start, None);
         assert_eq!(c.constants[2].lb, 0.4);
         assert_eq!(c.constants[3].scale, Scale::Log);
@@ -615,11 +1116,17 @@ rtol = 1e-8
         assert_eq!(w[2], vec![0.12, 0.12, 1.0]);
         assert!(c.objective.weight_vectors(2, &c.path).is_err());
         assert_eq!(c.load_options().interrupted, vec![70.0]);
+        assert!(c.warnings.is_empty());
+        assert_eq!(c.model_name(), "khd");
+        assert_eq!(c.out_dir("fit"), Path::new("results/t/fit"));
     }
 
     #[test]
     fn defaults() {
-        let c = parse("curves = \"a.csv\"\nruptures = \"b.csv\"\n").unwrap();
+        let c = parse(&format!(
+            "curves = \"a.csv\"\nruptures = \"b.csv\"\n{CONSTANTS}"
+        ))
+        .unwrap();
         assert_eq!(c.name, "run");
         assert_eq!(c.model, "khd");
         assert_eq!(c.objective.w_grid.len(), 10);
@@ -634,12 +1141,105 @@ rtol = 1e-8
         assert_eq!(c.solver.ftol, 1e-8);
         assert!(c.solver.geodesic);
         assert_eq!(c.constants.len(), 6);
+        assert_eq!(c.fit.starts, StartChoice::Both);
+        assert_eq!(c.data_hash, "");
+    }
+
+    /// The resolved solver settings give exactly the options the fits used before they were
+    /// resolved in one place (results must not change).
+    #[test]
+    fn solver_options_match_the_previous_construction() {
+        let s = SolverConfig::default();
+        assert_eq!(
+            s.lm_options(),
+            LmOptions {
+                max_iterations: 200,
+                ftol: 1e-8,
+                geodesic: Some(0.75),
+                ..LmOptions::default()
+            }
+        );
+        assert_eq!(
+            s.ode_options(),
+            OdeOptions {
+                rtol: 1e-8,
+                atol: 1e-13,
+                ..OdeOptions::default()
+            }
+        );
+    }
+
+    #[test]
+    fn command_line_overrides_the_file() {
+        let cli = Overrides {
+            starts: Some(3),
+            seed: Some(9),
+            w: Some(0.4),
+            fit_starts: Some(StartChoice::Guess),
+            diagnose: DiagnoseOverrides {
+                starts: Some(5),
+                bootstrap: Some(199),
+                ..DiagnoseOverrides::default()
+            },
+            run: RunOptions {
+                out: Some("o".into()),
+                threads: Some(1),
+                ..RunOptions::default()
+            },
+        };
+        let c = RunConfig::from_str_with(FULL, Path::new("cfg/run.toml"), &cli).unwrap();
+        assert_eq!((c.sweep.starts, c.sweep.seed), (3, 9));
+        assert_eq!((c.diagnose.starts, c.diagnose.bootstrap), (5, 199));
+        assert_eq!(c.diagnose.alpha, 0.05);
+        assert_eq!(c.objective.w_grid, vec![0.4]);
+        assert!(c.objective.w_sets.is_empty());
+        assert_eq!(c.fit.starts, StartChoice::Guess);
+        assert_eq!(c.out_dir("fit"), Path::new("o"));
+        let bad = Overrides {
+            w: Some(1.5),
+            ..Overrides::default()
+        };
+        let e = RunConfig::from_str_with(FULL, Path::new("cfg/run.toml"), &bad)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("--w") && e.contains("[0, 1]"), "{e}");
+    }
+
+    #[test]
+    fn extension_constants_take_their_defaults_with_a_note() {
+        let c = parse(&format!(
+            "curves = \"a.csv\"\nruptures = \"b.csv\"\nextensions = [\"loading_strain\"]\n{CONSTANTS}"
+        ))
+        .unwrap();
+        assert_eq!(c.constants.len(), 7);
+        assert_eq!(c.constants[6].name, "EL");
+        assert_eq!(c.warnings.len(), 1);
+        assert!(
+            c.warnings[0].contains("constants.EL") && c.warnings[0].contains("default"),
+            "{:?}",
+            c.warnings
+        );
+        assert_eq!(c.model_name(), "khd+loading_strain");
+    }
+
+    /// The serialisation round-trips (the journal stores it; the identity is made from it).
+    #[test]
+    fn serialisation_round_trips() {
+        let c = parse(FULL).unwrap();
+        let json = serde_json::to_string(&c).unwrap();
+        let mut back: RunConfig = serde_json::from_str(&json).unwrap();
+        // units are the model's, not settings
+        for (b, c) in back.constants.iter_mut().zip(&c.constants) {
+            b.unit = c.unit;
+        }
+        assert_eq!(back, c);
+        assert!(back.validate().is_ok());
     }
 
     fn err_of(text: &str) -> String {
         let e = parse(text).unwrap_err().to_string();
         assert!(!e.contains('\n'), "multi-line error: {e}");
-        assert!(e.starts_with("cfg/run.toml: "), "{e}");
+        assert!(e.starts_with("cfg/run.toml"), "{e}");
         e
     }
 
@@ -647,20 +1247,29 @@ rtol = 1e-8
     fn errors() {
         let base = "curves = \"a.csv\"\nruptures = \"b.csv\"\n";
         let cases: &[(&str, &str)] = &[
-            ("bogus = 1\n", "line 3: unknown field `bogus`"),
-            ("model = \"nope\"\n", "unknown model 'nope'"),
+            (
+                "bogus = 1\n",
+                "cfg/run.toml:3: bogus: unknown field `bogus`",
+            ),
+            (
+                "model = \"nope\"\n",
+                "cfg/run.toml:3: model: unknown model 'nope'",
+            ),
             (
                 "extensions = [\"constant_load\", \"constant_load\"]\n",
-                "'constant_load' is listed twice",
+                "cfg/run.toml:3: extensions: 'constant_load' is listed twice",
             ),
             (
                 "extensions = [\"loading_strain\"]\n[constants]\nEL = { lb = 2, ub = 1 }\n",
-                "constants.EL",
+                "cfg/run.toml:5: constants.EL: lb (2) must be below ub (1)",
             ),
-            ("extensions = [\"foo\"]\n", "unknown extension 'foo'"),
+            (
+                "extensions = [\"foo\"]\n",
+                "cfg/run.toml:3: extensions: unknown extension 'foo'",
+            ),
             (
                 "[constants]\nX = { lb = 1, ub = 2 }\n",
-                "unknown constant 'X'",
+                "cfg/run.toml:3: constants: unknown constant 'X'",
             ),
             (
                 "[constants]\nB = { lb = 1, ub = 2, foo = 3 }\n",
@@ -668,11 +1277,11 @@ rtol = 1e-8
             ),
             (
                 "[constants]\nB = { lb = 2, ub = 1 }\n",
-                "constants.B: lb (2) must be below ub (1)",
+                "cfg/run.toml:4: constants.B: lb (2) must be below ub (1)",
             ),
             (
                 "[constants]\nB = { lb = 1, ub = inf }\n",
-                "constants.B: bounds must be finite",
+                "cfg/run.toml:4: constants.B: bounds must be finite",
             ),
             (
                 "[constants]\nB = { lb = 0, ub = 1, scale = \"log\" }\n",
@@ -686,15 +1295,27 @@ rtol = 1e-8
                 "[constants]\nB = { lb = 0, ub = 1, scale = \"ln\" }\n",
                 "unknown variant `ln`",
             ),
+            // A base constant missing from [constants] is an error naming all missing ones.
+            (
+                "[constants]\nB = { lb = 0.1, ub = 0.2 }\n",
+                "cfg/run.toml:3: constants: missing A, Hstar, h, Kc, C",
+            ),
             (
                 "[objective]\nw_grid = []\n",
-                "objective.w_grid: w_grid and w_sets are both empty",
+                "cfg/run.toml:4: objective.w_grid: w_grid and w_sets are both empty",
             ),
             (
                 "[objective]\nw_grid = [-0.1]\n",
-                "objective.w_grid: weights must be finite and non-negative",
+                "cfg/run.toml:4: objective.w_grid: weights must be in [0, 1] (got -0.1)",
             ),
-            ("[objective]\nw_sets = [[1, -1]]\n", "objective.w_sets[0]"),
+            (
+                "[objective]\nw_grid = [0.5, 1.2]\n",
+                "objective.w_grid: weights must be in [0, 1] (got 1.2)",
+            ),
+            (
+                "[objective]\n\nw_sets = [[1, 1.01]]\n",
+                "cfg/run.toml:5: objective.w_sets[0]: weights must be in [0, 1] (got 1.01)",
+            ),
             (
                 "[objective]\nomega_f = 1.0\n",
                 "objective.omega_f: must be in (0, 1)",
@@ -703,14 +1324,44 @@ rtol = 1e-8
                 "[objective]\nlifetime_term = \"early\"\n",
                 "unknown variant `early`",
             ),
-            ("[solver]\nrtol = 0\n", "solver.rtol: must be positive"),
+            (
+                "[solver]\nrtol = 0\n",
+                "cfg/run.toml:4: solver.rtol: must be positive",
+            ),
             ("[solver]\nftol = 1\n", "solver.ftol: must be in (0, 1)"),
             ("[solver]\natol = -1e-3\n", "solver.atol: must be positive"),
-            ("[sweep]\nstarts = 0\n", "sweep.starts: must be at least 1"),
-            ("[sweep]\nthreads = 2\n", "unknown field `threads`"),
+            ("[solver]\nxtol = 1e-3\n", "unknown field `xtol`"),
+            (
+                "[sweep]\nstarts = 0\n",
+                "cfg/run.toml:4: sweep.starts: must be at least 1",
+            ),
+            (
+                "[sweep]\nthreads = 2\n",
+                "cfg/run.toml:4: sweep.threads: unknown field `threads`",
+            ),
+            (
+                "[objective]\nomega_f = \"x\"\n",
+                "cfg/run.toml:4: objective.omega_f: invalid type",
+            ),
+            (
+                "[constants]\nB = { lb = 1, ub = 2, foo = 3 }\n",
+                "cfg/run.toml:4: constants.B.foo: unknown field `foo`",
+            ),
+            (
+                "name = \"../../x\"\n",
+                "cfg/run.toml:3: name: '../../x' must not contain",
+            ),
+            ("name = \"a/b\"\n", "name: 'a/b' must not contain"),
+            ("name = \" \"\n", "name: must not be empty"),
         ];
         for (extra, want) in cases {
-            let e = err_of(&format!("{base}{extra}"));
+            // constants first so that a case about another table is not a missing constant
+            let text = if extra.contains("[constants]") {
+                format!("{base}{extra}")
+            } else {
+                format!("{base}{extra}{CONSTANTS}")
+            };
+            let e = err_of(&text);
             assert!(e.contains(want), "for {extra:?}: got {e}, want {want}");
         }
         let e = err_of("ruptures = \"b.csv\"\n");

@@ -77,7 +77,10 @@ impl Quad {
 impl Ar1 {
     /// White noise of standard deviation `sd`.
     pub fn white(sd: f64) -> Ar1 {
-        Ar1 { sigma: sd, phi: 0.0 }
+        Ar1 {
+            sigma: sd,
+            phi: 0.0,
+        }
     }
 
     /// The AR(1) whose errors have marginal standard deviation `sd` and correlation `phi`.
@@ -201,10 +204,7 @@ fn argmin_phi(q: &Quad) -> f64 {
             best = (f, p);
         }
     }
-    let (mut lo, mut hi) = (
-        (best.1 - step).max(-PHI_MAX),
-        (best.1 + step).min(PHI_MAX),
-    );
+    let (mut lo, mut hi) = ((best.1 - step).max(-PHI_MAX), (best.1 + step).min(PHI_MAX));
     let g = 0.5 * (5f64.sqrt() - 1.0);
     let mut x1 = hi - g * (hi - lo);
     let mut x2 = lo + g * (hi - lo);
@@ -329,10 +329,23 @@ mod tests {
     #[test]
     fn likelihood_equals_the_dense_gaussian() {
         let e = [0.3, -0.1, 0.25, 0.4, -0.2, 0.05, 0.0, 0.11];
-        for p in [Ar1::white(0.2), Ar1 { sigma: 0.15, phi: 0.7 }, Ar1 { sigma: 0.3, phi: -0.4 }] {
+        for p in [
+            Ar1::white(0.2),
+            Ar1 {
+                sigma: 0.15,
+                phi: 0.7,
+            },
+            Ar1 {
+                sigma: 0.3,
+                phi: -0.4,
+            },
+        ] {
             let a = p.neg2ll(&e);
             let b = dense_neg2ll(&p, &e);
-            assert!((a - b).abs() < 1e-10 * b.abs().max(1.0), "{p:?}: {a} vs {b}");
+            assert!(
+                (a - b).abs() < 1e-10 * b.abs().max(1.0),
+                "{p:?}: {a} vs {b}"
+            );
         }
     }
 
@@ -340,7 +353,10 @@ mod tests {
     fn whitening_gives_the_likelihood_quadratic_form() {
         // Σ whitened² + log-determinant terms = −2 ln L.
         let e = vec![0.3, -0.1, 0.25, 0.4, -0.2, 0.05];
-        let p = Ar1 { sigma: 0.2, phi: 0.6 };
+        let p = Ar1 {
+            sigma: 0.2,
+            phi: 0.6,
+        };
         let mut w = e.clone();
         p.whiten(&mut w);
         let n = e.len() as f64;
@@ -352,7 +368,10 @@ mod tests {
     #[test]
     fn unwhitening_inverts_whitening() {
         let e = vec![0.3, -0.1, 0.25, 0.4, -0.2, 0.05];
-        let p = Ar1 { sigma: 0.2, phi: 0.6 };
+        let p = Ar1 {
+            sigma: 0.2,
+            phi: 0.6,
+        };
         let mut w = e.clone();
         p.whiten(&mut w);
         p.unwhiten_strided(&mut w, 6, 1);

@@ -22,9 +22,14 @@ pub enum Error {
         line: usize,
         message: String,
     },
-    /// The run configuration (TOML) is invalid.
-    #[error("{}: {message}", path.display())]
-    Config { path: PathBuf, message: String },
+    /// The run configuration (TOML) is invalid: `FILE:LINE: field: what` (`line == 0`: no
+    /// line is known, e.g. a setting given on the command line).
+    #[error("{}{}: {message}", path.display(), if *line > 0 { format!(":{line}") } else { String::new() })]
+    Config {
+        path: PathBuf,
+        line: usize,
+        message: String,
+    },
     /// A model or extension name that is not registered.
     #[error("unknown model '{0}' (known: {1})")]
     UnknownModel(String, String),
@@ -35,6 +40,13 @@ pub enum Error {
     /// library).
     #[error("plot {}: {message}", path.display())]
     Plot { path: PathBuf, message: String },
+    /// An output folder that cannot be used: another run holds its lock, or it holds the
+    /// results of a different run.
+    #[error("{}: {message}", path.display())]
+    Folder { path: PathBuf, message: String },
+    /// The numeric outputs were written, but plots were not (each failure as `plot PATH: why`).
+    #[error("{}: the numeric outputs are written, but {} plot(s) failed: {}", out.display(), failures.len(), failures.join("; "))]
+    PlotsNotWritten { out: PathBuf, failures: Vec<String> },
     /// Anything else that is the caller's fault (bad arguments).
     #[error("{0}")]
     Invalid(String),
@@ -69,10 +81,15 @@ impl Error {
             message: message.into(),
         }
     }
-    /// A configuration error in a file.
+    /// A configuration error in a file, at no particular line.
     pub fn config(path: impl Into<PathBuf>, message: impl Into<String>) -> Self {
+        Self::config_at(path, 0, message)
+    }
+    /// A configuration error at a 1-based line of the file (0: no line).
+    pub fn config_at(path: impl Into<PathBuf>, line: usize, message: impl Into<String>) -> Self {
         Error::Config {
             path: path.into(),
+            line,
             message: message.into(),
         }
     }

@@ -16,20 +16,20 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
+pub use crate::config::StartChoice;
 use crate::config::{LifetimeTerm, RunConfig};
 use crate::data::{Curve, Dataset};
 use crate::error::{Error, Result};
 use crate::guess::{initial_guess, Guess};
 use crate::lsq::{minimize, LmOptions, LmReport, Termination};
 use crate::model::{build, Model};
-use crate::objective::{mean_abs, CreepProblem, Evaluation, JacobianMethod, Objective, ParamSpace};
+use crate::objective::{
+    mean_abs, CreepProblem, Evaluation, JacobianMethod, Objective, ObjectiveSettings, ParamSpace,
+};
 use crate::ode::OdeOptions;
 
-/// Largest accepted ratio 2‖a‖/‖v‖ of geodesic acceleration to velocity (Transtrum &
-/// Sethna's value; 0.5 and 1.5 measured no better on the 560 °C sweep).
-pub const GEODESIC_ALPHA: f64 = 0.75;
-
-/// Numerical settings of a fit.
+/// Numerical settings of a fit: a view of the resolved [`RunConfig`], derived from it only
+/// by [`FitSettings::from_config`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FitSettings {
     /// Levenberg–Marquardt options (unit-box coordinates).
@@ -45,23 +45,23 @@ pub struct FitSettings {
 }
 
 impl FitSettings {
-    /// Settings from a run configuration.
+    /// The settings of the resolved configuration `cfg` (the one place they are derived).
     pub fn from_config(cfg: &RunConfig) -> Self {
         FitSettings {
-            lm: LmOptions {
-                max_iterations: cfg.solver.max_iterations,
-                ftol: cfg.solver.ftol,
-                geodesic: cfg.solver.geodesic.then_some(GEODESIC_ALPHA),
-                ..LmOptions::default()
-            },
-            ode: OdeOptions {
-                rtol: cfg.solver.rtol,
-                atol: cfg.solver.atol,
-                ..OdeOptions::default()
-            },
+            lm: cfg.solver.lm_options(),
+            ode: cfg.solver.ode_options(),
             omega_f: cfg.objective.omega_f,
             lifetime: cfg.objective.lifetime_term,
             jacobian: cfg.solver.jacobian,
+        }
+    }
+
+    /// What eq. 8 takes of these settings.
+    pub fn objective(&self) -> ObjectiveSettings {
+        ObjectiveSettings {
+            lifetime: self.lifetime,
+            omega_f: self.omega_f,
+            ode: self.ode,
         }
     }
 }
@@ -127,14 +127,7 @@ pub fn local_fit(
 ) -> LocalFit {
     let t0 = Instant::now();
     let problem = CreepProblem {
-        objective: Objective {
-            model,
-            curves,
-            w: w.to_vec(),
-            lifetime: settings.lifetime,
-            omega_f: settings.omega_f,
-            ode: settings.ode,
-        },
+        objective: Objective::new(model, curves, w.to_vec(), settings.objective()),
         space: space.clone(),
         jacobian: settings.jacobian,
     };
@@ -155,30 +148,6 @@ pub fn local_fit(
         eval,
         wall_s: t0.elapsed().as_secs_f64(),
     }
-}
-
-/// The weight vectors a configuration asks for: each w of `w_grid` for every curve, then
-/// each explicit `w_sets` entry (which must have one weight per curve).
-pub fn weight_candidates(cfg: &RunConfig, n_curves: usize) -> Result<Vec<Vec<f64>>> {
-    let mut out: Vec<Vec<f64>> = cfg
-        .objective
-        .w_grid
-        .iter()
-        .map(|&w| vec![w; n_curves])
-        .collect();
-    for (k, set) in cfg.objective.w_sets.iter().enumerate() {
-        if set.len() != n_curves {
-            return Err(Error::config(
-                &cfg.path,
-                format!(
-                    "objective.w_sets[{k}] has {} weights but the data have {n_curves} curves",
-                    set.len()
-                ),
-            ));
-        }
-        out.push(set.clone());
-    }
-    Ok(out)
 }
 
 /// Resolution of the normalised residual in the best-w rule, relative.
@@ -256,36 +225,11 @@ pub struct FitRun {
     pub wall_s: f64,
 }
 
-/// Which start points `fit` uses.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
-pub enum StartChoice {
-    /// The configuration's start values (if all are given) and the computed initial guess.
-    #[default]
-    Both,
-    /// Only the configuration's start values (an error if one is missing).
-    Config,
-    /// Only the computed initial guess.
-    Guess,
-}
-
-/// What `fit` runs beyond the configuration.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct FitRequest {
-    /// Start points.
-    pub starts: StartChoice,
-    /// One w for every curve, replacing the configuration's `w_grid` and `w_sets`.
-    pub w: Option<f64>,
-}
-
 /// The paper's procedure on a configuration and its data: the initial guess, and — from the
 /// configured start (if every constant has one) and from the guess — a local fit for every
-/// weight vector; the best by [`choose_best`].
+/// weight vector; the best by [`choose_best`]. The starts are `cfg.fit.starts`, the weights
+/// `cfg.objective`'s.
 pub fn run_fit(cfg: &RunConfig, data: &Dataset) -> Result<FitRun> {
-    run_fit_with(cfg, data, &FitRequest::default())
-}
-
-/// [`run_fit`] with a choice of starts and weights.
-pub fn run_fit_with(cfg: &RunConfig, data: &Dataset, req: &FitRequest) -> Result<FitRun> {
     let t0 = Instant::now();
     let model = build(&cfg.model, &cfg.extensions)?;
     let space = param_space(cfg);
@@ -299,10 +243,11 @@ pub fn run_fit_with(cfg: &RunConfig, data: &Dataset, req: &FitRequest) -> Result
         &settings.ode,
     );
     let mut starts: Vec<(String, Vec<f64>)> = Vec::new();
-    if req.starts != StartChoice::Guess {
+    let choice = cfg.fit.starts;
+    if choice != StartChoice::Guess {
         match cfg.starts_all_given() {
             Some(s) => starts.push(("config".to_string(), s)),
-            None if req.starts == StartChoice::Config => {
+            None if choice == StartChoice::Config => {
                 return Err(Error::config(
                     &cfg.path,
                     "--start config needs a start value for every constant",
@@ -311,18 +256,10 @@ pub fn run_fit_with(cfg: &RunConfig, data: &Dataset, req: &FitRequest) -> Result
             None => {}
         }
     }
-    if req.starts != StartChoice::Config {
+    if choice != StartChoice::Config {
         starts.push(("guess".to_string(), guess.params.clone()));
     }
-    let ws = match req.w {
-        Some(w) if w >= 0.0 && w.is_finite() => vec![vec![w; curves.len()]],
-        Some(w) => {
-            return Err(Error::Invalid(format!(
-                "--w must be a finite weight >= 0, not {w}"
-            )))
-        }
-        None => weight_candidates(cfg, curves.len())?,
-    };
+    let ws = cfg.objective.weight_vectors(curves.len(), &cfg.path)?;
     let jobs: Vec<_> = starts
         .iter()
         .flat_map(|s| ws.iter().map(move |w| (s, w)))

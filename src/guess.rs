@@ -15,7 +15,9 @@ use crate::config::LifetimeTerm;
 use crate::data::Curve;
 use crate::lsq::{minimize, EvalFailure, LeastSquaresProblem, LmOptions};
 use crate::model::Model;
-use crate::objective::{CreepProblem, JacobianMethod, Objective, ParamSpace, MAX_PARAMS};
+use crate::objective::{
+    CreepProblem, JacobianMethod, Objective, ObjectiveSettings, ParamSpace, MAX_PARAMS,
+};
 use crate::ode::OdeOptions;
 
 /// Fraction of the rupture life taken as the primary stage for fitting H* and h.
@@ -175,14 +177,17 @@ pub fn initial_guess(
         space.to_unit_one(IH, mid(IH)),
     ];
     let prob = PrimaryProblem {
-        objective: Objective {
+        // The primary-stage fit has no lifetime term (w = 0); the run's ω_f and integrator.
+        objective: Objective::new(
             model,
-            curves: &primary,
-            w: vec![0.0; primary.len()],
-            lifetime: LifetimeTerm::Late,
-            omega_f,
-            ode: *ode,
-        },
+            &primary,
+            vec![0.0; primary.len()],
+            ObjectiveSettings {
+                lifetime: LifetimeTerm::Late,
+                omega_f,
+                ode: *ode,
+            },
+        ),
         space: space.clone(),
         base: x.clone(),
         a,
@@ -237,14 +242,17 @@ pub fn initial_guess(
         }
     }
     let problem = CreepProblem {
-        objective: Objective {
+        // The guess's own choice: Kc fitted to both sides of the lifetime error at w = 1.
+        objective: Objective::new(
             model,
             curves,
-            w: vec![1.0; curves.len()],
-            lifetime: LifetimeTerm::Both,
-            omega_f,
-            ode: *ode,
-        },
+            vec![1.0; curves.len()],
+            ObjectiveSettings {
+                lifetime: LifetimeTerm::Both,
+                omega_f,
+                ode: *ode,
+            },
+        ),
         space: kc_space.clone(),
         jacobian: JacobianMethod::default(),
     };

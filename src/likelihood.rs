@@ -24,7 +24,7 @@ use crate::errmodel::{ErrorModel, Residuals};
 use crate::fit::FitSettings;
 use crate::lsq::{minimize, EvalFailure, LeastSquaresProblem, Termination};
 use crate::model::Model;
-use crate::objective::{CreepProblem, Evaluation, Objective, ParamSpace};
+use crate::objective::{CreepProblem, Evaluation, Objective, ObjectiveSettings, ParamSpace};
 
 /// Options of [`ml_fit`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -48,14 +48,15 @@ pub fn raw_objective<'a>(
     curves: &'a [Curve],
     settings: &FitSettings,
 ) -> Objective<'a> {
-    Objective {
+    Objective::new(
         model,
         curves,
-        w: vec![1.0; curves.len()],
-        lifetime: LifetimeTerm::Both,
-        omega_f: settings.omega_f,
-        ode: settings.ode,
-    }
+        vec![1.0; curves.len()],
+        ObjectiveSettings {
+            lifetime: LifetimeTerm::Both,
+            ..settings.objective()
+        },
+    )
 }
 
 /// Raw residuals from an eq. 8 residual vector of [`raw_objective`] (layout: per curve its
@@ -66,7 +67,12 @@ pub fn split_residuals(curves: &[Curve], r: &[f64]) -> Residuals {
     let mut lifetime = Vec::with_capacity(curves.len());
     for c in curves {
         let n = c.times_h.len();
-        strain.push(r[off..off + n].iter().map(|v| v * c.rupture_strain).collect());
+        strain.push(
+            r[off..off + n]
+                .iter()
+                .map(|v| v * c.rupture_strain)
+                .collect(),
+        );
         lifetime.push(c.rupture_time_h.map(|_| r[off + n].ln_1p()));
         off += n + 1;
     }
@@ -126,7 +132,7 @@ impl<'a> LikelihoodProblem<'a> {
     }
 
     fn curves(&self) -> &[Curve] {
-        self.inner.objective.curves
+        self.inner.objective.curves()
     }
 
     /// Whiten eq. 8 residuals `r` (and the Jacobian rows of `jac`, if given) in place.

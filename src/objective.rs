@@ -183,20 +183,27 @@ impl SimScalar for Dual<SENS> {
     }
 }
 
-/// Eq. 8 for one set of curves, one model and one weight per curve.
-pub struct Objective<'a> {
-    /// The constitutive model.
-    pub model: &'a dyn Model,
-    /// Measured curves, ascending stress.
-    pub curves: &'a [Curve],
-    /// Lifetime weight w_i per curve.
-    pub w: Vec<f64>,
+/// What eq. 8 needs besides the model, the curves and the weights; taken from the resolved
+/// configuration ([`crate::fit::FitSettings::objective`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ObjectiveSettings {
     /// Which lifetime errors count.
     pub lifetime: LifetimeTerm,
     /// Damage at rupture ω_f.
     pub omega_f: f64,
     /// Integration options (the horizon is set per curve).
     pub ode: OdeOptions,
+}
+
+/// Eq. 8 for one set of curves, one model and one weight per curve. Built only by
+/// [`Objective::new`], so every objective takes its settings from one place.
+pub struct Objective<'a> {
+    model: &'a dyn Model,
+    curves: &'a [Curve],
+    w: Vec<f64>,
+    lifetime: LifetimeTerm,
+    omega_f: f64,
+    ode: OdeOptions,
 }
 
 /// Prediction for one curve at one constant set.
@@ -265,6 +272,35 @@ pub fn mean_abs(v: &[f64]) -> f64 {
 }
 
 impl<'a> Objective<'a> {
+    /// The measured curves.
+    pub fn curves(&self) -> &'a [Curve] {
+        self.curves
+    }
+
+    /// Eq. 8 of `model` on `curves` (ascending stress) with lifetime weight `w[i]` on curve
+    /// `i` (one per curve) and the run's `settings`.
+    pub fn new(
+        model: &'a dyn Model,
+        curves: &'a [Curve],
+        w: Vec<f64>,
+        settings: ObjectiveSettings,
+    ) -> Self {
+        assert_eq!(w.len(), curves.len(), "one lifetime weight per curve");
+        Objective {
+            model,
+            curves,
+            w,
+            lifetime: settings.lifetime,
+            omega_f: settings.omega_f,
+            ode: settings.ode,
+        }
+    }
+
+    /// The lifetime weights, one per curve.
+    pub fn weights(&self) -> &[f64] {
+        &self.w
+    }
+
     /// Number of residuals: every measured point plus one lifetime term per curve.
     pub fn n_residuals(&self) -> usize {
         self.curves.iter().map(|c| c.times_h.len() + 1).sum()

@@ -371,7 +371,7 @@ fn generate_inner(
             omega_f: 1.0 / 3.0,
         };
         let r = model.simulate(&params, &load, &[], &mut [], &ode);
-        if !r.ruptured() || !(r.t_end > 1.0 && r.t_end < 1e7) {
+        if !(r.ruptured() && r.t_end > 1.0 && r.t_end < 1e7) {
             return Err(Error::Invalid(format!(
                 "synth {name}: the true model does not rupture in [1 h, 1e7 h] at {s} MPa"
             )));

@@ -161,6 +161,11 @@ const CURVES: &str = "temperature_C,stress_MPa,time_h,strain_pct\n\
                       600,100,0,0\n600,100,10,1\n600,100,20,2\n600,100,24,4\n\
                       600,120,0,0\n600,120,5,1\n600,120,10,2\n600,120,12,4\n";
 const RUPTURES: &str = "temperature_C,stress_MPa,rupture_time_h\n600,100,25\n600,120,12.5\n";
+/// Every base-model constant needs its bounds in [constants] (a missing one is an error).
+const CONSTANTS: &str = "[constants]\n\
+    A = { lb = 1e-10, ub = 1e-6, scale = \"log\" }\nB = { lb = 0.05, ub = 0.2 }\n\
+    Hstar = { lb = 0.3, ub = 0.8 }\nh = { lb = 1e3, ub = 3e5, scale = \"log\" }\n\
+    Kc = { lb = 1e-6, ub = 1e-3, scale = \"log\" }\nC = { lb = 1, ub = 20 }\n";
 const CONFIG: &str = "name = \"bad\"\ncurves = \"curves.csv\"\nruptures = \"ruptures.csv\"\n";
 
 /// Run `fit` on a folder with the given files; return stderr, asserting the contract.
@@ -168,9 +173,15 @@ fn fails(files: &[(&str, &str)], config_extra: &str) -> String {
     let dir = TempDir::new().unwrap();
     std::fs::write(dir.path().join("curves.csv"), CURVES).unwrap();
     std::fs::write(dir.path().join("ruptures.csv"), RUPTURES).unwrap();
+    // config_extra may hold a [constants] table of its own; the others come after it
+    let constants = if config_extra.contains("[constants]") {
+        ""
+    } else {
+        CONSTANTS
+    };
     std::fs::write(
         dir.path().join("run.toml"),
-        format!("{CONFIG}{config_extra}"),
+        format!("{CONFIG}{config_extra}{constants}"),
     )
     .unwrap();
     for (name, text) in files {
@@ -211,7 +222,7 @@ fn missing_data_file() {
     let e = fails(
         &[(
             "run.toml",
-            "curves = \"nope.csv\"\nruptures = \"ruptures.csv\"\n",
+            &format!("curves = \"nope.csv\"\nruptures = \"ruptures.csv\"\n{CONSTANTS}"),
         )],
         "",
     );
@@ -321,4 +332,154 @@ fn bad_constants_file_for_simulate() {
     assert!(!o.status.success());
     assert_eq!(err.lines().count(), 1, "{err}");
     has(&err, &["constants.csv:3", "zero"]);
+}
+
+// ---- honest outputs -----------------------------------------------------------------------
+
+/// The numeric outputs of `fit configs/560C.toml` (summary.json differs in its wall times).
+const FIT_FILES: [&str; 3] = ["constants.csv", "errors.csv", "curves.csv"];
+
+fn reference_fit() -> TempDir {
+    let d = TempDir::new().unwrap();
+    let o = run(&[
+        "fit",
+        "configs/560C.toml",
+        "--out",
+        d.path().to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    d
+}
+
+/// Every file in `dir` is whole: a numeric output equal to the reference run's, a
+/// summary.json that parses; no temporary file is left behind.
+fn no_truncated_file(dir: &Path, reference: &Path) {
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        let name = p.file_name().unwrap().to_string_lossy().to_string();
+        if name == ".creepfit.lock" {
+            continue;
+        }
+        assert!(!name.starts_with('.'), "temporary file left: {name}");
+        let bytes = std::fs::read(&p).unwrap();
+        if name == "summary.json" {
+            serde_json::from_slice::<serde_json::Value>(&bytes)
+                .unwrap_or_else(|e| panic!("summary.json truncated ({} bytes): {e}", bytes.len()));
+        } else if name.ends_with(".png") {
+            assert_eq!(&bytes[1..4], b"PNG");
+            assert_eq!(bytes, std::fs::read(reference.join(&name)).unwrap());
+        } else {
+            assert_eq!(
+                String::from_utf8_lossy(&bytes),
+                std::fs::read_to_string(reference.join(&name)).unwrap(),
+                "{name} is not the whole file"
+            );
+        }
+    }
+}
+
+/// A plot that cannot be written makes `fit` exit non-zero after the numbers are written,
+/// saying so.
+#[test]
+fn a_plot_that_cannot_be_written_fails_the_command_after_the_numbers() {
+    let reference = reference_fit();
+    let out = TempDir::new().unwrap();
+    // The plot's place is taken by a folder: the PNG cannot be put there.
+    std::fs::create_dir(out.path().join("fit.png")).unwrap();
+    let o = run(&[
+        "fit",
+        "configs/560C.toml",
+        "--out",
+        out.path().to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success(),
+        "exit 0 although the plot failed: {err}"
+    );
+    assert_eq!(err.lines().count(), 1, "{err}");
+    has(
+        &err,
+        &[
+            "error: ",
+            "the numeric outputs are written, but 1 plot(s) failed",
+            "fit.png",
+        ],
+    );
+    for f in FIT_FILES {
+        assert_eq!(
+            std::fs::read_to_string(out.path().join(f)).unwrap(),
+            std::fs::read_to_string(reference.path().join(f)).unwrap(),
+            "{f}"
+        );
+    }
+    assert!(out.path().join("summary.json").is_file());
+}
+
+/// A small tmpfs mounted for the test (root only), unmounted on drop.
+struct Tmpfs(TempDir);
+
+impl Tmpfs {
+    fn mount(size: &str) -> Option<Tmpfs> {
+        let d = TempDir::new().ok()?;
+        let ok = Command::new("mount")
+            .args(["-t", "tmpfs", "-o", &format!("size={size}"), "tmpfs"])
+            .arg(d.path())
+            .stderr(std::process::Stdio::null())
+            .status()
+            .is_ok_and(|s| s.success());
+        ok.then_some(Tmpfs(d))
+    }
+}
+
+impl Drop for Tmpfs {
+    fn drop(&mut self) {
+        let _ = Command::new("umount").arg(self.0.path()).status();
+    }
+}
+
+/// A full disk leaves no truncated file and a non-zero exit: on a real full tmpfs where the
+/// OS allows mounting one (CI runs as root), and always with the injected write failure.
+#[test]
+fn a_full_disk_leaves_no_truncated_file_and_fails() {
+    let reference = reference_fit();
+    let check = |out: &Path, o: &Output| {
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "exit 0 on a full disk: {err}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+        has(&err, &["error: "]);
+        no_truncated_file(out, reference.path());
+    };
+    match Tmpfs::mount("64k") {
+        Some(fs) => {
+            // 56 KiB of 64 taken: two pages left, too few for the fit's outputs.
+            std::fs::write(fs.0.path().join("filler"), vec![0u8; 56 * 1024]).unwrap();
+            let out = fs.0.path().join("fit");
+            let o = run(&["fit", "configs/560C.toml", "--out", out.to_str().unwrap()]);
+            has(
+                &String::from_utf8_lossy(&o.stderr),
+                &["No space left on device"],
+            );
+            check(&out, &o);
+        }
+        None => eprintln!("tmpfs cannot be mounted here (not root?): injected failure only"),
+    }
+    // Injected: writes fail once 6000 bytes are written (the CSVs fit, summary.json not).
+    let out = TempDir::new().unwrap();
+    let o = bin()
+        .args([
+            "fit",
+            "configs/560C.toml",
+            "--out",
+            out.path().to_str().unwrap(),
+        ])
+        .env(creepfit::output::WRITE_BUDGET_ENV, "6000")
+        .current_dir(root())
+        .output()
+        .unwrap();
+    has(
+        &String::from_utf8_lossy(&o.stderr),
+        &["no space left on device"],
+    );
+    check(out.path(), &o);
 }

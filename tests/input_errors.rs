@@ -167,7 +167,7 @@ fn start_outside_bounds() {
 #[test]
 fn unknown_config_key() {
     let e = config_error("[sweep]\nstarts = 4\nsead = 3\n");
-    has(&e, &["sead", "line 5"]);
+    has(&e, &["run.toml:5: sweep.sead: ", "unknown field `sead`"]);
 }
 
 #[test]

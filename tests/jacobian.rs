@@ -5,10 +5,10 @@
 use std::path::Path;
 
 use creepfit::config::RunConfig;
-use creepfit::fit::param_space;
+use creepfit::fit::{param_space, FitSettings};
 use creepfit::lsq::LeastSquaresProblem;
 use creepfit::model::registry;
-use creepfit::objective::{CreepProblem, JacobianMethod, Objective};
+use creepfit::objective::{CreepProblem, JacobianMethod, Objective, ObjectiveSettings};
 use creepfit::ode::OdeOptions;
 use nalgebra::DMatrix;
 
@@ -33,15 +33,17 @@ fn column_errors(cfg_name: &str, model: &str, u: &[f64], w: f64) -> Vec<f64> {
         atol: 1e-15,
         ..OdeOptions::default()
     };
+    let settings = ObjectiveSettings {
+        ode,
+        ..FitSettings::from_config(&cfg).objective()
+    };
     let problem = CreepProblem {
-        objective: Objective {
-            model: model.as_ref(),
-            curves: &data.curves,
-            w: vec![w; data.curves.len()],
-            lifetime: cfg.objective.lifetime_term,
-            omega_f: cfg.objective.omega_f,
-            ode,
-        },
+        objective: Objective::new(
+            model.as_ref(),
+            &data.curves,
+            vec![w; data.curves.len()],
+            settings,
+        ),
         space: param_space(&cfg),
         jacobian: JacobianMethod::Sensitivity,
     };
@@ -170,16 +172,14 @@ fn fused_residuals_and_jacobian_agree_with_the_separate_calls() {
     let cfg = config("560C.toml");
     let data = cfg.load_data().unwrap();
     let model = registry("khd").unwrap();
-    let settings = creepfit::fit::FitSettings::from_config(&cfg);
+    let settings = FitSettings::from_config(&cfg);
     let problem = CreepProblem {
-        objective: Objective {
-            model: model.as_ref(),
-            curves: &data.curves,
-            w: vec![0.5; data.curves.len()],
-            lifetime: cfg.objective.lifetime_term,
-            omega_f: cfg.objective.omega_f,
-            ode: settings.ode,
-        },
+        objective: Objective::new(
+            model.as_ref(),
+            &data.curves,
+            vec![0.5; data.curves.len()],
+            settings.objective(),
+        ),
         space: param_space(&cfg),
         jacobian: JacobianMethod::Sensitivity,
     };

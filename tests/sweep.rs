@@ -53,8 +53,13 @@ fn outputs_and_failed_starts() {
     let (d, ranked, minima) = reference();
     let lines: Vec<&str> = ranked.lines().collect();
     assert!(lines[0].starts_with(
-        "rank,start_id,w,objective,norm_residual,lifetime_err_pct,min_rate_err_pct,status,iterations,evaluations,cluster,pareto,A,B,Hstar,h,Kc,C"
+        "rank,start_id,w,objective,norm_residual,lifetime_err_pct,mean_abs_lifetime_err_pct,min_rate_err_pct,mean_abs_min_rate_err_pct,status,iterations,evaluations,cluster,pareto,A,B,Hstar,h,Kc,C"
     ));
+    // The contract's names and the unambiguous ones hold the same means of absolute errors.
+    for l in &lines[1..] {
+        let f: Vec<&str> = l.split(',').collect();
+        assert_eq!((f[5], f[7]), (f[6], f[8]), "{l}");
+    }
     // 8 LHS starts + the configured start, × 2 weights: every pair is a row.
     assert_eq!(lines.len(), 1 + 9 * 2);
     let failed = lines
@@ -443,5 +448,188 @@ fn a_different_sweep_in_the_same_folder_is_refused() {
     ok(&sweep(d.path(), &["--threads", "2", "--starts", "2"]));
     let o = sweep(d.path(), &["--threads", "2", "--starts", "3"]);
     assert!(!o.status.success());
-    assert!(String::from_utf8_lossy(&o.stderr).contains("different sweep"));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains(
+            "journal.jsonl: this folder holds a sweep with sweep.starts = 2, the configuration asks for 3; use another --out or delete the folder"
+        ),
+        "{err}"
+    );
+    assert_eq!(err.lines().count(), 1, "{err}");
+}
+
+#[test]
+fn a_sweep_into_a_locked_folder_is_refused_at_once() {
+    let d = TempDir::new().unwrap();
+    // This test process holds the folder, as a running sweep would.
+    let lock = creepfit::output::lock_folder(d.path()).unwrap();
+    let t0 = Instant::now();
+    let o = sweep(d.path(), &["--threads", "1"]);
+    assert!(!o.status.success(), "a second writer must be refused");
+    assert!(t0.elapsed() < Duration::from_secs(30), "refused at once");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.starts_with("error: ")
+            && err.contains(&format!(
+                "another creepfit run (pid {})",
+                std::process::id()
+            )),
+        "{err}"
+    );
+    assert!(
+        !d.path().join("journal.jsonl").exists(),
+        "the refused run wrote nothing"
+    );
+    // A lock whose holder is gone is no obstacle (the OS releases it with the holder).
+    drop(lock);
+    ok(&sweep(d.path(), &["--threads", "2", "--starts", "2"]));
+}
+
+#[test]
+fn two_sweeps_at_once_into_one_folder_one_is_refused() {
+    let d = TempDir::new().unwrap();
+    let first = Command::new(env!("CARGO_BIN_EXE_creepfit"))
+        .args(["sweep", CONFIG, "--threads", "1", "--out"])
+        .arg(d.path())
+        .current_dir(root())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let journal = d.path().join("journal.jsonl");
+    let t0 = Instant::now();
+    while !journal.exists() && t0.elapsed() < Duration::from_secs(60) {
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    let o = sweep(d.path(), &["--threads", "1"]);
+    let mut first = first;
+    let status = first.wait().unwrap();
+    assert!(status.success());
+    if !o.status.success() {
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            err.contains(&format!("(pid {})", first.id())),
+            "the holder is named: {err}"
+        );
+    } else {
+        // The first had already finished: the second only re-read its journal.
+        let out = String::from_utf8_lossy(&o.stdout);
+        assert!(out.contains("0 fits computed now"), "{out}");
+    }
+}
+
+#[test]
+fn a_zero_byte_journal_resumes() {
+    let (_d, ranked, _) = reference();
+    let d = TempDir::new().unwrap();
+    // A kill right after the journal file was created (by an earlier version).
+    std::fs::write(d.path().join("journal.jsonl"), "").unwrap();
+    ok(&sweep(d.path(), &["--threads", "2"]));
+    assert_eq!(read(&d.path().join("ranked.csv")), ranked);
+    // So does a header line torn in the middle.
+    let d = TempDir::new().unwrap();
+    std::fs::write(d.path().join("journal.jsonl"), "{\"header\":{\"fingerpr").unwrap();
+    ok(&sweep(d.path(), &["--threads", "2"]));
+    assert_eq!(read(&d.path().join("ranked.csv")), ranked);
+}
+
+#[test]
+fn an_interrupted_sweep_says_so_in_summary_json() {
+    let d = TempDir::new().unwrap();
+    let o = sweep(d.path(), &["--threads", "2", "--stop-after", "5"]);
+    assert!(!o.status.success());
+    let s: serde_json::Value = serde_json::from_str(&read(&d.path().join("summary.json"))).unwrap();
+    assert_eq!(s["complete"], false);
+    assert_eq!(s["missing_fits"], 13);
+    let missing = s["missing"].as_array().unwrap();
+    assert_eq!(missing.len(), 13);
+    // The missing pairs and the ranked rows are the whole sweep, each pair once.
+    let ranked = read(&d.path().join("ranked.csv"));
+    let mut pairs: Vec<(u64, u64)> = missing
+        .iter()
+        .map(|m| {
+            (
+                m["start_id"].as_u64().unwrap(),
+                m["w_idx"].as_u64().unwrap(),
+            )
+        })
+        .collect();
+    let w_idx = |w: &str| if w.starts_with("0.5") { 0 } else { 1 };
+    for l in ranked.lines().skip(1) {
+        let f: Vec<&str> = l.split(',').collect();
+        pairs.push((f[1].parse().unwrap(), w_idx(f[2])));
+    }
+    pairs.sort();
+    pairs.dedup();
+    assert_eq!(pairs.len(), 18);
+    ok(&sweep(d.path(), &["--threads", "2"]));
+    let s: serde_json::Value = serde_json::from_str(&read(&d.path().join("summary.json"))).unwrap();
+    assert_eq!(s["complete"], true);
+    assert_eq!(s["missing_fits"], 0);
+    assert_eq!(s["model"], "khd");
+}
+
+/// The issue's case: a sweep resumed after adding an extension computed nothing and
+/// reported the base model's objective as the extended model's.
+#[test]
+fn adding_an_extension_is_a_different_sweep() {
+    let d = TempDir::new().unwrap();
+    ok(&sweep(d.path(), &["--threads", "2", "--starts", "1"]));
+    let cfg = d.path().join("ext.toml");
+    let text = read(&root().join(CONFIG))
+        .replace("../../data/", &format!("{}/data/", root().display()))
+        .replace(
+            "model = \"khd\"",
+            "model = \"khd\"\nextensions = [\"constant_load\"]",
+        );
+    std::fs::write(&cfg, text).unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_creepfit"))
+        .arg("sweep")
+        .arg(&cfg)
+        .args(["--threads", "2", "--starts", "1", "--out"])
+        .arg(d.path())
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("this folder holds a sweep with extensions = [], the configuration asks for [\"constant_load\"]; use another --out or delete the folder"),
+        "{err}"
+    );
+    // In a folder of its own it runs, and says which model it fitted.
+    let e = TempDir::new().unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_creepfit"))
+        .arg("sweep")
+        .arg(&cfg)
+        .args(["--threads", "2", "--starts", "1", "--out"])
+        .arg(e.path())
+        .output()
+        .unwrap();
+    ok(&o);
+    let s: serde_json::Value = serde_json::from_str(&read(&e.path().join("summary.json"))).unwrap();
+    assert_eq!(s["model"], "khd+constant_load");
+    assert_eq!(s["extensions"], serde_json::json!(["constant_load"]));
+}
+
+/// The process-wide stop flag is cleared by every run: a library user's second sweep in one
+/// process is not stopped by the first one's Ctrl-C.
+#[test]
+fn the_stop_flag_is_reset_at_the_start_of_a_run() {
+    use creepfit::config::{Overrides, RunConfig, RunOptions};
+    let d = TempDir::new().unwrap();
+    let cli = Overrides {
+        starts: Some(2),
+        run: RunOptions {
+            out: Some(d.path().to_path_buf()),
+            threads: Some(1),
+            ..RunOptions::default()
+        },
+        ..Overrides::default()
+    };
+    let (cfg, data) = RunConfig::resolve(&root().join(CONFIG), &cli).unwrap();
+    creepfit::sweep::STOP.store(true, std::sync::atomic::Ordering::SeqCst);
+    let (_, run) = creepfit::sweep::run_sweep(&cfg, &data).unwrap();
+    assert_eq!(run.computed, 3 * 2, "every fit ran");
+    assert_eq!(run.missing, 0);
 }

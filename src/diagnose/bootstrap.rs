@@ -94,8 +94,7 @@ where
         let batch: Vec<Vec<f64>> = (lo..hi).into_par_iter().map(&one).collect();
         out.extend(batch);
         let done = observed.iter().enumerate().all(|(k, &obs)| {
-            !obs.is_finite()
-                || out.iter().filter(|r| !(r[k] < obs)).count() >= STOP_EXCEEDANCES
+            !obs.is_finite() || out.iter().filter(|r| !(r[k] < obs)).count() >= STOP_EXCEEDANCES
         });
         if done && out.len() < max {
             return (out, true);
@@ -145,7 +144,10 @@ mod tests {
         assert_eq!(r.len() % BATCH, 0);
         assert!(r.len() < 99);
         // Identical whatever the thread count.
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
         let (r1, _) = pool.install(|| sequential(&[0.1, 0.0], 99, one));
         assert_eq!(r, r1);
     }

@@ -171,12 +171,38 @@ mod tests {
     #[test]
     fn holm_against_hand_computed_tables() {
         // (p-values, alpha, rejected, adjusted)
-        let cases: &[(&[f64], f64, &[bool], &[f64])] = &[
-            (&[0.01, 0.04, 0.03, 0.005], 0.05, &[true, false, false, true], &[0.03, 0.06, 0.06, 0.02]),
-            (&[0.01, 0.01, 0.01], 0.05, &[true, true, true], &[0.03, 0.03, 0.03]),
-            (&[0.2, f64::NAN, 0.011], 0.05, &[false, false, true], &[0.4, 1.0, 0.033]),
-            (&[0.0125, 0.5, 0.9, 0.9, 0.9], 0.05, &[false, false, false, false, false], &[0.0625, 1.0, 1.0, 1.0, 1.0]),
-            (&[0.01, 0.5, 0.9, 0.9, 0.9], 0.05, &[true, false, false, false, false], &[0.05, 1.0, 1.0, 1.0, 1.0]),
+        type Case<'a> = (&'a [f64], f64, &'a [bool], &'a [f64]);
+        let cases: &[Case] = &[
+            (
+                &[0.01, 0.04, 0.03, 0.005],
+                0.05,
+                &[true, false, false, true],
+                &[0.03, 0.06, 0.06, 0.02],
+            ),
+            (
+                &[0.01, 0.01, 0.01],
+                0.05,
+                &[true, true, true],
+                &[0.03, 0.03, 0.03],
+            ),
+            (
+                &[0.2, f64::NAN, 0.011],
+                0.05,
+                &[false, false, true],
+                &[0.4, 1.0, 0.033],
+            ),
+            (
+                &[0.0125, 0.5, 0.9, 0.9, 0.9],
+                0.05,
+                &[false, false, false, false, false],
+                &[0.0625, 1.0, 1.0, 1.0, 1.0],
+            ),
+            (
+                &[0.01, 0.5, 0.9, 0.9, 0.9],
+                0.05,
+                &[true, false, false, false, false],
+                &[0.05, 1.0, 1.0, 1.0, 1.0],
+            ),
         ];
         for (p, a, want_r, want_adj) in cases {
             let (r, adj) = holm(p, *a);
@@ -197,28 +223,130 @@ mod tests {
 
     #[test]
     fn decisions_as_a_table() {
-        let spread = vec![vec![0.0, 4.0, 4.0], vec![4.0, 0.0, 4.0], vec![4.0, 4.0, 0.0]];
+        let spread = vec![
+            vec![0.0, 4.0, 4.0],
+            vec![4.0, 0.0, 4.0],
+            vec![4.0, 4.0, 0.0],
+        ];
         // (extensions, base gof p, cause gof p, verdict, cause, indistinguishable)
-        type Row = (Vec<ExtensionEvidence>, f64, Option<f64>, Verdict, Option<usize>, Vec<usize>);
+        type Row = (
+            Vec<ExtensionEvidence>,
+            f64,
+            Option<f64>,
+            Verdict,
+            Option<usize>,
+            Vec<usize>,
+        );
         let rows: Vec<Row> = vec![
             // Nothing significant: adequate.
-            (vec![ext("a", 0.4, 10.0), ext("b", 0.2, 9.0), ext("c", 0.9, 11.0)], 0.6, None, Verdict::Adequate, None, vec![]),
+            (
+                vec![ext("a", 0.4, 10.0), ext("b", 0.2, 9.0), ext("c", 0.9, 11.0)],
+                0.6,
+                None,
+                Verdict::Adequate,
+                None,
+                vec![],
+            ),
             // One clear extension that fits: extension a.
-            (vec![ext("a", 0.01, -50.0), ext("b", 0.3, 9.0), ext("c", 0.9, 11.0)], 0.01, Some(0.5), Verdict::Extension, Some(0), vec![]),
+            (
+                vec![
+                    ext("a", 0.01, -50.0),
+                    ext("b", 0.3, 9.0),
+                    ext("c", 0.9, 11.0),
+                ],
+                0.01,
+                Some(0.5),
+                Verdict::Extension,
+                Some(0),
+                vec![],
+            ),
             // Two significant, b better by more than the spread: cause b.
-            (vec![ext("a", 0.01, -50.0), ext("b", 0.01, -60.0), ext("c", 0.9, 11.0)], 0.5, Some(0.3), Verdict::Extension, Some(1), vec![]),
+            (
+                vec![
+                    ext("a", 0.01, -50.0),
+                    ext("b", 0.01, -60.0),
+                    ext("c", 0.9, 11.0),
+                ],
+                0.5,
+                Some(0.3),
+                Verdict::Extension,
+                Some(1),
+                vec![],
+            ),
             // Two significant within the spread: cause the lower AIC, the other listed.
-            (vec![ext("a", 0.01, -58.0), ext("b", 0.01, -60.0), ext("c", 0.9, 11.0)], 0.5, Some(0.3), Verdict::Extension, Some(1), vec![0]),
+            (
+                vec![
+                    ext("a", 0.01, -58.0),
+                    ext("b", 0.01, -60.0),
+                    ext("c", 0.9, 11.0),
+                ],
+                0.5,
+                Some(0.3),
+                Verdict::Extension,
+                Some(1),
+                vec![0],
+            ),
             // The best extension still fails its own goodness of fit: unexplained.
-            (vec![ext("a", 0.01, -50.0), ext("b", 0.3, 9.0), ext("c", 0.9, 11.0)], 0.01, Some(0.01), Verdict::Unexplained, None, vec![]),
+            (
+                vec![
+                    ext("a", 0.01, -50.0),
+                    ext("b", 0.3, 9.0),
+                    ext("c", 0.9, 11.0),
+                ],
+                0.01,
+                Some(0.01),
+                Verdict::Unexplained,
+                None,
+                vec![],
+            ),
             // Only the base goodness of fit fails: unexplained.
-            (vec![ext("a", 0.3, 1.0), ext("b", 0.3, 9.0), ext("c", 0.9, 11.0)], 0.002, None, Verdict::Unexplained, None, vec![]),
+            (
+                vec![ext("a", 0.3, 1.0), ext("b", 0.3, 9.0), ext("c", 0.9, 11.0)],
+                0.002,
+                None,
+                Verdict::Unexplained,
+                None,
+                vec![],
+            ),
             // Significant but its fit failed (AIC NaN): never the cause.
-            (vec![ext("a", 0.001, f64::NAN), ext("b", 0.4, 9.0), ext("c", 0.9, 11.0)], 0.5, None, Verdict::Adequate, None, vec![]),
+            (
+                vec![
+                    ext("a", 0.001, f64::NAN),
+                    ext("b", 0.4, 9.0),
+                    ext("c", 0.9, 11.0),
+                ],
+                0.5,
+                None,
+                Verdict::Adequate,
+                None,
+                vec![],
+            ),
             // p just above the Holm threshold α/4 = 0.0125 (4 tests): not rejected.
-            (vec![ext("a", 0.013, -50.0), ext("b", 0.4, 9.0), ext("c", 0.9, 11.0)], 0.5, None, Verdict::Adequate, None, vec![]),
+            (
+                vec![
+                    ext("a", 0.013, -50.0),
+                    ext("b", 0.4, 9.0),
+                    ext("c", 0.9, 11.0),
+                ],
+                0.5,
+                None,
+                Verdict::Adequate,
+                None,
+                vec![],
+            ),
             // A cause whose goodness-of-fit p-value could not be computed counts as fitting.
-            (vec![ext("a", 0.01, -50.0), ext("b", 0.4, 9.0), ext("c", 0.9, 11.0)], 0.5, Some(f64::NAN), Verdict::Extension, Some(0), vec![]),
+            (
+                vec![
+                    ext("a", 0.01, -50.0),
+                    ext("b", 0.4, 9.0),
+                    ext("c", 0.9, 11.0),
+                ],
+                0.5,
+                Some(f64::NAN),
+                Verdict::Extension,
+                Some(0),
+                vec![],
+            ),
         ];
         for (i, (e, gof, cgof, want_v, want_c, want_ind)) in rows.into_iter().enumerate() {
             let sel = select(&SelectInput {

@@ -66,7 +66,7 @@ impl Spec {
     }
     /// A start for this model from base constants `base` (by name); the constants the base
     /// lacks take their switched-off value.
-    fn from_base(&self, base_names: &[&str], base: &[f64]) -> Vec<f64> {
+    fn start_from_base(&self, base_names: &[&str], base: &[f64]) -> Vec<f64> {
         self.names()
             .iter()
             .enumerate()
@@ -230,7 +230,11 @@ fn weighted_ms(c: &Curve, pred: &[f64]) -> f64 {
     let n = c.times_h.len();
     let (mut sw, mut s) = (0.0, 0.0);
     for j in 0..n {
-        let left = if j > 0 { c.times_h[j] - c.times_h[j - 1] } else { 0.0 };
+        let left = if j > 0 {
+            c.times_h[j] - c.times_h[j - 1]
+        } else {
+            0.0
+        };
         let right = if j + 1 < n {
             c.times_h[j + 1] - c.times_h[j]
         } else {
@@ -268,7 +272,10 @@ fn leave_one_stress_out(
             failed_folds: vec![],
         };
     }
-    let folds: Vec<(f64, Option<Vec<(f64, f64)>>)> = groups
+    // Per fold: its stress and, unless it failed, per held-out curve (mean squared
+    // normalised strain residual, |lifetime error| %).
+    type Fold = (f64, Option<Vec<(f64, f64)>>);
+    let folds: Vec<Fold> = groups
         .par_iter()
         .map(|&(t, s)| {
             let (train, test): (Vec<Curve>, Vec<Curve>) = curves
@@ -614,7 +621,7 @@ fn null_replicate(
     for (k, spec) in specs[1..].iter().enumerate() {
         // From the replicate's base optimum with the extension switched off (so that a nested
         // extension never fits worse than the base), and from the extension's data optimum.
-        let mut st = vec![spec.from_base(&base_names, &b0.params)];
+        let mut st = vec![spec.start_from_base(&base_names, &b0.params)];
         st.extend(basins[k + 1].iter().take(1).cloned());
         st.extend(ext_random[k].iter().cloned());
         let (fk, _) = fit_best(spec, &data, &st, settings, ml);
@@ -695,7 +702,8 @@ pub fn diagnose(cfg: &RunConfig, data: &Dataset) -> Result<Diagnosis> {
 
 /// Diagnose with explicit settings `dc` (the command line's overrides applied).
 pub fn diagnose_with(cfg: &RunConfig, data: &Dataset, dc: &DiagnoseConfig) -> Result<Diagnosis> {
-    dc.validate().map_err(|m| Error::Diagnose(format!("[diagnose] {m}")))?;
+    dc.validate()
+        .map_err(|m| Error::Diagnose(format!("{}: {}", m.field, m.what)))?;
     let t0 = Instant::now();
     let binned_curves: Vec<Curve> = data
         .curves
@@ -716,7 +724,12 @@ pub fn diagnose_with(cfg: &RunConfig, data: &Dataset, dc: &DiagnoseConfig) -> Re
         let s = param_space(cfg);
         let idx: Vec<usize> = khd_names
             .iter()
-            .map(|n| cfg.constants.iter().position(|c| c.name == *n).expect("KHD constant"))
+            .map(|n| {
+                cfg.constants
+                    .iter()
+                    .position(|c| c.name == *n)
+                    .expect("KHD constant")
+            })
             .collect();
         ParamSpace::new(
             idx.iter().map(|&i| s.lb[i]).collect(),
@@ -724,7 +737,13 @@ pub fn diagnose_with(cfg: &RunConfig, data: &Dataset, dc: &DiagnoseConfig) -> Re
             idx.iter().map(|&i| s.scale[i]).collect(),
         )
     };
-    let guess = initial_guess(khd.as_ref(), curves, &khd_space, settings.omega_f, &settings.ode);
+    let guess = initial_guess(
+        khd.as_ref(),
+        curves,
+        &khd_space,
+        settings.omega_f,
+        &settings.ode,
+    );
 
     // 1. Fits on the data.
     let mut fits: Vec<Option<MlFit>> = Vec::with_capacity(specs.len());
@@ -732,10 +751,10 @@ pub fn diagnose_with(cfg: &RunConfig, data: &Dataset, dc: &DiagnoseConfig) -> Re
     let mut start_sets: Vec<Vec<Vec<f64>>> = Vec::with_capacity(specs.len());
     let mut basins: Vec<Vec<Vec<f64>>> = Vec::with_capacity(specs.len());
     for (i, spec) in specs.iter().enumerate() {
-        let mut starts = vec![spec.from_base(&khd_names, &guess.params)];
+        let mut starts = vec![spec.start_from_base(&khd_names, &guess.params)];
         if i > 0 {
             if let Some(b) = &fits[0] {
-                starts.insert(0, spec.from_base(&specs[0].names(), &b.params));
+                starts.insert(0, spec.start_from_base(&specs[0].names(), &b.params));
             }
         }
         let mut rng = ChaCha8Rng::seed_from_u64(dc.seed);
@@ -747,10 +766,10 @@ pub fn diagnose_with(cfg: &RunConfig, data: &Dataset, dc: &DiagnoseConfig) -> Re
         let all = fit_all(spec, curves, &starts, &settings, &ml);
         let failed = all.iter().filter(|f| !f.ok()).count();
         basins.push(distinct_optima(spec, &all, dc.replicate_basins));
-        let best = all
-            .into_iter()
-            .filter(|f| f.ok())
-            .reduce(|a, b| if b.neg2ll < a.neg2ll { b } else { a });
+        let best =
+            all.into_iter()
+                .filter(|f| f.ok())
+                .reduce(|a, b| if b.neg2ll < a.neg2ll { b } else { a });
         if i == 0 && best.is_none() {
             return Err(Error::Diagnose(format!(
                 "the base model could not be fitted from any of {} starts",
@@ -835,7 +854,9 @@ pub fn diagnose_with(cfg: &RunConfig, data: &Dataset, dc: &DiagnoseConfig) -> Re
     let cause_gof = sel.best.map(|b| {
         gof_bootstrap(
             &specs[b + 1],
-            fits[b + 1].as_ref().expect("rejected candidates are fitted"),
+            fits[b + 1]
+                .as_ref()
+                .expect("rejected candidates are fitted"),
             &basins[b + 1],
             curves,
             &warm,
@@ -907,7 +928,9 @@ pub fn diagnose_with(cfg: &RunConfig, data: &Dataset, dc: &DiagnoseConfig) -> Re
         .map(|k| {
             (
                 specs[k + 1].name.clone(),
-                reps.iter().filter(|r| r[k].is_nan() && r[n_ext + 1] == 0.0).count(),
+                reps.iter()
+                    .filter(|r| r[k].is_nan() && r[n_ext + 1] == 0.0)
+                    .count(),
             )
         })
         .collect();

@@ -19,7 +19,13 @@ fn opt(v: Option<f64>, prec: usize) -> String {
 
 fn list(v: &[f64], prec: usize) -> String {
     v.iter()
-        .map(|x| if x.is_finite() { format!("{x:+.prec$}") } else { "–".into() })
+        .map(|x| {
+            if x.is_finite() {
+                format!("{x:+.prec$}")
+            } else {
+                "–".into()
+            }
+        })
         .collect::<Vec<_>>()
         .join(" / ")
 }

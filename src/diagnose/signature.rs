@@ -107,7 +107,10 @@ pub fn curve_signature(c: &Curve, e: &[f64], t_pred: f64, noise: &Ar1) -> CurveS
         stage_z,
         first_point_pct: 100.0 * e[0] / c.rupture_strain,
         last_fraction: t_last / life,
-        last_point_pct: (100.0 * c.strains[n - 1], 100.0 * (c.strains[n - 1] + e[n - 1])),
+        last_point_pct: (
+            100.0 * c.strains[n - 1],
+            100.0 * (c.strains[n - 1] + e[n - 1]),
+        ),
         lifetime_err_pct: match c.rupture_time_h {
             Some(t) => 100.0 * (t_pred - t) / t,
             None => f64::NAN,
@@ -127,7 +130,9 @@ fn coherent(z: impl Iterator<Item = f64>) -> f64 {
 }
 
 fn fmt_list(v: impl Iterator<Item = f64>) -> String {
-    v.map(|x| format!("{x:+.2}")).collect::<Vec<_>>().join(" / ")
+    v.map(|x| format!("{x:+.2}"))
+        .collect::<Vec<_>>()
+        .join(" / ")
 }
 
 /// The misses common to the curves whose coherent z-score reaches [`REPORT_Z`], largest

@@ -30,6 +30,7 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters::style::{register_font, FontStyle};
 
 use crate::error::{Error, Result};
+use crate::output;
 
 /// Image width in pixels.
 pub const WIDTH: u32 = 1200;
@@ -831,17 +832,28 @@ where
         }
     }
 
+    // Encoded into a temporary file beside `path` and renamed into place: the old PNG or
+    // the new one, never a truncated one (crate::output).
+    let plot_err = |e: Error| match e {
+        Error::Io { source, .. } => Error::plot(path, source.to_string()),
+        other => Error::plot(path, other.to_string()),
+    };
+    let tmp = output::temp_beside(path, ".png").map_err(plot_err)?;
     let written = catch_unwind(AssertUnwindSafe(|| -> DrawResult {
-        let mut out = BitMapBackend::new(path, (WIDTH, HEIGHT));
+        let mut out = BitMapBackend::new(tmp.path(), (WIDTH, HEIGHT));
         out.blit_bitmap((0, 0), (WIDTH, HEIGHT), &buffer)?;
         out.present()?;
         Ok(())
     }));
     match written {
-        Ok(Ok(())) => Ok(drawn),
-        Ok(Err(e)) => Err(Error::plot(path, e.to_string())),
-        Err(_) => Err(Error::plot(path, "panic while writing the PNG")),
+        Ok(Ok(())) => {}
+        Ok(Err(e)) => return Err(Error::plot(path, e.to_string())),
+        Err(_) => return Err(Error::plot(path, "panic while writing the PNG")),
     }
+    let len = tmp.as_file().metadata().map(|m| m.len()).unwrap_or(0);
+    output::charge(len as usize).map_err(|e| Error::plot(path, e.to_string()))?;
+    output::persist(tmp, path).map_err(plot_err)?;
+    Ok(drawn)
 }
 
 fn chart_builder<'a, 'b>(area: &'a Root<'b>) -> ChartBuilder<'a, 'b, BitMapBackend<'b>> {

@@ -2,39 +2,46 @@
 
 use std::fmt::Write as _;
 use std::fs;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use serde_json::{json, Value};
 
+use crate::config::RunConfig;
 use crate::data::Curve;
 use crate::error::{Error, Result};
 use crate::fit::{FitRun, LocalFit};
 use crate::model::Model;
 use crate::objective::ParamSpace;
+use crate::output;
 
 /// Create `dir` (and parents).
 pub fn ensure_dir(dir: &Path) -> Result<()> {
     fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))
 }
 
-/// Write `text` to `path`.
+/// Write `text` to `path` atomically ([`output::write_atomic`]: the old file or the new one,
+/// never a truncated one).
 pub fn write_text(path: &Path, text: &str) -> Result<()> {
-    fs::write(path, text).map_err(|e| Error::io(path, e))
+    output::write_atomic(path, |w| w.write_all(text.as_bytes()))
 }
 
-/// Write a CSV file from a header and rows of already formatted cells.
+/// Write a CSV file atomically from a header and rows of already formatted cells.
 pub fn write_csv(path: &Path, header: &[&str], rows: &[Vec<String>]) -> Result<()> {
-    let mut w = csv::Writer::from_path(path).map_err(|e| Error::io(path, csv_io(e)))?;
-    w.write_record(header)
-        .map_err(|e| Error::io(path, csv_io(e)))?;
-    for r in rows {
-        w.write_record(r).map_err(|e| Error::io(path, csv_io(e)))?;
-    }
-    w.flush().map_err(|e| Error::io(path, e))
+    output::write_atomic(path, |w| {
+        let mut c = csv::Writer::from_writer(w);
+        c.write_record(header).map_err(csv_io)?;
+        for r in rows {
+            c.write_record(r).map_err(csv_io)?;
+        }
+        c.flush()
+    })
 }
 
 fn csv_io(e: csv::Error) -> std::io::Error {
-    std::io::Error::other(e.to_string())
+    match e.into_kind() {
+        csv::ErrorKind::Io(e) => e,
+        k => std::io::Error::other(format!("{k:?}")),
+    }
 }
 
 /// A number as CSV text: shortest round-trip form, empty for NaN.
@@ -308,13 +315,8 @@ pub fn error_table(rows: &[ErrorRow], min_rate_measured: bool) -> String {
     s
 }
 
-/// Default output folder for a command: `results/<name>/<command>/`.
-pub fn default_out(name: &str, command: &str) -> PathBuf {
-    PathBuf::from("results").join(name).join(command)
-}
-
-/// `summary.json` of a fit.
-pub fn fit_summary(run: &FitRun, curves: &[Curve]) -> Value {
+/// `summary.json` of a fit of the configuration `cfg`.
+pub fn fit_summary(cfg: &RunConfig, run: &FitRun, curves: &[Curve]) -> Value {
     let best = &run.fits[run.best];
     let names: Vec<&str> = run.model.constants().iter().map(|c| c.name).collect();
     let consts = |p: &[f64]| -> Value {
@@ -353,6 +355,9 @@ pub fn fit_summary(run: &FitRun, curves: &[Curve]) -> Value {
         .collect();
     json!({
         "model": run.model.name(),
+        "extensions": cfg.extensions,
+        "run_id": crate::identity::hash_value(&crate::identity::identity(cfg)),
+        "data_hash": cfg.data_hash,
         "objective": jnum(best.eval.objective),
         "norm_residual": jnum(best.eval.norm_residual),
         "w": best.w,

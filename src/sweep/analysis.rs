@@ -245,15 +245,24 @@ fn w_text(w: &[f64]) -> String {
     w.iter().map(|v| num(*v)).collect::<Vec<_>>().join(";")
 }
 
-/// Write `ranked.csv`, `minima.csv`, `summary.json` and the plots.
+/// Write `ranked.csv`, `minima.csv`, `summary.json` (which says whether the result is
+/// complete: the shards it lacks (`coverage`) and the (start_id, w_idx) pairs without a
+/// solution (`missing`)), then the plots; returns the plots that could not be written (`plot
+/// PATH: why`), after every numeric file is in place.
+///
+/// `ranked.csv`'s `lifetime_err_pct` and `min_rate_err_pct` are means of absolute per-curve
+/// errors (the DESIGN contract's names, kept); `mean_abs_lifetime_err_pct` and
+/// `mean_abs_min_rate_err_pct` repeat them under names that cannot be mistaken for the
+/// signed per-curve errors of `errors.csv`.
 pub fn write(
     header: &Header,
     a: &Analysis,
+    coverage: &Coverage,
+    missing: &[(usize, usize)],
     out: &Path,
     wall_s: f64,
     threads: usize,
-    coverage: &Coverage,
-) -> Result<()> {
+) -> Result<Vec<String>> {
     let mut head: Vec<&str> = vec![
         "rank",
         "start_id",
@@ -261,7 +270,9 @@ pub fn write(
         "objective",
         "norm_residual",
         "lifetime_err_pct",
+        "mean_abs_lifetime_err_pct",
         "min_rate_err_pct",
+        "mean_abs_min_rate_err_pct",
         "status",
         "iterations",
         "evaluations",
@@ -281,6 +292,8 @@ pub fn write(
                 num(s.objective),
                 num(s.norm_residual),
                 num(s.lifetime_err_pct),
+                num(s.lifetime_err_pct),
+                num(s.min_rate_err_pct),
                 num(s.min_rate_err_pct),
                 s.status.clone(),
                 s.iterations.to_string(),
@@ -315,12 +328,14 @@ pub fn write(
 
     write_text(
         &out.join("summary.json"),
-        &serde_json::to_string_pretty(&summary(header, a, wall_s, threads, coverage))
+        &serde_json::to_string_pretty(&summary(header, a, coverage, missing, wall_s, threads))
             .expect("plain JSON"),
     )?;
 
-    // Plots last: a failure is reported but loses nothing. The waterfall gets every fit,
-    // failed ones (no objective, ranked last) included, so that its counts add up.
+    // Plots last: a failure is reported after the numbers are safely in place. The
+    // waterfall gets every fit, failed ones (no objective, ranked last) included, so that
+    // its counts add up.
+    let mut failures = Vec::new();
     let objs: Vec<f64> = a.ranked.iter().map(|s| s.objective).collect();
     let scaled: Vec<Vec<f64>> = a
         .ranked
@@ -339,7 +354,7 @@ pub fn write(
         &format!("{title}: sorted local minima"),
         &objs,
     ) {
-        eprintln!("warning: plot not written: {e}");
+        failures.push(e.to_string());
     }
     if let Err(e) = plot_parameters(
         &out.join("parameters.png"),
@@ -347,9 +362,9 @@ pub fn write(
         &header.names,
         &scaled,
     ) {
-        eprintln!("warning: plot not written: {e}");
+        failures.push(e.to_string());
     }
-    Ok(())
+    Ok(failures)
 }
 
 fn constants_json(header: &Header, p: &[f64]) -> Value {
@@ -360,14 +375,16 @@ fn constants_json(header: &Header, p: &[f64]) -> Value {
     Value::Object(m)
 }
 
-/// `summary.json` of a sweep. `complete` says whether every fit of the sweep is in it;
-/// `missing` lists the shards left out (see [`super::MissingShard`]).
+/// `summary.json` of a sweep. `complete` is true when no shard (`coverage`) and no
+/// (start_id, w_idx) pair (`missing`) is missing; `missing` lists the shards left out (see
+/// [`super::MissingShard`]), `missing_fits` / `missing_pairs` the fits without a solution.
 pub fn summary(
     header: &Header,
     a: &Analysis,
+    coverage: &Coverage,
+    missing: &[(usize, usize)],
     wall_s: f64,
     threads: usize,
-    coverage: &Coverage,
 ) -> Value {
     let sol_json = |i: usize| {
         let s = &a.ranked[i];
@@ -400,13 +417,18 @@ pub fn summary(
     json!({
         "name": header.name,
         "model": header.model,
+        "extensions": header.extensions,
+        "run_id": header.fingerprint,
+        "shard": format!("{}/{}", header.shard.0, header.shard.1),
+        "complete": coverage.complete && missing.is_empty(),
+        "missing": coverage.missing,
+        "missing_fits": missing.len(),
+        "missing_pairs": missing.iter().map(|(s, w)| json!({"start_id": s, "w_idx": w})).collect::<Vec<_>>(),
         "starts": header.n_starts_total(),
         "lhs_starts": header.n_starts,
         "extra_start": header.extra_start,
         "seed": header.seed,
         "w_candidates": header.w.len(),
-        "complete": coverage.complete,
-        "missing": coverage.missing,
         "fits": a.ranked.len(),
         "completed": a.completed,
         "failed": a.failed,

@@ -3,16 +3,22 @@
 //! shortest round-trip form, so a resumed or merged sweep reproduces them bit for bit.
 
 use std::fs::{File, OpenOptions};
-use std::io::{BufRead, BufReader, Write};
+use std::io::{BufReader, Read, Write};
 use std::path::Path;
 
 use serde::{Deserialize, Serialize};
+use serde_json::Value;
 
 use crate::config::RunConfig;
 use crate::data::Dataset;
 use crate::error::{Error, Result};
+use crate::identity::{first_difference, hash_value, identity};
 use crate::model::Scale;
 use crate::objective::ParamSpace;
+use crate::output;
+
+/// Key of the drawn start points' hash in a sweep's identity.
+const START_POINTS: &str = "sweep_start_points";
 
 /// File name of the journal in a sweep folder.
 pub const FILE: &str = "journal.jsonl";
@@ -20,12 +26,19 @@ pub const FILE: &str = "journal.jsonl";
 /// What identifies a sweep, and what its final files need besides the solutions.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Header {
-    /// Hash of everything that determines the solutions (configuration, data, starts).
+    /// The run identity's hash ([`crate::identity`]): configuration, data, start points.
     pub fingerprint: String,
+    /// The run identity itself, compared field by field on resume and merge (`null` in
+    /// journals of earlier versions, which had none).
+    #[serde(default)]
+    pub identity: Value,
     /// Configuration name.
     pub name: String,
-    /// Model name.
+    /// Model name with its extensions, e.g. `khd+constant_load`.
     pub model: String,
+    /// The extensions, in the configuration's order.
+    #[serde(default)]
+    pub extensions: Vec<String>,
     /// Constant names, units, bounds and scales.
     pub names: Vec<String>,
     pub units: Vec<String>,
@@ -47,46 +60,73 @@ pub struct Header {
 }
 
 impl Header {
-    /// Build the header (and its fingerprint) of a sweep.
-    #[allow(clippy::too_many_arguments)]
+    /// Build the header of a sweep of the resolved configuration `cfg` on `data`; its
+    /// identity is the configuration's ([`identity`]) plus the drawn start points.
     pub fn new(
         cfg: &RunConfig,
         data: &Dataset,
         names: &[String],
         space: &ParamSpace,
-        n_starts: usize,
-        seed: u64,
         extra_start: Option<String>,
         w: &[Vec<f64>],
         starts: &[Vec<f64>],
     ) -> Header {
-        let mut h = Header {
-            fingerprint: String::new(),
+        let mut id = identity(cfg);
+        id[START_POINTS] = Value::String(hash_value(&serde_json::json!(starts)));
+        Header {
+            fingerprint: hash_value(&id),
+            identity: id,
             name: cfg.name.clone(),
-            model: cfg.model.clone(),
+            model: cfg.model_name(),
+            extensions: cfg.extensions.clone(),
             names: names.to_vec(),
             units: cfg.constants.iter().map(|c| c.unit.to_string()).collect(),
             lb: space.lb.clone(),
             ub: space.ub.clone(),
             log_scale: space.scale.iter().map(|s| *s == Scale::Log).collect(),
-            n_starts,
-            seed,
+            n_starts: cfg.sweep.starts,
+            seed: cfg.sweep.seed,
             extra_start,
             w: w.to_vec(),
             stresses: data.curves.iter().map(|c| c.stress_mpa).collect(),
             shard: (1, 1),
-        };
-        let identity = serde_json::json!({
-            "header": &h,
-            "starts": starts,
-            "data": data.curves.iter().map(|c| (c.temperature_c, c.stress_mpa, &c.times_h, &c.strains, c.rupture_time_h, c.rupture_strain, c.min_rate_measured)).collect::<Vec<_>>(),
-            "objective": [cfg.objective.omega_f, if matches!(cfg.objective.lifetime_term, crate::config::LifetimeTerm::Late) { 0.0 } else { 1.0 }],
-            "solver": [cfg.solver.rtol, cfg.solver.atol, cfg.solver.max_iterations as f64],
-            "version": env!("CARGO_PKG_VERSION"),
-        });
-        h.fingerprint = format!("{:016x}", fnv1a(identity.to_string().as_bytes()));
-        h
+        }
     }
+
+    /// The first setting in which `other`'s sweep differs from this one: (dotted field,
+    /// value here, value in `other`); `None` when they are the same sweep.
+    pub fn difference(&self, other: &Header) -> Option<(String, String, String)> {
+        if self.fingerprint == other.fingerprint {
+            return None;
+        }
+        let old = "(none: a journal of an earlier creepfit version)".to_string();
+        if self.identity.is_null() {
+            return Some(("run identity".into(), old, other.fingerprint.clone()));
+        }
+        if other.identity.is_null() {
+            return Some(("run identity".into(), self.fingerprint.clone(), old));
+        }
+        // The configuration's settings first, then what derives from them (start points)
+        // and the version, so that the message names the setting the user changed.
+        let settings = |v: &Value| {
+            let mut v = v.clone();
+            if let Value::Object(m) = &mut v {
+                m.remove(START_POINTS);
+                m.remove("version");
+            }
+            v
+        };
+        first_difference(&settings(&self.identity), &settings(&other.identity))
+            .or_else(|| first_difference(&self.identity, &other.identity))
+            .or_else(|| {
+                Some((
+                    "run identity".into(),
+                    self.fingerprint.clone(),
+                    other.fingerprint.clone(),
+                ))
+            })
+    }
+
     /// Number of starts including the extra one.
     pub fn n_starts_total(&self) -> usize {
         self.n_starts + usize::from(self.extra_start.is_some())
@@ -99,15 +139,6 @@ impl Header {
             (x - self.lb[j]) / (self.ub[j] - self.lb[j])
         }
     }
-}
-
-fn fnv1a(bytes: &[u8]) -> u64 {
-    let mut h: u64 = 0xcbf29ce484222325;
-    for b in bytes {
-        h ^= *b as u64;
-        h = h.wrapping_mul(0x100000001b3);
-    }
-    h
 }
 
 /// One finished local fit.
@@ -183,31 +214,34 @@ mod nan_null_vec {
 #[derive(Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 enum Line {
-    Header(Header),
+    Header(Box<Header>),
     Solution(Solution),
 }
 
-/// Start a new journal with its header.
+/// Start a new journal with its header, atomically (the header line whole, or no journal).
 pub fn create(path: &Path, header: &Header) -> Result<()> {
-    let mut f = File::create(path).map_err(|e| Error::io(path, e))?;
-    let line = serde_json::to_string(&Line::Header(header.clone())).expect("header serialises");
-    writeln!(f, "{line}")
-        .and_then(|_| f.sync_data())
-        .map_err(|e| Error::io(path, e))
+    let line =
+        serde_json::to_string(&Line::Header(Box::new(header.clone()))).expect("header serialises");
+    output::write_atomic(path, |w| writeln!(w, "{line}"))
 }
 
-/// Read a journal: `None` if it does not exist. A last line cut short by an interruption is
-/// ignored (its fit is simply computed again).
+/// Read a journal: `None` if it does not exist or holds no complete header line (a kill
+/// right after its creation, by an earlier version that did not create it atomically). A
+/// last line cut short by an interruption is ignored (its fit is simply computed again).
 pub fn read(path: &Path) -> Result<Option<(Header, Vec<Solution>)>> {
     let f = match File::open(path) {
         Ok(f) => f,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
         Err(e) => return Err(Error::io(path, e)),
     };
-    let lines: Vec<String> = BufReader::new(f)
-        .lines()
-        .collect::<std::io::Result<_>>()
+    let mut text = String::new();
+    BufReader::new(f)
+        .read_to_string(&mut text)
         .map_err(|e| Error::io(path, e))?;
+    if !text.contains('\n') && serde_json::from_str::<Line>(text.trim()).is_err() {
+        return Ok(None); // empty, or a torn header line: nothing was journaled
+    }
+    let lines: Vec<&str> = text.lines().collect();
     let mut header = None;
     let mut sols = Vec::new();
     let n = lines.len();
@@ -216,7 +250,7 @@ pub fn read(path: &Path) -> Result<Option<(Header, Vec<Solution>)>> {
             continue;
         }
         match serde_json::from_str::<Line>(l) {
-            Ok(Line::Header(h)) if i == 0 => header = Some(h),
+            Ok(Line::Header(h)) if i == 0 => header = Some(*h),
             Ok(Line::Solution(s)) if header.is_some() => sols.push(s),
             Err(_) if i + 1 == n && header.is_some() => {} // torn last line
             _ => return Err(Error::data(path, i + 1, "not a sweep journal line")),
@@ -240,17 +274,22 @@ impl Appender {
     pub fn open(path: &Path) -> Result<Appender> {
         let text = std::fs::read(path).map_err(|e| Error::io(path, e))?;
         let keep = text.iter().rposition(|b| *b == b'\n').map_or(0, |p| p + 1);
-        if keep < text.len() {
+        let whole_last = serde_json::from_slice::<Line>(&text[keep..]).is_ok();
+        if keep < text.len() && !whole_last {
             let f = OpenOptions::new()
                 .write(true)
                 .open(path)
                 .map_err(|e| Error::io(path, e))?;
             f.set_len(keep as u64).map_err(|e| Error::io(path, e))?;
         }
-        let file = OpenOptions::new()
+        let mut file = OpenOptions::new()
             .append(true)
             .open(path)
             .map_err(|e| Error::io(path, e))?;
+        if keep < text.len() && whole_last {
+            // a whole last record without its newline: end its line
+            file.write_all(b"\n").map_err(|e| Error::io(path, e))?;
+        }
         Ok(Appender {
             file,
             path: path.to_path_buf(),
@@ -261,8 +300,8 @@ impl Appender {
         let mut line =
             serde_json::to_string(&Line::Solution(s.clone())).expect("solution serialises");
         line.push('\n');
-        self.file
-            .write_all(line.as_bytes())
+        output::charge(line.len())
+            .and_then(|_| self.file.write_all(line.as_bytes()))
             .and_then(|_| self.file.flush())
             .map_err(|e| Error::io(&self.path, e))
     }

@@ -9,6 +9,10 @@
 //! takes I and N from a scheduler's job array, [`array`]); [`merge`] unites the shard
 //! journals, also of an incomplete set. The final files are a function of the set of solutions alone, so they are
 //! identical for any thread count, shard split or interruption history.
+//!
+//! Safe: the journal's header holds the run identity ([`crate::identity`]); a resume or merge
+//! of a different sweep is refused, naming the first differing setting. One sweep at a time
+//! writes into a folder ([`crate::output::lock_folder`]).
 
 mod analysis;
 pub mod array;
@@ -31,29 +35,11 @@ use serde::Serialize;
 use crate::config::RunConfig;
 use crate::data::Dataset;
 use crate::error::{Error, Result};
-use crate::fit::{local_fit, param_space, weight_candidates, FitSettings};
+use crate::fit::{local_fit, param_space, FitSettings};
 use crate::guess::initial_guess;
 use crate::model::build;
 use crate::objective::mean_abs;
-
-/// Options of one sweep run (command line over configuration).
-#[derive(Debug, Clone, PartialEq)]
-pub struct SweepOptions {
-    /// Number of Latin-hypercube starts.
-    pub starts: usize,
-    /// Seed of the start sequence.
-    pub seed: u64,
-    /// Worker threads (None: rayon's default, all cores).
-    pub threads: Option<usize>,
-    /// (I, N): run the I-th (1-based) of N disjoint parts.
-    pub shard: Option<(usize, usize)>,
-    /// Output folder.
-    pub out: PathBuf,
-    /// Stop (as if interrupted) after this many new solutions: for tests of resumption.
-    pub stop_after: Option<usize>,
-    /// Show a progress bar (only drawn when stderr is a terminal).
-    pub progress: bool,
-}
+use crate::output::{lock_folder, FolderLock};
 
 /// The part of a sweep the command line asks for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -88,6 +74,7 @@ pub fn part_dir(
 }
 
 /// Set by the SIGINT handler: no new fits start, running ones finish and are journaled.
+/// [`run_sweep`] clears it when it starts.
 pub static STOP: AtomicBool = AtomicBool::new(false);
 
 /// Install a SIGINT (Ctrl-C) handler that sets [`STOP`]; a second Ctrl-C kills at once.
@@ -133,15 +120,16 @@ pub struct Plan {
     pub ws: Vec<Vec<f64>>,
 }
 
-/// Draw the starts and fix the w candidates for a configuration.
-pub fn plan(cfg: &RunConfig, data: &Dataset, starts: usize, seed: u64) -> Result<Plan> {
+/// Draw the starts (`cfg.sweep`) and fix the w candidates for a configuration.
+pub fn plan(cfg: &RunConfig, data: &Dataset) -> Result<Plan> {
+    let (starts, seed) = (cfg.sweep.starts, cfg.sweep.seed);
     if starts == 0 {
         return Err(Error::Invalid("--starts must be at least 1".into()));
     }
     let model = build(&cfg.model, &cfg.extensions)?;
     let space = param_space(cfg);
     let settings = FitSettings::from_config(cfg);
-    let ws = weight_candidates(cfg, data.curves.len())?;
+    let ws = cfg.objective.weight_vectors(data.curves.len(), &cfg.path)?;
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let k = space.n_free();
     let mut start_params: Vec<Vec<f64>> = latin_hypercube(starts, k, &mut rng)
@@ -176,17 +164,7 @@ pub fn plan(cfg: &RunConfig, data: &Dataset, starts: usize, seed: u64) -> Result
         .iter()
         .map(|c| c.name.to_string())
         .collect();
-    let header = Header::new(
-        cfg,
-        data,
-        &names,
-        &space,
-        starts,
-        seed,
-        extra,
-        &ws,
-        &start_params,
-    );
+    let header = Header::new(cfg, data, &names, &space, extra, &ws, &start_params);
     Ok(Plan {
         header,
         starts: start_params,
@@ -206,16 +184,24 @@ pub struct SweepRun {
     pub wall_s: f64,
     /// Threads used.
     pub threads: usize,
+    /// The output folder's write lock, held while this value lives (write the outputs
+    /// before dropping it).
+    pub lock: FolderLock,
 }
 
-/// Run (or resume) a sweep part into `opts.out`, journaling every finished fit.
-pub fn run_sweep(cfg: &RunConfig, data: &Dataset, opts: &SweepOptions) -> Result<(Plan, SweepRun)> {
+/// Run (or resume) a sweep part of the resolved configuration `cfg` (bound to `data`) into
+/// its output folder (`cfg.out_dir("sweep")`), journaling every finished fit. Refused at
+/// once when another run holds the folder's lock, or when the folder holds a different
+/// sweep (the error names the first differing setting).
+pub fn run_sweep(cfg: &RunConfig, data: &Dataset) -> Result<(Plan, SweepRun)> {
     let t0 = Instant::now();
-    let plan = plan(cfg, data, opts.starts, opts.seed)?;
+    STOP.store(false, Ordering::SeqCst);
+    let out = cfg.out_dir("sweep");
+    let plan = plan(cfg, data)?;
     let model = build(&cfg.model, &cfg.extensions)?;
     let space = param_space(cfg);
     let settings = FitSettings::from_config(cfg);
-    let (shard_i, shard_n) = opts.shard.unwrap_or((1, 1));
+    let (shard_i, shard_n) = cfg.run.shard.unwrap_or((1, 1));
     if shard_n == 0 || shard_i == 0 || shard_i > shard_n {
         return Err(Error::Invalid(format!(
             "--shard {shard_i}/{shard_n}: need 1 ≤ I ≤ N"
@@ -223,33 +209,42 @@ pub fn run_sweep(cfg: &RunConfig, data: &Dataset, opts: &SweepOptions) -> Result
     }
     let mut header = plan.header.clone();
     header.shard = (shard_i, shard_n);
-    std::fs::create_dir_all(&opts.out).map_err(|e| Error::io(&opts.out, e))?;
-    let journal_path = opts.out.join(journal::FILE);
+    let lock = lock_folder(&out)?;
+    let journal_path = out.join(journal::FILE);
     let existing = journal::read(&journal_path)?;
     let mut solutions = match existing {
         Some((h, sols)) => {
-            if h.fingerprint != header.fingerprint || h.shard != header.shard {
-                return Err(Error::Invalid(format!(
-                    "{} belongs to a different sweep (configuration, data, starts, seed or shard differ); use another --out",
-                    journal_path.display()
+            let folder = |what: String| Error::Folder {
+                path: journal_path.clone(),
+                message: format!(
+                    "this folder holds {what}; use another --out or delete the folder"
+                ),
+            };
+            if let Some((field, held, asked)) = h.difference(&header) {
+                return Err(folder(format!(
+                    "a sweep with {field} = {held}, the configuration asks for {asked}"
+                )));
+            }
+            if h.shard != header.shard {
+                return Err(folder(format!(
+                    "shard {}/{} of this sweep, the command asks for {shard_i}/{shard_n}",
+                    h.shard.0, h.shard.1
                 )));
             }
             sols
         }
         None => {
+            check_bound(cfg, data)?;
             journal::create(&journal_path, &header)?;
             Vec::new()
         }
     };
-    let done: std::collections::HashSet<(usize, usize)> =
-        solutions.iter().map(|s| (s.start_id, s.w_idx)).collect();
-    let jobs: Vec<(usize, usize)> = (0..plan.starts.len())
-        .filter(|s| s % shard_n == shard_i - 1)
-        .flat_map(|s| (0..plan.ws.len()).map(move |w| (s, w)))
-        .filter(|j| !done.contains(j))
-        .collect();
+    // After the identity comparison, so that a folder of another sweep is named as such.
+    check_bound(cfg, data)?;
+    let jobs = missing(&header, &solutions);
 
-    let threads = opts
+    let threads = cfg
+        .run
         .threads
         .unwrap_or_else(rayon::current_num_threads)
         .max(1);
@@ -261,13 +256,13 @@ pub fn run_sweep(cfg: &RunConfig, data: &Dataset, opts: &SweepOptions) -> Result
     let new: Mutex<Vec<Solution>> = Mutex::new(Vec::new());
     let started = AtomicUsize::new(0);
     let write_error: Mutex<Option<Error>> = Mutex::new(None);
-    let bar = progress_bar(jobs.len(), opts.progress);
+    let bar = progress_bar(jobs.len(), cfg.run.progress);
     pool.install(|| {
         jobs.par_iter().for_each(|&(s, wi)| {
             if STOP.load(Ordering::SeqCst) {
                 return;
             }
-            if let Some(k) = opts.stop_after {
+            if let Some(k) = cfg.run.stop_after {
                 if started.fetch_add(1, Ordering::SeqCst) >= k {
                     return;
                 }
@@ -313,8 +308,7 @@ pub fn run_sweep(cfg: &RunConfig, data: &Dataset, opts: &SweepOptions) -> Result
     let new = new.into_inner().unwrap();
     let computed = new.len();
     solutions.extend(new);
-    let total_part = shard_fits(&plan.header, (shard_i, shard_n));
-    let missing = total_part - solutions.len();
+    let missing = missing(&header, &solutions).len();
     Ok((
         plan,
         SweepRun {
@@ -323,8 +317,19 @@ pub fn run_sweep(cfg: &RunConfig, data: &Dataset, opts: &SweepOptions) -> Result
             missing,
             wall_s: t0.elapsed().as_secs_f64(),
             threads,
+            lock,
         },
     ))
+}
+
+/// The configuration must have been resolved on these very data (its `data_hash`).
+fn check_bound(cfg: &RunConfig, data: &Dataset) -> Result<()> {
+    if cfg.data_hash != crate::identity::data_hash(data) {
+        return Err(Error::Invalid(
+            "the configuration is not bound to these data (build it with RunConfig::resolve or with_data)".into(),
+        ));
+    }
+    Ok(())
 }
 
 fn progress_bar(len: usize, enabled: bool) -> indicatif::ProgressBar {
@@ -448,24 +453,28 @@ pub fn merge(dirs: &[PathBuf]) -> Result<Merged> {
             continue;
         };
         if let Some((h0, d0)) = &header {
-            if h0.fingerprint != h.fingerprint {
-                return Err(Error::Invalid(format!(
-                    "{}: a different sweep than {} (configuration, data, starts or seed differ)",
-                    path.display(),
-                    d0.display()
-                )));
+            if let Some((field, first, here)) = h0.difference(&h) {
+                return Err(Error::Folder {
+                    path: path.clone(),
+                    message: format!(
+                        "a different sweep than {}: {field} = {here} here, {first} there",
+                        d0.display()
+                    ),
+                });
             }
             if h0.shard.1 != h.shard.1 {
-                return Err(Error::Invalid(format!(
-                    "{}: shard {}/{} of a split into {} parts, but {} holds shard {}/{}",
-                    path.display(),
-                    h.shard.0,
-                    h.shard.1,
-                    h.shard.1,
-                    d0.display(),
-                    h0.shard.0,
-                    h0.shard.1
-                )));
+                return Err(Error::Folder {
+                    path: path.clone(),
+                    message: format!(
+                        "shard {}/{} of a split into {} parts, but {} holds shard {}/{}",
+                        h.shard.0,
+                        h.shard.1,
+                        h.shard.1,
+                        d0.display(),
+                        h0.shard.0,
+                        h0.shard.1
+                    ),
+                });
             }
         }
         let (i, n) = h.shard;
@@ -547,7 +556,23 @@ pub fn merge(dirs: &[PathBuf]) -> Result<Merged> {
     })
 }
 
-/// Write the final files of a (complete or partial) set of solutions into `out`.
+/// The (start_id, w_idx) pairs of `header`'s part of the sweep that `solutions` lack.
+pub fn missing(header: &Header, solutions: &[Solution]) -> Vec<(usize, usize)> {
+    let (i, n) = header.shard;
+    let done: std::collections::HashSet<(usize, usize)> =
+        solutions.iter().map(|s| (s.start_id, s.w_idx)).collect();
+    (0..header.n_starts_total())
+        .filter(|s| s % n == i - 1)
+        .flat_map(|s| (0..header.w.len()).map(move |w| (s, w)))
+        .filter(|j| !done.contains(j))
+        .collect()
+}
+
+/// Write the final files of a (complete or partial) set of solutions into `out`: the
+/// numeric files first, then the plots. `summary.json` says whether the set is complete
+/// and what is missing. Returns the analysis and the plots that could not be written
+/// (`plot PATH: why`; the caller reports them, see [`Error::PlotsNotWritten`]): an error
+/// of a numeric file is an `Err`, a plot's is not.
 pub fn write_outputs(
     header: &Header,
     solutions: &[Solution],
@@ -555,10 +580,11 @@ pub fn write_outputs(
     wall_s: f64,
     threads: usize,
     coverage: &Coverage,
-) -> Result<Analysis> {
+) -> Result<(Analysis, Vec<String>)> {
     let analysis = analyse(header, solutions);
-    analysis::write(header, &analysis, out, wall_s, threads, coverage)?;
-    Ok(analysis)
+    let missing = missing(header, solutions);
+    let failures = analysis::write(header, &analysis, coverage, &missing, out, wall_s, threads)?;
+    Ok((analysis, failures))
 }
 
 #[cfg(test)]
