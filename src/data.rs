@@ -13,6 +13,9 @@ use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
 
+mod min_rate;
+pub use min_rate::estimate_min_rate;
+
 /// Required columns of the curves file.
 pub const CURVE_COLUMNS: &[&str] = &["temperature_C", "stress_MPa", "time_h", "strain_pct"];
 /// Required columns of the ruptures file.
@@ -647,73 +650,6 @@ pub fn read_ruptures(path: &Path) -> Result<Vec<RuptureRecord>> {
         });
     }
     Ok(out)
-}
-
-/// Estimate the minimum creep rate (1/h when `strains` are fractions) of a digitized curve.
-///
-/// Method: from every start point, a window of consecutive points is grown until it spans at
-/// least [`MIN_RATE_WINDOW_FRACTION`] × `life_h` in time **and** holds at least
-/// [`MIN_RATE_WINDOW_POINTS`] points; a
-/// least-squares line strain-vs-time is fitted to each such window, and the estimate is the
-/// smallest positive slope over all windows. Fitting over a fixed fraction of the life
-/// averages out digitizing noise (single points that fall back would make point-to-point
-/// slopes zero or negative), while windows short against the life still resolve the
-/// secondary stage. The estimate is biased slightly high on a curved secondary stage (a
-/// window's mean slope exceeds its minimum).
-///
-/// Fallback, when no window qualifies (curve shorter than the window) or no window has a
-/// positive slope: the overall secant slope (last − first point) of the curve; 0 when the
-/// points span no time. A non-finite or non-positive `life_h` is replaced by the time span of
-/// the points. `times_h` must be sorted ascending (as [`Curve::times_h`] is).
-pub fn estimate_min_rate(times_h: &[f64], strains: &[f64], life_h: f64) -> f64 {
-    let n = times_h.len().min(strains.len());
-    if n < 2 {
-        return 0.0;
-    }
-    let (t, e) = (&times_h[..n], &strains[..n]);
-    let span = t[n - 1] - t[0];
-    let life = if life_h.is_finite() && life_h > 0.0 {
-        life_h
-    } else {
-        span
-    };
-    let width = MIN_RATE_WINDOW_FRACTION * life;
-    let mut best = f64::INFINITY;
-    for i in 0..n {
-        let mut j = i + MIN_RATE_WINDOW_POINTS.min(n) - 1;
-        while j < n && t[j] - t[i] < width {
-            j += 1;
-        }
-        if j >= n {
-            break; // later starts cannot qualify either
-        }
-        if let Some(slope) = ls_slope(&t[i..=j], &e[i..=j]) {
-            if slope > 0.0 && slope < best {
-                best = slope;
-            }
-        }
-    }
-    if best.is_finite() {
-        best
-    } else if span > 0.0 {
-        (e[n - 1] - e[0]) / span
-    } else {
-        0.0
-    }
-}
-
-/// Least-squares slope of y against x (centred sums); `None` when x has no spread.
-fn ls_slope(x: &[f64], y: &[f64]) -> Option<f64> {
-    let m = x.len() as f64;
-    let mx = x.iter().sum::<f64>() / m;
-    let my = y.iter().sum::<f64>() / m;
-    let (mut sxx, mut sxy) = (0.0, 0.0);
-    for (a, b) in x.iter().zip(y) {
-        let dx = a - mx;
-        sxx += dx * dx;
-        sxy += dx * (b - my);
-    }
-    (sxx > 0.0).then(|| sxy / sxx)
 }
 
 #[cfg(test)]
