@@ -242,8 +242,9 @@ fn nan_strain() {
 }
 
 #[test]
-fn negative_strain_and_time() {
-    let bad = CURVES.replace("600,100,10,1\n", "600,100,10,-1\n");
+fn infinite_strain_and_negative_time() {
+    // (A negative strain is a measurement: tests/input_errors.rs.)
+    let bad = CURVES.replace("600,100,10,1\n", "600,100,10,-inf\n");
     has(
         &fails(&[("curves.csv", &bad)], ""),
         &["curves.csv:3", "strain_pct"],
