@@ -16,8 +16,8 @@ mod min_rate;
 mod table;
 
 pub use min_rate::estimate_min_rate;
-use table::Table;
 pub use table::PROGRESS_MIN_BYTES;
+pub(crate) use table::{read_file, Table};
 
 /// Required columns of the curves file.
 pub const CURVE_COLUMNS: &[&str] = &["temperature_C", "stress_MPa", "time_h", "strain_pct"];

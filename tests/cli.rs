@@ -216,6 +216,11 @@ fn missing_data_file() {
         "",
     );
     has(&e, &["nope.csv"]);
+    // The OS text once (it used to come twice through the error chain).
+    let os = std::fs::File::open("/no/such/dir/nope.csv")
+        .unwrap_err()
+        .to_string();
+    assert_eq!(e.matches(&os).count(), 1, "{e}");
 }
 
 #[test]

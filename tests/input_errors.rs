@@ -523,3 +523,21 @@ fn physical_line_numbers() {
     let e = load_text(text).unwrap_err();
     has(&e, &["curves.csv:6:", "2 fields"]);
 }
+
+#[test]
+fn constants_file_errors_name_the_physical_line() {
+    let dir = TempDir::new().unwrap();
+    let model = creepfit::model::build("khd", &[]).unwrap();
+    let p = write(&dir, "constants.csv", "name,value\n\nA,1e-9\n\n\nB,zero\n");
+    let e = creepfit::report::tables::read_constants(&p, model.as_ref())
+        .unwrap_err()
+        .to_string();
+    assert_one_line(&e);
+    has(&e, &["constants.csv:6:", "column 'value'", "zero"]);
+    let p = write(&dir, "constants.csv", "name,value\nA,\"1e-9\n\"\nBee,1\n");
+    let e = creepfit::report::tables::read_constants(&p, model.as_ref())
+        .unwrap_err()
+        .to_string();
+    assert_one_line(&e);
+    has(&e, &["constants.csv:2:", "column 'value'", "1e-9\\n"]);
+}

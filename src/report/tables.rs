@@ -80,48 +80,29 @@ pub fn write_constants(
 }
 
 /// Read a `constants.csv` (columns `name,value`, any order, extra columns ignored) into the
-/// model's order; every model constant must be present.
+/// model's order; every model constant must be present. Errors name the file's physical line.
 pub fn read_constants(path: &Path, model: &dyn Model) -> Result<Vec<f64>> {
-    let mut rdr = csv::ReaderBuilder::new()
-        .has_headers(true)
-        .from_path(path)
-        .map_err(|e| match e.kind() {
-            csv::ErrorKind::Io(_) => Error::io(path, std::io::Error::other(e.to_string())),
-            _ => Error::data(path, 0, e.to_string()),
-        })?;
-    let headers = rdr
-        .headers()
-        .map_err(|e| Error::data(path, 1, e.to_string()))?
-        .clone();
-    let col = |name: &str| {
-        headers
-            .iter()
-            .position(|h| h.trim() == name)
-            .ok_or_else(|| Error::data(path, 1, format!("missing column '{name}'")))
-    };
-    let (ci, cv) = (col("name")?, col("value")?);
+    let (bytes, progress) = crate::data::read_file(path)?;
+    let mut table = crate::data::Table::open(path, &bytes, &["name", "value"], progress)?;
+    let (ci, cv) = (table.col("name").unwrap(), table.col("value").unwrap());
     let specs = model.constants();
     let mut values = vec![f64::NAN; specs.len()];
-    for rec in rdr.records() {
-        let rec = rec.map_err(|e| {
-            let line = e.position().map(|p| p.line() as usize).unwrap_or(0);
-            Error::data(path, line, e.to_string())
-        })?;
-        let line = rec.position().map(|p| p.line() as usize).unwrap_or(0);
+    let mut rec = csv::StringRecord::new();
+    while let Some(line) = table.next_row(&mut rec)? {
         let name = rec.get(ci).unwrap_or("").trim();
         let text = rec.get(cv).unwrap_or("").trim();
         let v: f64 = text.parse().map_err(|_| {
             Error::data(
                 path,
                 line,
-                format!("field 'value': cannot parse '{text}' as a number"),
+                format!("column 'value': cannot parse '{text}' as a number"),
             )
         })?;
         if !v.is_finite() {
             return Err(Error::data(
                 path,
                 line,
-                format!("field 'value': '{text}' is not finite"),
+                format!("column 'value': '{text}' is not finite"),
             ));
         }
         match specs.iter().position(|s| s.name == name) {
@@ -131,7 +112,7 @@ pub fn read_constants(path: &Path, model: &dyn Model) -> Result<Vec<f64>> {
                     path,
                     line,
                     format!(
-                        "field 'name': '{name}' is not a constant of model {}",
+                        "column 'name': '{name}' is not a constant of model {}",
                         model.name()
                     ),
                 ))
