@@ -539,5 +539,11 @@ fn constants_file_errors_name_the_physical_line() {
         .unwrap_err()
         .to_string();
     assert_one_line(&e);
-    has(&e, &["constants.csv:2:", "column 'value'", "1e-9\\n"]);
+    has(&e, &["constants.csv:4:", "column 'name'", "Bee"]);
+    let p = write(&dir, "constants.csv", "name,value\n\nA,\"1e\n9\"\n");
+    let e = creepfit::report::tables::read_constants(&p, model.as_ref())
+        .unwrap_err()
+        .to_string();
+    assert_one_line(&e);
+    has(&e, &["constants.csv:3:", "column 'value'", "'1e\\n9'"]);
 }
