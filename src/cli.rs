@@ -442,7 +442,10 @@ fn curve_plots(
             let grid = dense_grid(res.t_end, 400);
             let (_, traj) = model.trajectory(params, &load, &grid, &o);
             CurvePlot {
-                label: format!("{} MPa", c.stress_mpa),
+                label: match &c.specimen {
+                    Some(sp) => format!("{} MPa, {sp}", c.stress_mpa),
+                    None => format!("{} MPa", c.stress_mpa),
+                },
                 measured: c
                     .times_h
                     .iter()
@@ -484,6 +487,9 @@ fn simulate(
     let (ih, iphi, iom) = (idx("H"), idx("Phi"), idx("omega"));
     let mut curve_rows = Vec::new();
     let mut rupture_rows = Vec::new();
+    let specimens = tables::has_specimens(&data.curves);
+    let specimen =
+        |c: &crate::data::Curve| specimens.then(|| c.specimen.clone().unwrap_or_default());
     for c in &data.curves {
         let load = Load {
             stress_mpa: c.stress_mpa,
@@ -514,6 +520,7 @@ fn simulate(
                 get(iphi),
                 get(iom),
             ]);
+            curve_rows.last_mut().unwrap().extend(specimen(c));
         }
         rupture_rows.push(vec![
             num(c.temperature_c),
@@ -530,38 +537,45 @@ fn simulate(
             },
             num(100.0 * res.min_rate),
         ]);
+        rupture_rows.last_mut().unwrap().extend(specimen(c));
         println!(
-            "{} °C {:>6} MPa: {} at t = {:.1} h, strain {:.3} %, min rate {:.4e} %/h",
+            "{} °C {:>6} MPa{}: {} at t = {:.1} h, strain {:.3} %, min rate {:.4e} %/h",
             c.temperature_c,
             c.stress_mpa,
+            c.specimen
+                .as_ref()
+                .map(|s| format!(" (specimen {s})"))
+                .unwrap_or_default(),
             res.outcome.as_str(),
             res.t_end,
             100.0 * res.strain_end,
             100.0 * res.min_rate
         );
     }
+    let curve_header = [
+        "temperature_C",
+        "stress_MPa",
+        "time_h",
+        "strain_pct",
+        "H",
+        "Phi",
+        "omega",
+    ];
     write_csv(
         &out.join("curves.csv"),
-        &[
-            "temperature_C",
-            "stress_MPa",
-            "time_h",
-            "strain_pct",
-            "H",
-            "Phi",
-            "omega",
-        ],
+        &tables::with_specimen(&curve_header, specimens),
         &curve_rows,
     )?;
+    let rupture_header = [
+        "temperature_C",
+        "stress_MPa",
+        "rupture_time_h",
+        "rupture_strain_pct",
+        "min_rate_pct_per_h",
+    ];
     write_csv(
         &out.join("ruptures.csv"),
-        &[
-            "temperature_C",
-            "stress_MPa",
-            "rupture_time_h",
-            "rupture_strain_pct",
-            "min_rate_pct_per_h",
-        ],
+        &tables::with_specimen(&rupture_header, specimens),
         &rupture_rows,
     )?;
     if let Some(w) = w {

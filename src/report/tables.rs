@@ -141,6 +141,8 @@ pub struct ErrorRow {
     pub min_rate_err_pct: f64,
     pub rupture_strain_exp_pct: f64,
     pub rupture_strain_pred_pct: f64,
+    /// Specimen label of the curve, if the data have one.
+    pub specimen: Option<String>,
 }
 
 /// The error rows of a local fit.
@@ -161,13 +163,30 @@ pub fn error_rows(fit: &LocalFit, curves: &[Curve]) -> Vec<ErrorRow> {
                 min_rate_err_pct: fit.min_rate_err_pct[i],
                 rupture_strain_exp_pct: 100.0 * c.rupture_strain,
                 rupture_strain_pred_pct: 100.0 * p.rupture_strain,
+                specimen: c.specimen.clone(),
             }
         })
         .collect()
 }
 
-/// `errors.csv`.
+/// Whether a `specimen` column goes into per-curve outputs: when some curve has one. It is
+/// appended after the contract's columns, so readers by column name keep working.
+pub fn has_specimens(curves: &[Curve]) -> bool {
+    curves.iter().any(|c| c.specimen.is_some())
+}
+
+/// `header` plus `specimen` if `specimens`.
+pub fn with_specimen<'a>(header: &[&'a str], specimens: bool) -> Vec<&'a str> {
+    let mut h = header.to_vec();
+    if specimens {
+        h.push("specimen");
+    }
+    h
+}
+
+/// `errors.csv` (plus a last `specimen` column when some row has one).
 pub fn write_errors(path: &Path, rows: &[ErrorRow]) -> Result<()> {
+    let specimens = rows.iter().any(|r| r.specimen.is_some());
     let header = [
         "temperature_C",
         "stress_MPa",
@@ -197,37 +216,41 @@ pub fn write_errors(path: &Path, rows: &[ErrorRow]) -> Result<()> {
             ]
             .iter()
             .map(|v| num(*v))
+            .chain(specimens.then(|| r.specimen.clone().unwrap_or_default()))
             .collect()
         })
         .collect();
-    write_csv(path, &header, &rows)
+    write_csv(path, &with_specimen(&header, specimens), &rows)
 }
 
-/// `curves.csv` of a fit: measured and predicted strain at every measured time.
+/// `curves.csv` of a fit: measured and predicted strain at every measured time (plus a last
+/// `specimen` column when some curve has one).
 pub fn write_fit_curves(path: &Path, fit: &LocalFit, curves: &[Curve]) -> Result<()> {
+    let specimens = has_specimens(curves);
     let mut rows = Vec::new();
     for (i, c) in curves.iter().enumerate() {
         for (k, &t) in c.times_h.iter().enumerate() {
-            rows.push(vec![
+            let mut row = vec![
                 num(c.temperature_c),
                 num(c.stress_mpa),
                 num(t),
                 num(100.0 * c.strains[k]),
                 num(100.0 * fit.eval.curves[i].strain[k]),
-            ]);
+            ];
+            if specimens {
+                row.push(c.specimen.clone().unwrap_or_default());
+            }
+            rows.push(row);
         }
     }
-    write_csv(
-        path,
-        &[
-            "temperature_C",
-            "stress_MPa",
-            "time_h",
-            "strain_exp_pct",
-            "strain_pred_pct",
-        ],
-        &rows,
-    )
+    let header = [
+        "temperature_C",
+        "stress_MPa",
+        "time_h",
+        "strain_exp_pct",
+        "strain_pred_pct",
+    ];
+    write_csv(path, &with_specimen(&header, specimens), &rows)
 }
 
 /// The paper-style table (Tables 6/7): lifetime and minimum-rate errors per stress.
@@ -238,7 +261,8 @@ pub fn error_table(rows: &[ErrorRow], min_rate_measured: bool) -> String {
     } else {
         "estimated from the curve"
     };
-    let _ = writeln!(
+    let specimens = rows.iter().any(|r| r.specimen.is_some());
+    let _ = write!(
         s,
         "{:>6} {:>7} | {:>10} {:>10} {:>8} | {:>11} {:>11} {:>8} | {:>7} {:>7}",
         "T(C)",
@@ -252,8 +276,9 @@ pub fn error_table(rows: &[ErrorRow], min_rate_measured: bool) -> String {
         "e_f exp",
         "e_f pred"
     );
+    let _ = writeln!(s, "{}", if specimens { " | specimen" } else { "" });
     for r in rows {
-        let _ = writeln!(
+        let _ = write!(
             s,
             "{:>6} {:>7} | {:>10.0} {:>10.0} {:>8.2} | {:>11.4e} {:>11.4e} {:>8.2} | {:>7.3} {:>7.3}",
             r.temperature_c,
@@ -267,6 +292,11 @@ pub fn error_table(rows: &[ErrorRow], min_rate_measured: bool) -> String {
             r.rupture_strain_exp_pct,
             r.rupture_strain_pred_pct
         );
+        let _ = match (&r.specimen, specimens) {
+            (Some(sp), _) => writeln!(s, " | {sp}"),
+            (None, true) => writeln!(s, " |"),
+            (None, false) => writeln!(s),
+        };
     }
     let mean = |f: &dyn Fn(&ErrorRow) -> f64| {
         let v: Vec<f64> = rows
