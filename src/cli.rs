@@ -193,14 +193,17 @@ fn diagnose_cmd(config: &Path, out: Option<PathBuf>, opts: &DiagnoseOptions) -> 
             .zip(&ev.curves)
             .map(|(cu, p)| Series {
                 label: format!("{} MPa", cu.stress_mpa),
-                points: (0..cu.times_h.len())
-                    .map(|k| {
-                        (
-                            cu.times_h[k] / cu.life_h(),
-                            100.0 * (cu.strains[k] - p.strain[k]) / cu.rupture_strain,
-                        )
-                    })
-                    .collect(),
+                points: tables::thin(
+                    (0..cu.times_h.len())
+                        .map(|k| {
+                            (
+                                cu.times_h[k] / cu.life_h(),
+                                100.0 * (cu.strains[k] - p.strain[k]) / cu.rupture_strain,
+                            )
+                        })
+                        .collect(),
+                    PLOT_POINTS,
+                ),
             })
             .collect();
         let path = out.join(format!("residuals_{}.png", c.name));
@@ -415,6 +418,9 @@ fn fit(config: &Path, out: Option<PathBuf>, req: &FitRequest) -> Result<()> {
     Ok(())
 }
 
+/// Most measured points a plot draws per curve ([`tables::thin`]).
+const PLOT_POINTS: usize = 2000;
+
 /// Measured points and dense predicted curves for a plot.
 fn curve_plots(
     cfg: &RunConfig,
@@ -446,12 +452,14 @@ fn curve_plots(
                     Some(sp) => format!("{} MPa, {sp}", c.stress_mpa),
                     None => format!("{} MPa", c.stress_mpa),
                 },
-                measured: c
-                    .times_h
-                    .iter()
-                    .zip(&c.strains)
-                    .map(|(t, e)| (*t, 100.0 * e))
-                    .collect(),
+                measured: tables::thin(
+                    c.times_h
+                        .iter()
+                        .zip(&c.strains)
+                        .map(|(t, e)| (*t, 100.0 * e))
+                        .collect(),
+                    PLOT_POINTS,
+                ),
                 predicted: traj.iter().map(|(t, e, _)| (*t, 100.0 * e)).collect(),
             }
         })
@@ -485,7 +493,7 @@ fn simulate(
     let names = model.state_names();
     let idx = |n: &str| names.iter().position(|s| *s == n);
     let (ih, iphi, iom) = (idx("H"), idx("Phi"), idx("omega"));
-    let mut curve_rows = Vec::new();
+    let mut trajectories = Vec::new();
     let mut rupture_rows = Vec::new();
     let specimens = tables::has_specimens(&data.curves);
     let specimen =
@@ -509,19 +517,7 @@ fn simulate(
         grid.sort_by(|a, b| a.total_cmp(b));
         grid.dedup();
         let (_, traj) = model.trajectory(&params, &load, &grid, &o);
-        for (t, e, y) in &traj {
-            let get = |i: Option<usize>| i.map(|i| num(y[i])).unwrap_or_default();
-            curve_rows.push(vec![
-                num(c.temperature_c),
-                num(c.stress_mpa),
-                num(*t),
-                num(100.0 * e),
-                get(ih),
-                get(iphi),
-                get(iom),
-            ]);
-            curve_rows.last_mut().unwrap().extend(specimen(c));
-        }
+        trajectories.push((c, traj));
         rupture_rows.push(vec![
             num(c.temperature_c),
             num(c.stress_mpa),
@@ -561,10 +557,27 @@ fn simulate(
         "Phi",
         "omega",
     ];
-    write_csv(
+    // Rows formatted as they are written (a logged curve gives a million of them).
+    let curve_rows = trajectories.iter().flat_map(|(c, traj)| {
+        traj.iter().map(|(t, e, y)| {
+            let get = |i: Option<usize>| i.map(|i| num(y[i])).unwrap_or_default();
+            let mut row = vec![
+                num(c.temperature_c),
+                num(c.stress_mpa),
+                num(*t),
+                num(100.0 * e),
+                get(ih),
+                get(iphi),
+                get(iom),
+            ];
+            row.extend(specimen(c));
+            row
+        })
+    });
+    tables::write_csv_rows(
         &out.join("curves.csv"),
         &tables::with_specimen(&curve_header, specimens),
-        &curve_rows,
+        curve_rows,
     )?;
     let rupture_header = [
         "temperature_C",

@@ -24,11 +24,22 @@ pub fn write_text(path: &Path, text: &str) -> Result<()> {
 
 /// Write a CSV file from a header and rows of already formatted cells.
 pub fn write_csv(path: &Path, header: &[&str], rows: &[Vec<String>]) -> Result<()> {
+    write_csv_rows(path, header, rows.iter())
+}
+
+/// [`write_csv`] from rows made one at a time: a million-point curve's rows are formatted
+/// as they are written, never held all at once.
+pub fn write_csv_rows<R, I>(path: &Path, header: &[&str], rows: I) -> Result<()>
+where
+    R: AsRef<[String]>,
+    I: Iterator<Item = R>,
+{
     let mut w = csv::Writer::from_path(path).map_err(|e| Error::io(path, csv_io(e)))?;
     w.write_record(header)
         .map_err(|e| Error::io(path, csv_io(e)))?;
     for r in rows {
-        w.write_record(r).map_err(|e| Error::io(path, csv_io(e)))?;
+        w.write_record(r.as_ref())
+            .map_err(|e| Error::io(path, csv_io(e)))?;
     }
     w.flush().map_err(|e| Error::io(path, e))
 }
@@ -227,9 +238,8 @@ pub fn write_errors(path: &Path, rows: &[ErrorRow]) -> Result<()> {
 /// `specimen` column when some curve has one).
 pub fn write_fit_curves(path: &Path, fit: &LocalFit, curves: &[Curve]) -> Result<()> {
     let specimens = has_specimens(curves);
-    let mut rows = Vec::new();
-    for (i, c) in curves.iter().enumerate() {
-        for (k, &t) in c.times_h.iter().enumerate() {
+    let rows = curves.iter().enumerate().flat_map(|(i, c)| {
+        c.times_h.iter().enumerate().map(move |(k, &t)| {
             let mut row = vec![
                 num(c.temperature_c),
                 num(c.stress_mpa),
@@ -240,9 +250,9 @@ pub fn write_fit_curves(path: &Path, fit: &LocalFit, curves: &[Curve]) -> Result
             if specimens {
                 row.push(c.specimen.clone().unwrap_or_default());
             }
-            rows.push(row);
-        }
-    }
+            row
+        })
+    });
     let header = [
         "temperature_C",
         "stress_MPa",
@@ -250,7 +260,22 @@ pub fn write_fit_curves(path: &Path, fit: &LocalFit, curves: &[Curve]) -> Result
         "strain_exp_pct",
         "strain_pred_pct",
     ];
-    write_csv(path, &with_specimen(&header, specimens), &rows)
+    write_csv_rows(path, &with_specimen(&header, specimens), rows)
+}
+
+/// At most about `max` of `points`, evenly spaced in index, first and last kept: what a plot
+/// draws of a logged curve (a million markers cost seconds and show nothing more).
+pub fn thin<T: Copy>(points: Vec<T>, max: usize) -> Vec<T> {
+    let n = points.len();
+    if n <= max.max(2) {
+        return points;
+    }
+    let stride = n.div_ceil(max.max(2) - 1);
+    let mut out: Vec<T> = points.iter().step_by(stride).copied().collect();
+    if (n - 1) % stride != 0 {
+        out.push(points[n - 1]);
+    }
+    out
 }
 
 /// The paper-style table (Tables 6/7): lifetime and minimum-rate errors per stress.
