@@ -159,7 +159,7 @@ impl<'a> Table<'a> {
                 let byte = rec.position().map(|p| p.byte() as usize).unwrap_or(0);
                 self.rows += 1;
                 if let Some(pb) = &self.progress {
-                    if self.rows % 65_536 == 0 {
+                    if self.rows.is_multiple_of(65_536) {
                         pb.set_position(pb.length().unwrap_or(0) / 2 + byte as u64);
                     }
                 }

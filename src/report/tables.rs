@@ -272,7 +272,7 @@ pub fn thin<T: Copy>(points: Vec<T>, max: usize) -> Vec<T> {
     }
     let stride = n.div_ceil(max.max(2) - 1);
     let mut out: Vec<T> = points.iter().step_by(stride).copied().collect();
-    if (n - 1) % stride != 0 {
+    if !(n - 1).is_multiple_of(stride) {
         out.push(points[n - 1]);
     }
     out
