@@ -366,14 +366,17 @@ fn diagnose_cmd(config: &Path, cli: &Overrides) -> Result<()> {
             .zip(&ev.curves)
             .map(|(cu, p)| Series {
                 label: cu.label(),
-                points: (0..cu.times_h.len())
-                    .map(|k| {
-                        (
-                            cu.times_h[k] / cu.life_h(),
-                            100.0 * (p.strain[k] - cu.strains[k]) / cu.rupture_strain,
-                        )
-                    })
-                    .collect(),
+                points: tables::thin(
+                    (0..cu.times_h.len())
+                        .map(|k| {
+                            (
+                                cu.times_h[k] / cu.life_h(),
+                                100.0 * (p.strain[k] - cu.strains[k]) / cu.rupture_strain,
+                            )
+                        })
+                        .collect(),
+                    PLOT_POINTS,
+                ),
             })
             .collect();
         let path = out.join(format!("residuals_{}.png", c.name));
@@ -672,6 +675,9 @@ fn fit(config: &Path, cli: &Overrides) -> Result<()> {
     )
 }
 
+/// Most measured points a plot draws per curve ([`tables::thin`]).
+const PLOT_POINTS: usize = 2000;
+
 /// Measured points and dense predicted curves for a plot.
 fn curve_plots(
     cfg: &RunConfig,
@@ -699,13 +705,18 @@ fn curve_plots(
             let grid = dense_grid(res.t_end, 400);
             let (_, traj) = model.trajectory(params, &load, &grid, &o);
             CurvePlot {
-                label: format!("{} MPa", c.stress_mpa),
-                measured: c
-                    .times_h
-                    .iter()
-                    .zip(&c.strains)
-                    .map(|(t, e)| (*t, 100.0 * e))
-                    .collect(),
+                label: match &c.specimen {
+                    Some(sp) => format!("{} MPa, {sp}", c.stress_mpa),
+                    None => format!("{} MPa", c.stress_mpa),
+                },
+                measured: tables::thin(
+                    c.times_h
+                        .iter()
+                        .zip(&c.strains)
+                        .map(|(t, e)| (*t, 100.0 * e))
+                        .collect(),
+                    PLOT_POINTS,
+                ),
                 predicted: traj.iter().map(|(t, e, _)| (*t, 100.0 * e)).collect(),
             }
         })
@@ -743,8 +754,11 @@ fn simulate(
     let names = model.state_names();
     let idx = |n: &str| names.iter().position(|s| *s == n);
     let (ih, iphi, iom) = (idx("H"), idx("Phi"), idx("omega"));
-    let mut curve_rows = Vec::new();
+    let mut trajectories = Vec::new();
     let mut rupture_rows = Vec::new();
+    let specimens = tables::has_specimens(&data.curves);
+    let specimen =
+        |c: &crate::data::Curve| specimens.then(|| c.specimen.clone().unwrap_or_default());
     for c in &data.curves {
         let load = Load {
             stress_mpa: c.stress_mpa,
@@ -764,18 +778,7 @@ fn simulate(
         grid.sort_by(|a, b| a.total_cmp(b));
         grid.dedup();
         let (_, traj) = model.trajectory(&params, &load, &grid, &o);
-        for (t, e, y) in &traj {
-            let get = |i: Option<usize>| i.map(|i| num(y[i])).unwrap_or_default();
-            curve_rows.push(vec![
-                num(c.temperature_c),
-                num(c.stress_mpa),
-                num(*t),
-                num(100.0 * e),
-                get(ih),
-                get(iphi),
-                get(iom),
-            ]);
-        }
+        trajectories.push((c, traj));
         rupture_rows.push(vec![
             num(c.temperature_c),
             num(c.stress_mpa),
@@ -791,38 +794,62 @@ fn simulate(
             },
             num(100.0 * res.min_rate),
         ]);
+        rupture_rows.last_mut().unwrap().extend(specimen(c));
         println!(
-            "{} °C {:>6} MPa: {} at t = {:.1} h, strain {:.3} %, min rate {:.4e} %/h",
+            "{} °C {:>6} MPa{}: {} at t = {:.1} h, strain {:.3} %, min rate {:.4e} %/h",
             c.temperature_c,
             c.stress_mpa,
+            c.specimen
+                .as_ref()
+                .map(|s| format!(" (specimen {s})"))
+                .unwrap_or_default(),
             res.outcome.as_str(),
             res.t_end,
             100.0 * res.strain_end,
             100.0 * res.min_rate
         );
     }
-    write_csv(
+    let curve_header = [
+        "temperature_C",
+        "stress_MPa",
+        "time_h",
+        "strain_pct",
+        "H",
+        "Phi",
+        "omega",
+    ];
+    // Rows formatted as they are written (a logged curve gives a million of them).
+    let curve_rows = trajectories.iter().flat_map(|(c, traj)| {
+        traj.iter().map(|(t, e, y)| {
+            let get = |i: Option<usize>| i.map(|i| num(y[i])).unwrap_or_default();
+            let mut row = vec![
+                num(c.temperature_c),
+                num(c.stress_mpa),
+                num(*t),
+                num(100.0 * e),
+                get(ih),
+                get(iphi),
+                get(iom),
+            ];
+            row.extend(specimen(c));
+            row
+        })
+    });
+    tables::write_csv_rows(
         &out.join("curves.csv"),
-        &[
-            "temperature_C",
-            "stress_MPa",
-            "time_h",
-            "strain_pct",
-            "H",
-            "Phi",
-            "omega",
-        ],
-        &curve_rows,
+        &tables::with_specimen(&curve_header, specimens),
+        curve_rows,
     )?;
+    let rupture_header = [
+        "temperature_C",
+        "stress_MPa",
+        "rupture_time_h",
+        "rupture_strain_pct",
+        "min_rate_pct_per_h",
+    ];
     write_csv(
         &out.join("ruptures.csv"),
-        &[
-            "temperature_C",
-            "stress_MPa",
-            "rupture_time_h",
-            "rupture_strain_pct",
-            "min_rate_pct_per_h",
-        ],
+        &tables::with_specimen(&rupture_header, specimens),
         &rupture_rows,
     )?;
     if let Some(w) = w {

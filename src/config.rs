@@ -772,6 +772,7 @@ impl RunConfig {
         LoadOptions {
             temperature_c: self.temperature_c,
             interrupted: self.interrupted.clone(),
+            ..LoadOptions::default()
         }
     }
 

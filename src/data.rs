@@ -8,10 +8,16 @@
 //! ignored. Every error names the file, the 1-based line (header = line 1) and the field.
 
 use std::collections::HashMap;
-use std::fs::File;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use crate::error::{Error, Result};
+
+mod min_rate;
+mod table;
+
+pub use min_rate::estimate_min_rate;
+pub use table::PROGRESS_MIN_BYTES;
+pub(crate) use table::{read_file, Table};
 
 /// Required columns of the curves file.
 pub const CURVE_COLUMNS: &[&str] = &["temperature_C", "stress_MPa", "time_h", "strain_pct"];
@@ -90,6 +96,11 @@ pub struct LoadOptions {
     pub temperature_c: Option<f64>,
     /// Stresses (MPa) of tests declared interrupted: they need no rupture record.
     pub interrupted: Vec<f64>,
+    /// Accept curves at several temperatures without a `temperature_c` filter. Off (the
+    /// default), that is an error: one set of constants does not fit several temperatures.
+    /// A configuration that declares how constants depend on temperature (temperature laws,
+    /// DESIGN.md §8) switches it on.
+    pub several_temperatures: bool,
 }
 
 /// The points of one curve as read from the curves file: grouped, sorted by time (stable)
@@ -159,10 +170,14 @@ pub fn load(curves: &Path, ruptures: &Path, opts: &LoadOptions) -> Result<Datase
         };
         return Err(Error::data(curves, 0, msg));
     }
+    if opts.temperature_c.is_none() && !opts.several_temperatures {
+        check_one_temperature(&raw, curves)?;
+    }
 
     let mut used = vec![false; records.len()];
     let mut out = Vec::with_capacity(raw.len());
     for c in raw {
+        warnings.extend(negative_strain_warning(&c, curves));
         let interrupted = opts.interrupted.iter().any(|&s| close(s, c.stress_mpa));
         let rec = match_record(&c, &records, ruptures)?;
         if let Some(i) = rec {
@@ -199,7 +214,7 @@ pub fn load(curves: &Path, ruptures: &Path, opts: &LoadOptions) -> Result<Datase
                 ))
             }
         };
-        out.push(finish_curve(c, rec, curves, ruptures, &mut warnings));
+        out.push(finish_curve(c, rec, curves, ruptures, &mut warnings)?);
     }
 
     // Unused records at a temperature that has curves.
@@ -229,6 +244,37 @@ pub fn load(curves: &Path, ruptures: &Path, opts: &LoadOptions) -> Result<Datase
         curves: out,
         warnings,
     })
+}
+
+/// Curves at more than one temperature are an error naming them and the line where the
+/// second one starts.
+fn check_one_temperature(raw: &[RawCurve], path: &Path) -> Result<()> {
+    let mut temps: Vec<f64> = raw.iter().map(|c| c.temperature_c).collect();
+    temps.sort_by(f64::total_cmp);
+    temps.dedup_by(|a, b| key_bits(*a) == key_bits(*b));
+    if temps.len() < 2 {
+        return Ok(());
+    }
+    let t0 = key_bits(raw[0].temperature_c);
+    let second = raw
+        .iter()
+        .filter(|c| key_bits(c.temperature_c) != t0)
+        .map(|c| c.first_line)
+        .min()
+        .unwrap_or(0);
+    let list: Vec<String> = temps.iter().map(|t| t.to_string()).collect();
+    Err(Error::data(
+        path,
+        second,
+        format!(
+            "column 'temperature_C': the curves are at {} temperatures ({} °C) and the \
+             configuration has no temperature_C filter: one set of constants does not fit \
+             several temperatures; set temperature_C = {} (say) in the configuration",
+            temps.len(),
+            list.join(", "),
+            list[0]
+        ),
+    ))
 }
 
 /// Relative closeness for values typed by people (temperature filter, interrupted stresses).
@@ -286,7 +332,7 @@ fn finish_curve(
     curves: &Path,
     ruptures: &Path,
     warnings: &mut Vec<String>,
-) -> Curve {
+) -> Result<Curve> {
     let t_last = *c
         .times_h
         .last()
@@ -316,6 +362,25 @@ fn finish_curve(
         }
     }
     let rupture_strain = rec.and_then(|r| r.rupture_strain).unwrap_or(last_strain);
+    if !(rupture_strain > 0.0) {
+        // Strain residuals are scaled by the rupture strain: it must be positive.
+        return Err(Error::data(
+            curves,
+            c.first_line,
+            format!(
+                "column 'strain_pct': the curve at temperature_C = {}, stress_MPa = {}{} ends at \
+                 strain {} %, not above zero: no creep to fit (or give rupture_strain_pct in {})",
+                c.temperature_c,
+                c.stress_mpa,
+                c.specimen
+                    .as_ref()
+                    .map(|s| format!(", specimen = {s}"))
+                    .unwrap_or_default(),
+                last_strain * 100.0,
+                ruptures.display()
+            ),
+        ));
+    }
     let life = rupture_time_h.unwrap_or(t_last);
     let min_rate_estimated = estimate_min_rate(&c.times_h, &c.strains, life);
     if min_rate_estimated.is_nan() || min_rate_estimated <= 0.0 {
@@ -329,7 +394,7 @@ fn finish_curve(
             min_rate_estimated
         ));
     }
-    Curve {
+    Ok(Curve {
         temperature_c: c.temperature_c,
         stress_mpa: c.stress_mpa,
         specimen: c.specimen,
@@ -339,89 +404,7 @@ fn finish_curve(
         rupture_strain,
         min_rate_measured: rec.and_then(|r| r.min_rate),
         min_rate_estimated,
-    }
-}
-
-/// A CSV file opened with its header mapped to column indices.
-struct Table {
-    path: PathBuf,
-    reader: csv::Reader<File>,
-    columns: HashMap<String, usize>,
-}
-
-impl Table {
-    fn open(path: &Path, required: &[&str]) -> Result<Table> {
-        let file = File::open(path).map_err(|e| Error::io(path, e))?;
-        let mut reader = csv::ReaderBuilder::new()
-            .has_headers(true)
-            .flexible(false)
-            .trim(csv::Trim::All)
-            .from_reader(file);
-        let header = reader.headers().map_err(|e| csv_error(path, e))?.clone();
-        let mut columns = HashMap::new();
-        for (i, name) in header.iter().enumerate() {
-            // First occurrence wins; a repeated column name is an error (which one to use?).
-            if columns.insert(name.to_string(), i).is_some() && !name.is_empty() {
-                return Err(Error::data(
-                    path,
-                    1,
-                    format!("column '{name}' appears more than once in the header"),
-                ));
-            }
-        }
-        for name in required {
-            if !columns.contains_key(*name) {
-                return Err(Error::data(
-                    path,
-                    1,
-                    format!(
-                        "missing required column '{name}' (header must contain {})",
-                        required.join(", ")
-                    ),
-                ));
-            }
-        }
-        Ok(Table {
-            path: path.to_path_buf(),
-            reader,
-            columns,
-        })
-    }
-
-    /// Each record with its 1-based line.
-    fn rows(&mut self) -> Result<Vec<(usize, csv::StringRecord)>> {
-        let mut out = Vec::new();
-        for rec in self.reader.records() {
-            let rec = rec.map_err(|e| csv_error(&self.path, e))?;
-            let line = rec.position().map(|p| p.line() as usize).unwrap_or(0);
-            out.push((line, rec));
-        }
-        Ok(out)
-    }
-
-    fn col(&self, name: &str) -> Option<usize> {
-        self.columns.get(name).copied()
-    }
-}
-
-fn csv_error(path: &Path, e: csv::Error) -> Error {
-    let line = e.position().map(|p| p.line() as usize).unwrap_or(0);
-    match e.into_kind() {
-        csv::ErrorKind::Io(io) => Error::io(path, io),
-        csv::ErrorKind::UnequalLengths {
-            expected_len, len, ..
-        } => Error::data(
-            path,
-            line,
-            format!("row has {len} fields, the header has {expected_len}"),
-        ),
-        csv::ErrorKind::Utf8 { err, .. } => Error::data(
-            path,
-            line,
-            format!("invalid UTF-8 in field {}", err.field() + 1),
-        ),
-        other => Error::data(path, line, format!("{other:?}")),
-    }
+    })
 }
 
 /// A cell read as a number: parsed, finite and in the allowed range.
@@ -498,12 +481,22 @@ impl Field<'_> {
 
 /// Read the curves file: rows grouped into curves by (temperature, stress[, specimen]) in
 /// order of first appearance, each sorted by time (stable), exact duplicate points (same
-/// time and same strain) dropped with a warning. Strain is converted to a fraction.
+/// time and same strain) dropped with one warning for the file. Strain is converted to a
+/// fraction. Time and memory are linear in the file (plus the O(n log n) sort).
 ///
-/// Errors: missing file or column, unparsable or non-finite number, negative time or strain,
-/// non-positive stress, a curve with fewer than [`MIN_POINTS`] points.
+/// Negative strains are measurements (an extensometer zero offset, say): kept ([`load`]
+/// warns once per curve it keeps).
+///
+/// Errors: missing file or column, unparsable or non-finite number, negative time,
+/// non-positive stress, a curve with fewer than [`MIN_POINTS`] points or with all its times
+/// equal, and two specimens mixed in one curve. Rows of one curve may be out of time order
+/// locally (digitised tables are), but a curve without specimen whose rows restart in time
+/// (a row at or below the curve's first time after larger times), or whose rows come back
+/// after rows of other curves at a time below the largest already reached, holds two
+/// specimens: the error names both line ranges and asks for a `specimen` column.
 pub fn read_curves(path: &Path) -> Result<(Vec<RawCurve>, Vec<String>)> {
-    let mut table = Table::open(path, CURVE_COLUMNS)?;
+    let (bytes, progress) = table::read_file(path)?;
+    let mut table = Table::open(path, &bytes, CURVE_COLUMNS, progress)?;
     let ct = table.col("temperature_C").unwrap();
     let cs = table.col("stress_MPa").unwrap();
     let cti = table.col("time_h").unwrap();
@@ -511,8 +504,12 @@ pub fn read_curves(path: &Path) -> Result<(Vec<RawCurve>, Vec<String>)> {
     let csp = table.col("specimen");
 
     let mut curves: Vec<RawCurve> = Vec::new();
+    let mut tracks: Vec<Track> = Vec::new();
     let mut index: HashMap<(u64, u64, Option<String>), usize> = HashMap::new();
-    for (line, rec) in table.rows()? {
+    let mut prev: Option<usize> = None;
+    let mut split: Option<Split> = None;
+    let mut rec = csv::StringRecord::new();
+    while let Some(line) = table.next_row(&mut rec)? {
         let f = Field {
             path,
             line,
@@ -522,51 +519,224 @@ pub fn read_curves(path: &Path) -> Result<(Vec<RawCurve>, Vec<String>)> {
         let s = f.num(cs, "stress_MPa", Range::Positive)?;
         let time = f.num(cti, "time_h", Range::NonNegative)?;
         let e = f.num(ce, "strain_pct", Range::Any)?;
-        let sp = f.opt_text(csp);
-        let key = (key_bits(t), key_bits(s), sp.clone());
-        let k = *index.entry(key).or_insert_with(|| {
-            curves.push(RawCurve {
-                temperature_c: t,
-                stress_mpa: s,
-                specimen: sp,
-                times_h: Vec::new(),
-                strains: Vec::new(),
-                lines: Vec::new(),
-                first_line: line,
-            });
-            curves.len() - 1
-        });
+        let sp = csp.map(|c| f.text(c)).filter(|s| !s.is_empty());
+        // Rows of one curve usually come together: try the previous row's curve first.
+        let k = match prev {
+            Some(p)
+                if key_bits(curves[p].temperature_c) == key_bits(t)
+                    && key_bits(curves[p].stress_mpa) == key_bits(s)
+                    && curves[p].specimen.as_deref() == sp =>
+            {
+                p
+            }
+            _ => {
+                let key = (key_bits(t), key_bits(s), sp.map(str::to_string));
+                *index.entry(key).or_insert_with(|| {
+                    curves.push(RawCurve {
+                        temperature_c: t,
+                        stress_mpa: s,
+                        specimen: sp.map(str::to_string),
+                        times_h: Vec::new(),
+                        strains: Vec::new(),
+                        lines: Vec::new(),
+                        first_line: line,
+                    });
+                    tracks.push(Track {
+                        first_time: time,
+                        max_time: time,
+                        max_line: line,
+                        last_line: line,
+                    });
+                    curves.len() - 1
+                })
+            }
+        };
+        let tr = &mut tracks[k];
+        if split.is_none() && curves[k].specimen.is_none() && !curves[k].times_h.is_empty() {
+            let new_block = prev != Some(k);
+            if time <= tr.first_time && tr.max_time > tr.first_time {
+                split = Some(Split {
+                    curve: k,
+                    line,
+                    before_last: tr.last_line,
+                    why: format!(
+                        "time_h goes back to {time} h, at or below the curve's first time \
+                         {} h, after {} h on line {}",
+                        tr.first_time, tr.max_time, tr.max_line
+                    ),
+                });
+            } else if new_block && time < tr.max_time {
+                split = Some(Split {
+                    curve: k,
+                    line,
+                    before_last: tr.last_line,
+                    why: format!(
+                        "after rows of other curves its rows resume at {time} h, before the \
+                         {} h already reached on line {}",
+                        tr.max_time, tr.max_line
+                    ),
+                });
+            }
+        }
+        if time > tr.max_time {
+            tr.max_time = time;
+            tr.max_line = line;
+        }
+        tr.last_line = line;
         let c = &mut curves[k];
         c.times_h.push(time);
         c.strains.push(e / 100.0);
         c.lines.push(line);
+        prev = Some(k);
     }
+    drop(table);
     if curves.is_empty() {
         return Err(Error::data(path, 0, "no data rows"));
     }
+    if let Some(sp) = split {
+        let c = &curves[sp.curve];
+        return Err(Error::data(
+            path,
+            sp.line,
+            format!(
+                "column 'time_h': the rows at temperature_C = {}, stress_MPa = {} look like two \
+                 specimens in one curve, lines {}–{} and {}–{} ({}); add a 'specimen' column \
+                 (or fill its empty cells) to tell them apart",
+                c.temperature_c,
+                c.stress_mpa,
+                c.first_line,
+                sp.before_last,
+                sp.line,
+                tracks[sp.curve].last_line,
+                sp.why
+            ),
+        ));
+    }
 
+    let mut dups = Duplicates::default();
     let mut warnings = Vec::new();
     for c in &mut curves {
-        sort_and_dedup(c, path, &mut warnings);
-        if c.times_h.len() < MIN_POINTS {
+        sort_and_dedup(c, &mut dups);
+        let what = || {
+            format!(
+                "curve at temperature_C = {}, stress_MPa = {}{}",
+                c.temperature_c,
+                c.stress_mpa,
+                c.specimen
+                    .as_ref()
+                    .map(|s| format!(", specimen = {s}"))
+                    .unwrap_or_default()
+            )
+        };
+        let n = c.times_h.len();
+        if n < MIN_POINTS {
             return Err(Error::data(
                 path,
                 c.first_line,
                 format!(
-                    "curve at temperature_C = {}, stress_MPa = {}{} has {} distinct point(s); at least {} are needed",
-                    c.temperature_c,
-                    c.stress_mpa,
-                    c.specimen
-                        .as_ref()
-                        .map(|s| format!(", specimen = {s}"))
-                        .unwrap_or_default(),
-                    c.times_h.len(),
-                    MIN_POINTS
+                    "{} has {n} distinct point(s); at least {MIN_POINTS} are needed",
+                    what()
+                ),
+            ));
+        }
+        if c.times_h[0] == c.times_h[n - 1] {
+            return Err(Error::data(
+                path,
+                c.first_line,
+                format!(
+                    "column 'time_h': the {} has all its {n} points at time_h = {}: no time \
+                     span to fit",
+                    what(),
+                    c.times_h[0]
                 ),
             ));
         }
     }
+    if let Some((line, of, time, strain)) = dups.first {
+        let more = if dups.count > 1 {
+            format!(
+                " (and {} more exact duplicate(s), {} in all, in {} curve(s))",
+                dups.count - 1,
+                dups.count,
+                dups.curves
+            )
+        } else {
+            String::new()
+        };
+        warnings.insert(
+            0,
+            format!(
+                "{}:{line}: duplicate point (time_h = {time}, strain_pct = {}) of line {of} \
+                 dropped{more}",
+                path.display(),
+                pct(strain)
+            ),
+        );
+    }
     Ok((curves, warnings))
+}
+
+/// One warning for a curve's negative strains (count, most negative value, first line), if
+/// it has any: they are measurements (an extensometer zero offset, say), not errors.
+fn negative_strain_warning(c: &RawCurve, path: &Path) -> Option<String> {
+    let (mut count, mut lowest, mut first) = (0usize, 0.0f64, usize::MAX);
+    for (e, l) in c.strains.iter().zip(&c.lines) {
+        if *e < 0.0 {
+            count += 1;
+            lowest = lowest.min(*e);
+            first = first.min(*l);
+        }
+    }
+    (count > 0).then(|| {
+        format!(
+            "{}:{first}: column 'strain_pct': {count} negative strain(s) in the curve at {} °C, \
+             {} MPa{}, down to {} % (first on this line); kept as measured (e.g. an \
+             extensometer zero offset)",
+            path.display(),
+            c.temperature_c,
+            c.stress_mpa,
+            c.specimen
+                .as_ref()
+                .map(|s| format!(", specimen {s}"))
+                .unwrap_or_default(),
+            pct(lowest)
+        )
+    })
+}
+
+/// A strain fraction as percent text without binary noise (0.00155 → "0.155").
+fn pct(strain: f64) -> f64 {
+    (strain * 100.0 * 1e9).round() / 1e9
+}
+
+/// What [`read_curves`] tracks per curve while reading, to tell two specimens apart.
+struct Track {
+    /// Time of the curve's first row, h.
+    first_time: f64,
+    /// Largest time so far, h, and its line.
+    max_time: f64,
+    max_line: usize,
+    /// Line of the curve's latest row.
+    last_line: usize,
+}
+
+/// The first place where a curve's rows look like two specimens.
+struct Split {
+    curve: usize,
+    /// Line of the row that starts the second specimen.
+    line: usize,
+    /// Line of the curve's last row before it.
+    before_last: usize,
+    why: String,
+}
+
+/// Exact duplicate points dropped over a file.
+#[derive(Default)]
+struct Duplicates {
+    count: usize,
+    curves: usize,
+    /// The first dropped row (file line, line it repeats, time, strain).
+    first: Option<(usize, usize, f64, f64)>,
 }
 
 /// Bits of a key value with -0.0 folded onto 0.0, so that equal numbers group together.
@@ -578,30 +748,57 @@ fn key_bits(v: f64) -> u64 {
     }
 }
 
-fn sort_and_dedup(c: &mut RawCurve, path: &Path, warnings: &mut Vec<String>) {
-    let mut idx: Vec<usize> = (0..c.times_h.len()).collect();
-    idx.sort_by(|&a, &b| c.times_h[a].total_cmp(&c.times_h[b])); // stable
-    let (mut t, mut e, mut l) = (Vec::new(), Vec::new(), Vec::new());
+/// Sort a curve's points by time (stable: equal times keep their file order) and drop exact
+/// duplicates (same time and strain as an earlier kept point). O(n log n); a run of equal
+/// times is checked through a hash set, so long runs stay linear.
+fn sort_and_dedup(c: &mut RawCurve, dups: &mut Duplicates) {
+    let n = c.times_h.len();
+    let mut idx: Vec<u32> = (0..n as u32).collect();
+    idx.sort_by(|&a, &b| c.times_h[a as usize].total_cmp(&c.times_h[b as usize])); // stable
+    let (mut t, mut e, mut l) = (
+        Vec::with_capacity(n),
+        Vec::with_capacity(n),
+        Vec::with_capacity(n),
+    );
     let mut run_start = 0; // first kept point with the current time
+    let mut seen: HashMap<u64, usize> = HashMap::new(); // strain bits → kept index, long runs
+    let mut dropped = 0;
     for &i in &idx {
+        let i = i as usize;
         let (ti, ei, li) = (c.times_h[i], c.strains[i], c.lines[i]);
         if t.last() != Some(&ti) {
             run_start = t.len();
+            seen.clear();
         }
-        if let Some(k) = (run_start..t.len()).find(|&k| e[k] == ei) {
-            warnings.push(format!(
-                "{}:{}: duplicate point (time_h = {}, strain_pct = {}) of line {} dropped",
-                path.display(),
-                li,
-                ti,
-                ei * 100.0,
-                l[k]
-            ));
+        let run = t.len() - run_start;
+        let earlier = if run < 16 {
+            (run_start..t.len()).find(|&k| e[k] == ei)
+        } else {
+            if seen.is_empty() {
+                for k in run_start..t.len() {
+                    seen.entry(key_bits(e[k])).or_insert(k);
+                }
+            }
+            seen.get(&key_bits(ei)).copied()
+        };
+        if let Some(k) = earlier {
+            dropped += 1;
+            dups.count += 1;
+            match dups.first {
+                Some((fl, ..)) if fl <= li => {}
+                _ => dups.first = Some((li, l[k], ti, ei)),
+            }
             continue;
+        }
+        if run >= 16 {
+            seen.insert(key_bits(ei), t.len());
         }
         t.push(ti);
         e.push(ei);
         l.push(li);
+    }
+    if dropped > 0 {
+        dups.curves += 1;
     }
     c.times_h = t;
     c.strains = e;
@@ -614,7 +811,8 @@ fn sort_and_dedup(c: &mut RawCurve, path: &Path, warnings: &mut Vec<String>) {
 /// Errors: missing file or column, unparsable or non-finite number, non-positive stress or
 /// rupture time, non-positive rupture strain or minimum rate when given.
 pub fn read_ruptures(path: &Path) -> Result<Vec<RuptureRecord>> {
-    let mut table = Table::open(path, RUPTURE_COLUMNS)?;
+    let (bytes, progress) = table::read_file(path)?;
+    let mut table = Table::open(path, &bytes, RUPTURE_COLUMNS, progress)?;
     let ct = table.col("temperature_C").unwrap();
     let cs = table.col("stress_MPa").unwrap();
     let ctf = table.col("rupture_time_h").unwrap();
@@ -622,7 +820,8 @@ pub fn read_ruptures(path: &Path) -> Result<Vec<RuptureRecord>> {
     let cmr = table.col("min_rate_pct_per_h");
     let csp = table.col("specimen");
     let mut out = Vec::new();
-    for (line, rec) in table.rows()? {
+    let mut rec = csv::StringRecord::new();
+    while let Some(line) = table.next_row(&mut rec)? {
         let f = Field {
             path,
             line,
@@ -649,77 +848,12 @@ pub fn read_ruptures(path: &Path) -> Result<Vec<RuptureRecord>> {
     Ok(out)
 }
 
-/// Estimate the minimum creep rate (1/h when `strains` are fractions) of a digitized curve.
-///
-/// Method: from every start point, a window of consecutive points is grown until it spans at
-/// least [`MIN_RATE_WINDOW_FRACTION`] × `life_h` in time **and** holds at least
-/// [`MIN_RATE_WINDOW_POINTS`] points; a
-/// least-squares line strain-vs-time is fitted to each such window, and the estimate is the
-/// smallest positive slope over all windows. Fitting over a fixed fraction of the life
-/// averages out digitizing noise (single points that fall back would make point-to-point
-/// slopes zero or negative), while windows short against the life still resolve the
-/// secondary stage. The estimate is biased slightly high on a curved secondary stage (a
-/// window's mean slope exceeds its minimum).
-///
-/// Fallback, when no window qualifies (curve shorter than the window) or no window has a
-/// positive slope: the overall secant slope (last − first point) of the curve; 0 when the
-/// points span no time. A non-finite or non-positive `life_h` is replaced by the time span of
-/// the points. `times_h` must be sorted ascending (as [`Curve::times_h`] is).
-pub fn estimate_min_rate(times_h: &[f64], strains: &[f64], life_h: f64) -> f64 {
-    let n = times_h.len().min(strains.len());
-    if n < 2 {
-        return 0.0;
-    }
-    let (t, e) = (&times_h[..n], &strains[..n]);
-    let span = t[n - 1] - t[0];
-    let life = if life_h.is_finite() && life_h > 0.0 {
-        life_h
-    } else {
-        span
-    };
-    let width = MIN_RATE_WINDOW_FRACTION * life;
-    let mut best = f64::INFINITY;
-    for i in 0..n {
-        let mut j = i + MIN_RATE_WINDOW_POINTS.min(n) - 1;
-        while j < n && t[j] - t[i] < width {
-            j += 1;
-        }
-        if j >= n {
-            break; // later starts cannot qualify either
-        }
-        if let Some(slope) = ls_slope(&t[i..=j], &e[i..=j]) {
-            if slope > 0.0 && slope < best {
-                best = slope;
-            }
-        }
-    }
-    if best.is_finite() {
-        best
-    } else if span > 0.0 {
-        (e[n - 1] - e[0]) / span
-    } else {
-        0.0
-    }
-}
-
-/// Least-squares slope of y against x (centred sums); `None` when x has no spread.
-fn ls_slope(x: &[f64], y: &[f64]) -> Option<f64> {
-    let m = x.len() as f64;
-    let mx = x.iter().sum::<f64>() / m;
-    let my = y.iter().sum::<f64>() / m;
-    let (mut sxx, mut sxy) = (0.0, 0.0);
-    for (a, b) in x.iter().zip(y) {
-        let dx = a - mx;
-        sxx += dx * dx;
-        sxy += dx * (b - my);
-    }
-    (sxx > 0.0).then(|| sxy / sxx)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::fs::File;
     use std::io::Write;
+    use std::path::PathBuf;
 
     fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
         let p = dir.join(name);
@@ -854,6 +988,7 @@ mod tests {
         let opts = LoadOptions {
             temperature_c: Some(600.0),
             interrupted: vec![80.0],
+            ..Default::default()
         };
         let ds = load(&c, &r, &opts).unwrap();
         assert_eq!(ds.curves.len(), 2);
@@ -867,6 +1002,7 @@ mod tests {
             &LoadOptions {
                 temperature_c: Some(700.0),
                 interrupted: vec![],
+                ..Default::default()
             },
         )
         .unwrap_err();
@@ -874,6 +1010,15 @@ mod tests {
         let err = load(&c, &r, &LoadOptions::default())
             .unwrap_err()
             .to_string();
+        assert!(
+            err.contains("c.csv:8:") && err.contains("2 temperatures"),
+            "{err}"
+        );
+        let several = LoadOptions {
+            several_temperatures: true,
+            ..Default::default()
+        };
+        let err = load(&c, &r, &several).unwrap_err().to_string();
         assert!(
             err.contains("c.csv:5:") && err.contains("no rupture record"),
             "{err}"

@@ -7,13 +7,10 @@ use std::path::PathBuf;
 /// All errors crossing the library boundary.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
-    /// A file could not be opened, read or written.
-    #[error("{path}: {source}")]
-    Io {
-        path: PathBuf,
-        #[source]
-        source: std::io::Error,
-    },
+    /// A file could not be opened, read or written. The OS text is part of the message and
+    /// deliberately not a `source`: an error chain (`{:#}` in the binary) would print it twice.
+    #[error("{}: {err}", path.display())]
+    Io { path: PathBuf, err: std::io::Error },
     /// A data file (curves, ruptures, constants) has bad content; `line` is 1-based and
     /// counts the header as line 1. `line == 0` means the whole file.
     #[error("{}{}: {message}", path.display(), if *line > 0 { format!(":{line}") } else { String::new() })]
@@ -63,15 +60,16 @@ impl Error {
     pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
         Error::Io {
             path: path.into(),
-            source,
+            err: source,
         }
     }
-    /// A data error at a 1-based line of a file.
+    /// A data error at a 1-based line of a file. Line breaks in the message (quoted from a
+    /// multi-line cell, say) are shown as `\n`: every error is one line.
     pub fn data(path: impl Into<PathBuf>, line: usize, message: impl Into<String>) -> Self {
         Error::Data {
             path: path.into(),
             line,
-            message: message.into(),
+            message: one_line(message.into()),
         }
     }
     /// A plotting error for the image at `path`.
@@ -81,7 +79,7 @@ impl Error {
             message: message.into(),
         }
     }
-    /// A configuration error in a file, at no particular line.
+    /// A configuration error in a file, at no particular line (one line, as [`Error::data`]).
     pub fn config(path: impl Into<PathBuf>, message: impl Into<String>) -> Self {
         Self::config_at(path, 0, message)
     }
@@ -90,7 +88,48 @@ impl Error {
         Error::Config {
             path: path.into(),
             line,
-            message: message.into(),
+            message: one_line(message.into()),
         }
+    }
+}
+
+/// `text` with its line breaks escaped (`\n`, `\r`).
+fn one_line(text: String) -> String {
+    if text.contains(['\n', '\r']) {
+        text.replace('\r', "\\r").replace('\n', "\\n")
+    } else {
+        text
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The binary prints errors as `{:#}` through anyhow, which appends every `source`.
+    #[test]
+    fn io_error_text_appears_once() {
+        let e = Error::io(
+            "/no/such/file.csv",
+            std::io::Error::from(std::io::ErrorKind::NotFound),
+        );
+        let os = std::io::Error::from(std::io::ErrorKind::NotFound).to_string();
+        let chain = format!("{:#}", anyhow::Error::from(e));
+        assert_eq!(chain.matches(&os).count(), 1, "{chain}");
+        assert_eq!(chain, format!("/no/such/file.csv: {os}"));
+    }
+
+    #[test]
+    fn messages_are_one_line() {
+        let e = Error::data(
+            "c.csv",
+            3,
+            "column 'x': cannot parse '1\n2\r\n' as a number",
+        );
+        assert_eq!(
+            e.to_string(),
+            "c.csv:3: column 'x': cannot parse '1\\n2\\r\\n' as a number"
+        );
+        assert!(!Error::config("r.toml", "a\nb").to_string().contains('\n'));
     }
 }

@@ -133,7 +133,10 @@ pub fn local_fit(
     };
     let u0 = space.to_unit(start);
     let k = u0.len();
-    let lm = minimize(&problem, &u0, &vec![0.0; k], &vec![1.0; k], &settings.lm);
+    let mut lm = minimize(&problem, &u0, &vec![0.0; k], &vec![1.0; k], &settings.lm);
+    // `eval` below holds the predictions; the residual vector (8 bytes a measured point) is
+    // not kept in each of the fits of a run.
+    lm.residuals = Vec::new();
     let mut params = start.to_vec();
     space.from_unit(&lm.x, &mut params);
     let eval = problem.objective.evaluate(&params);

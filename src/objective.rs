@@ -521,20 +521,35 @@ impl CreepProblem<'_> {
                 Dual::cst(x[j])
             };
         }
-        let mut rd = vec![Dual::<SENS>::cst(0.0); self.objective.n_residuals()];
-        if let Err(e) = self.objective.residuals_in(&xd[..n], &mut rd) {
-            return Some(Err(e));
-        }
-        for (i, ri) in rd.iter().enumerate() {
-            for k in 0..n_free {
-                jac[(i, k)] = ri.d[k];
+        // The dual residuals go to a buffer kept per thread: for a logged curve of a million
+        // points it is 72 MB, which a fresh allocation per Jacobian would page-fault in anew.
+        DUAL_RESIDUALS.with(|buf| {
+            let mut rd = buf.borrow_mut();
+            rd.clear();
+            rd.resize(self.objective.n_residuals(), Dual::<SENS>::cst(0.0));
+            if let Err(e) = self.objective.residuals_in(&xd[..n], &mut rd) {
+                return Some(Err(e));
             }
-        }
-        if let Some(r) = r {
-            for (ri, di) in r.iter_mut().zip(&rd) {
-                *ri = di.re();
+            // One pass over the dual residuals (the column-by-column copy reads them k times).
+            let m = rd.len();
+            let js = jac.as_mut_slice();
+            for (i, ri) in rd.iter().enumerate() {
+                for k in 0..n_free {
+                    js[k * m + i] = ri.d[k];
+                }
             }
-        }
-        Some(Ok(()))
+            if let Some(r) = r {
+                for (ri, di) in r.iter_mut().zip(rd.iter()) {
+                    *ri = di.re();
+                }
+            }
+            Some(Ok(()))
+        })
     }
+}
+
+thread_local! {
+    /// Reused buffer of [`CreepProblem::sensitivities`].
+    static DUAL_RESIDUALS: std::cell::RefCell<Vec<Dual<SENS>>> =
+        const { std::cell::RefCell::new(Vec::new()) };
 }

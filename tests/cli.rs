@@ -227,6 +227,11 @@ fn missing_data_file() {
         "",
     );
     has(&e, &["nope.csv"]);
+    // The OS text once (it used to come twice through the error chain).
+    let os = std::fs::File::open("/no/such/dir/nope.csv")
+        .unwrap_err()
+        .to_string();
+    assert_eq!(e.matches(&os).count(), 1, "{e}");
 }
 
 #[test]
@@ -253,8 +258,9 @@ fn nan_strain() {
 }
 
 #[test]
-fn negative_strain_and_time() {
-    let bad = CURVES.replace("600,100,10,1\n", "600,100,10,-1\n");
+fn infinite_strain_and_negative_time() {
+    // (A negative strain is a measurement: tests/input_errors.rs.)
+    let bad = CURVES.replace("600,100,10,1\n", "600,100,10,-inf\n");
     has(
         &fails(&[("curves.csv", &bad)], ""),
         &["curves.csv:3", "strain_pct"],
@@ -482,4 +488,94 @@ fn a_full_disk_leaves_no_truncated_file_and_fails() {
         &["no space left on device"],
     );
     check(out.path(), &o);
+}
+
+/// The bundled 560 °C data with a `specimen` column (one label per curve) and its config.
+fn with_specimens(dir: &Path) -> PathBuf {
+    let text = std::fs::read_to_string(root().join("data/creep_560C.csv")).unwrap();
+    let mut out = String::new();
+    for (i, line) in text.lines().enumerate() {
+        let label = if i == 0 {
+            "specimen".to_string()
+        } else {
+            format!("CMV-{}", line.split(',').nth(1).unwrap())
+        };
+        out.push_str(&format!("{line},{label}\n"));
+    }
+    std::fs::write(dir.join("curves.csv"), out).unwrap();
+    let cfg = std::fs::read_to_string(root().join("configs/560C.toml"))
+        .unwrap()
+        .replace("../data/creep_560C.csv", "curves.csv")
+        .replace(
+            "../data/lifetimes.csv",
+            root().join("data/lifetimes.csv").to_str().unwrap(),
+        );
+    std::fs::write(dir.join("run.toml"), cfg).unwrap();
+    dir.join("run.toml")
+}
+
+fn csv_text(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
+    let mut rdr = csv::Reader::from_path(path).unwrap();
+    let h = rdr.headers().unwrap().iter().map(str::to_string).collect();
+    let rows = rdr
+        .records()
+        .map(|r| r.unwrap().iter().map(str::to_string).collect())
+        .collect();
+    (h, rows)
+}
+
+/// Every per-curve output carries the specimen, as a last column, when the data have one;
+/// the other columns are those (and the values) of the same run without specimens.
+#[test]
+fn specimen_in_every_per_curve_output() {
+    let dir = TempDir::new().unwrap();
+    let cfg = with_specimens(dir.path());
+    let (with, plain) = (dir.path().join("with"), dir.path().join("plain"));
+    let o = run(&[
+        "fit",
+        cfg.to_str().unwrap(),
+        "--out",
+        with.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let table = String::from_utf8_lossy(&o.stdout).to_string();
+    for s in ["85", "100", "110"] {
+        assert!(
+            table
+                .lines()
+                .any(|l| l.contains(" | ") && l.ends_with(&format!("| CMV-{s}"))),
+            "{table}"
+        );
+    }
+    let o = run(&["fit", "configs/560C.toml", "--out", plain.to_str().unwrap()]);
+    assert!(o.status.success());
+    assert!(!String::from_utf8_lossy(&o.stdout).contains("specimen"));
+    for file in ["errors.csv", "curves.csv"] {
+        let (h1, r1) = csv_text(&with.join(file));
+        let (h0, r0) = csv_text(&plain.join(file));
+        assert_eq!(h1.last().unwrap(), "specimen", "{file}");
+        assert_eq!(&h1[..h1.len() - 1], &h0[..], "{file}");
+        assert_eq!(r1.len(), r0.len());
+        for (a, b) in r1.iter().zip(&r0) {
+            assert_eq!(&a[..a.len() - 1], &b[..], "{file}");
+            assert_eq!(a.last().unwrap(), &format!("CMV-{}", a[1]), "{file}");
+        }
+    }
+    // simulate: curves.csv and ruptures.csv.
+    let (sim1, sim0) = (dir.path().join("sim1"), dir.path().join("sim0"));
+    for (c, out) in [(cfg.to_str().unwrap(), &sim1), ("configs/560C.toml", &sim0)] {
+        let o = run(&["simulate", c, "--out", out.to_str().unwrap()]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    for file in ["curves.csv", "ruptures.csv"] {
+        let (h1, r1) = csv_text(&sim1.join(file));
+        let (h0, r0) = csv_text(&sim0.join(file));
+        assert_eq!(h1.last().unwrap(), "specimen", "{file}");
+        assert_eq!(&h1[..h1.len() - 1], &h0[..], "{file}");
+        assert_eq!(r1.len(), r0.len());
+        for (a, b) in r1.iter().zip(&r0) {
+            assert_eq!(&a[..a.len() - 1], &b[..], "{file}");
+            assert_eq!(a.last().unwrap(), &format!("CMV-{}", a[1]), "{file}");
+        }
+    }
 }

@@ -147,6 +147,7 @@ fn curve_without_rupture_record() {
     let opts = LoadOptions {
         temperature_c: None,
         interrupted: vec![120.0],
+        ..Default::default()
     };
     let ds = data::load(&c, &r, &opts).unwrap();
     assert_eq!(ds.curves[1].rupture_time_h, None);
@@ -257,11 +258,292 @@ fn exact_duplicates_warned() {
     let c = write(
         &dir,
         "curves.csv",
-        &format!("{CURVES}600,100,10,1\n600,100,10,1.5\n"),
+        &CURVES.replace(
+            "600,100,20,2\n",
+            "600,100,20,2\n600,100,10,1\n600,100,10,1.5\n",
+        ),
     );
     let r = write(&dir, "ruptures.csv", RUPTURES);
     let ds = data::load(&c, &r, &LoadOptions::default()).unwrap();
     assert_eq!(ds.warnings.len(), 1, "{:?}", ds.warnings);
-    assert!(ds.warnings[0].contains("curves.csv:8"));
+    has(&ds.warnings[0], &["curves.csv:5:", "of line 3 dropped"]);
     assert_eq!(ds.curves[0].times_h, vec![0.0, 10.0, 10.0, 20.0]);
+}
+
+/// Real laboratory data (`data/alloy617/`): 34 curves, 28,933 rows, replicate specimens,
+/// negative strains at the start of four tests, a repeated (0, 0) row at the start of every
+/// curve and 601 more exact repeats, times that step back by 3 h. Everything loads as it
+/// is, one temperature at a time.
+#[test]
+fn alloy617_loads_as_it_is() {
+    let c = repo("data/alloy617/creep_alloy617.csv");
+    let r = repo("data/alloy617/ruptures_alloy617.csv");
+    let (mut curves, mut points, mut negative_warnings) = (0, 0, 0);
+    for t in [750.0, 850.0, 900.0, 950.0] {
+        let opts = LoadOptions {
+            temperature_c: Some(t),
+            ..Default::default()
+        };
+        let ds = data::load(&c, &r, &opts).unwrap();
+        curves += ds.curves.len();
+        points += ds.curves.iter().map(|c| c.times_h.len()).sum::<usize>();
+        for c in &ds.curves {
+            assert!(c.specimen.is_some());
+            assert!(c.rupture_time_h.is_some());
+            assert!(c.times_h.windows(2).all(|w| w[0] <= w[1]));
+        }
+        // The repeated (0, 0) rows: one warning for the file.
+        let dup: Vec<&String> = ds
+            .warnings
+            .iter()
+            .filter(|w| w.contains("duplicate"))
+            .collect();
+        assert_eq!(dup.len(), 1, "{:?}", ds.warnings);
+        has(
+            dup[0],
+            &[
+                "creep_alloy617.csv:3:",
+                "of line 2",
+                "635 in all, in 34 curve(s)",
+            ],
+        );
+        negative_warnings += ds
+            .warnings
+            .iter()
+            .filter(|w| w.contains("negative strain"))
+            .count();
+    }
+    assert_eq!(curves, 34);
+    // 28,933 rows less the 635 exact repeats.
+    assert_eq!(points, 28_933 - 635);
+    assert_eq!(negative_warnings, 4);
+    // The 750 °C, 137 MPa, INL2-b test: 21 negative strains down to −0.155 %.
+    let ds = data::load(
+        &c,
+        &r,
+        &LoadOptions {
+            temperature_c: Some(750.0),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let w: Vec<&String> = ds
+        .warnings
+        .iter()
+        .filter(|w| w.contains("negative"))
+        .collect();
+    assert_eq!(w.len(), 1, "{w:?}");
+    has(
+        w[0],
+        &[
+            "column 'strain_pct'",
+            "21 negative strain(s)",
+            "INL2-b",
+            "-0.155 %",
+        ],
+    );
+    let curve = ds
+        .curves
+        .iter()
+        .find(|c| c.stress_mpa == 137.0 && c.specimen.as_deref() == Some("INL2-b"))
+        .unwrap();
+    assert_eq!(curve.strains.iter().filter(|e| **e < 0.0).count(), 21);
+    assert!((curve.strains.iter().cloned().fold(0.0, f64::min) + 0.00155).abs() < 1e-15);
+    // Without a temperature filter: an error naming the temperatures.
+    let e = data::load(&c, &r, &LoadOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert_one_line(&e);
+    has(
+        &e,
+        &[
+            "creep_alloy617.csv:",
+            "temperature_C",
+            "4 temperatures (750, 850, 900, 950 °C)",
+        ],
+    );
+    // …unless the caller says the constants depend on temperature.
+    let ds = data::load(
+        &c,
+        &r,
+        &LoadOptions {
+            several_temperatures: true,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(ds.curves.len(), 34);
+}
+
+/// Load `curves` with ruptures at 100 and 120 MPa; the result or the one-line error.
+fn load_text(curves: &str) -> Result<data::Dataset, String> {
+    let dir = TempDir::new().unwrap();
+    let c = write(&dir, "curves.csv", curves);
+    let r = write(&dir, "ruptures.csv", RUPTURES);
+    data::load(&c, &r, &LoadOptions::default()).map_err(|e| {
+        let e = e.to_string();
+        assert_one_line(&e);
+        e
+    })
+}
+
+#[test]
+fn two_specimens_without_specimen_column() {
+    let h = "temperature_C,stress_MPa,time_h,strain_pct\n";
+    // The time restarts within one block (lines 2–4, then 5–7).
+    let e = load_text(&format!(
+        "{h}600,100,0,0\n600,100,10,1\n600,100,20,2\n600,100,0,0\n600,100,8,1.1\n600,100,19,2.2\n\
+         600,120,0,0\n600,120,5,1\n600,120,10,2\n"
+    ))
+    .unwrap_err();
+    has(
+        &e,
+        &[
+            "curves.csv:5:",
+            "column 'time_h'",
+            "stress_MPa = 100",
+            "lines 2–4 and 5–7",
+            "specimen",
+        ],
+    );
+    // A second block of the same (T, σ) after other rows, resuming before the time reached.
+    let e = load_text(&format!(
+        "{h}600,100,0,0\n600,100,10,1\n600,100,20,2\n600,120,0,0\n600,120,5,1\n600,120,10,2\n\
+         600,100,5,0.4\n600,100,12,1.3\n600,100,22,2.5\n"
+    ))
+    .unwrap_err();
+    has(
+        &e,
+        &[
+            "curves.csv:8:",
+            "lines 2–4 and 8–10",
+            "20 h already reached on line 4",
+        ],
+    );
+    // With a specimen column: two curves.
+    let ds = load_text(
+        "temperature_C,stress_MPa,time_h,strain_pct,specimen\n\
+         600,100,0,0,a\n600,100,10,1,a\n600,100,20,2,a\n600,100,0,0,b\n600,100,8,1.1,b\n\
+         600,100,19,2.2,b\n600,120,0,0,a\n600,120,5,1,a\n600,120,10,2,a\n",
+    )
+    .unwrap();
+    assert_eq!(ds.curves.len(), 3);
+    // Curves interleaved row by row in time order (a file sorted by time) are not specimens.
+    let ds = load_text(&format!(
+        "{h}600,100,0,0\n600,120,0,0\n600,120,5,1\n600,100,10,1\n600,120,10,2\n600,100,20,2\n"
+    ))
+    .unwrap();
+    assert_eq!(ds.curves.len(), 2);
+    assert_eq!(ds.curves[0].times_h, vec![0.0, 10.0, 20.0]);
+    // Local disorder, repeated times and a repeated first time stay data (seed, Alloy 617).
+    let ds = load_text(&format!(
+        "{h}600,100,0,0\n600,100,0,0.2\n600,100,12,1\n600,100,10,1.1\n600,100,10,1.2\n600,100,20,2\n\
+         600,120,0,0\n600,120,5,1\n600,120,10,2\n"
+    ))
+    .unwrap();
+    assert_eq!(ds.curves[0].times_h, vec![0.0, 0.0, 10.0, 10.0, 12.0, 20.0]);
+}
+
+#[test]
+fn all_times_equal() {
+    let e = load_text(&CURVES.replace(
+        "600,120,0,0\n600,120,5,1\n600,120,10,2\n",
+        "600,120,5,0.5\n600,120,5,1\n600,120,5,2\n",
+    ))
+    .unwrap_err();
+    has(
+        &e,
+        &[
+            "curves.csv:5:",
+            "column 'time_h'",
+            "stress_MPa = 120",
+            "all its 3 points at time_h = 5",
+        ],
+    );
+}
+
+#[test]
+fn negative_strains_are_data() {
+    let ds = load_text(&CURVES.replace(
+        "600,100,0,0\n600,100,10,1\n",
+        "600,100,0,0\n600,100,1,-0.02\n600,100,2,-0.03\n600,100,10,1\n",
+    ))
+    .unwrap();
+    assert_eq!(ds.warnings.len(), 1, "{:?}", ds.warnings);
+    has(
+        &ds.warnings[0],
+        &[
+            "curves.csv:3:",
+            "column 'strain_pct'",
+            "2 negative strain(s)",
+            "-0.03 %",
+            "100 MPa",
+        ],
+    );
+    assert_eq!(ds.curves[0].strains[1], -0.0002);
+    // A curve that never rises above zero has nothing to fit.
+    let e = load_text(&CURVES.replace(
+        "600,120,0,0\n600,120,5,1\n600,120,10,2\n",
+        "600,120,0,0\n600,120,5,-1\n600,120,10,-2\n",
+    ))
+    .unwrap_err();
+    has(
+        &e,
+        &["curves.csv:5:", "column 'strain_pct'", "not above zero"],
+    );
+    // Non-finite numbers and negative times stay errors.
+    let e = load_text(&CURVES.replace("600,100,10,1\n", "600,100,10,-inf\n")).unwrap_err();
+    has(&e, &["curves.csv:3:", "column 'strain_pct'", "-inf"]);
+}
+
+#[test]
+fn several_temperatures_need_a_filter() {
+    let e = load_text(&format!("{CURVES}650,100,0,0\n650,100,3,1\n650,100,6,2\n")).unwrap_err();
+    has(
+        &e,
+        &[
+            "curves.csv:8:",
+            "column 'temperature_C'",
+            "2 temperatures (600, 650 °C)",
+            "temperature_C = ",
+        ],
+    );
+}
+
+/// Lines are the file's physical lines, after blank lines, quoted multi-line cells and
+/// `\r\n` endings (the csv crate's own positions are not).
+#[test]
+fn physical_line_numbers() {
+    let text =
+        "temperature_C,stress_MPa,time_h,strain_pct,note\r\n\r\n600,100,0,0,\"two\r\nlines\"\r\n\
+                \r\n\r\n600,100,10,1,x\r\n600,100,2o,2,x\r\n";
+    let e = load_text(text).unwrap_err();
+    has(&e, &["curves.csv:8:", "column 'time_h'", "2o"]);
+    let text = "temperature_C,stress_MPa,time_h,strain_pct\n\n\n600,100,0,0\n\n600,100\n";
+    let e = load_text(text).unwrap_err();
+    has(&e, &["curves.csv:6:", "2 fields"]);
+}
+
+#[test]
+fn constants_file_errors_name_the_physical_line() {
+    let dir = TempDir::new().unwrap();
+    let model = creepfit::model::build("khd", &[]).unwrap();
+    let p = write(&dir, "constants.csv", "name,value\n\nA,1e-9\n\n\nB,zero\n");
+    let e = creepfit::report::tables::read_constants(&p, model.as_ref())
+        .unwrap_err()
+        .to_string();
+    assert_one_line(&e);
+    has(&e, &["constants.csv:6:", "column 'value'", "zero"]);
+    let p = write(&dir, "constants.csv", "name,value\nA,\"1e-9\n\"\nBee,1\n");
+    let e = creepfit::report::tables::read_constants(&p, model.as_ref())
+        .unwrap_err()
+        .to_string();
+    assert_one_line(&e);
+    has(&e, &["constants.csv:4:", "column 'name'", "Bee"]);
+    let p = write(&dir, "constants.csv", "name,value\n\nA,\"1e\n9\"\n");
+    let e = creepfit::report::tables::read_constants(&p, model.as_ref())
+        .unwrap_err()
+        .to_string();
+    assert_one_line(&e);
+    has(&e, &["constants.csv:3:", "column 'value'", "'1e\\n9'"]);
 }

@@ -174,8 +174,8 @@ fn rows_by_fit(ranked: &str) -> std::collections::BTreeMap<(u64, String), Vec<St
         .map(|l| {
             let c: Vec<String> = l.split(',').map(str::to_string).collect();
             let key = (c[1].parse().unwrap(), c[2].clone());
-            let mut v = c[3..10].to_vec();
-            v.extend_from_slice(&c[12..]);
+            let mut v = c[3..12].to_vec();
+            v.extend_from_slice(&c[14..]);
             (key, v)
         })
         .collect()
@@ -542,7 +542,7 @@ fn an_interrupted_sweep_says_so_in_summary_json() {
     let s: serde_json::Value = serde_json::from_str(&read(&d.path().join("summary.json"))).unwrap();
     assert_eq!(s["complete"], false);
     assert_eq!(s["missing_fits"], 13);
-    let missing = s["missing"].as_array().unwrap();
+    let missing = s["missing_pairs"].as_array().unwrap();
     assert_eq!(missing.len(), 13);
     // The missing pairs and the ranked rows are the whole sweep, each pair once.
     let ranked = read(&d.path().join("ranked.csv"));

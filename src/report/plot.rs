@@ -835,7 +835,7 @@ where
     // Encoded into a temporary file beside `path` and renamed into place: the old PNG or
     // the new one, never a truncated one (crate::output).
     let plot_err = |e: Error| match e {
-        Error::Io { source, .. } => Error::plot(path, source.to_string()),
+        Error::Io { err, .. } => Error::plot(path, err.to_string()),
         other => Error::plot(path, other.to_string()),
     };
     let tmp = output::temp_beside(path, ".png").map_err(plot_err)?;

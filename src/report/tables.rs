@@ -27,11 +27,21 @@ pub fn write_text(path: &Path, text: &str) -> Result<()> {
 
 /// Write a CSV file atomically from a header and rows of already formatted cells.
 pub fn write_csv(path: &Path, header: &[&str], rows: &[Vec<String>]) -> Result<()> {
+    write_csv_rows(path, header, rows.iter())
+}
+
+/// [`write_csv`] from rows made one at a time: a million-point curve's rows are formatted
+/// as they are written, never held all at once. Atomic like [`write_csv`].
+pub fn write_csv_rows<R, I>(path: &Path, header: &[&str], rows: I) -> Result<()>
+where
+    R: AsRef<[String]>,
+    I: Iterator<Item = R>,
+{
     output::write_atomic(path, |w| {
         let mut c = csv::Writer::from_writer(w);
         c.write_record(header).map_err(csv_io)?;
         for r in rows {
-            c.write_record(r).map_err(csv_io)?;
+            c.write_record(r.as_ref()).map_err(csv_io)?;
         }
         c.flush()
     })
@@ -87,48 +97,29 @@ pub fn write_constants(
 }
 
 /// Read a `constants.csv` (columns `name,value`, any order, extra columns ignored) into the
-/// model's order; every model constant must be present.
+/// model's order; every model constant must be present. Errors name the file's physical line.
 pub fn read_constants(path: &Path, model: &dyn Model) -> Result<Vec<f64>> {
-    let mut rdr = csv::ReaderBuilder::new()
-        .has_headers(true)
-        .from_path(path)
-        .map_err(|e| match e.kind() {
-            csv::ErrorKind::Io(_) => Error::io(path, std::io::Error::other(e.to_string())),
-            _ => Error::data(path, 0, e.to_string()),
-        })?;
-    let headers = rdr
-        .headers()
-        .map_err(|e| Error::data(path, 1, e.to_string()))?
-        .clone();
-    let col = |name: &str| {
-        headers
-            .iter()
-            .position(|h| h.trim() == name)
-            .ok_or_else(|| Error::data(path, 1, format!("missing column '{name}'")))
-    };
-    let (ci, cv) = (col("name")?, col("value")?);
+    let (bytes, progress) = crate::data::read_file(path)?;
+    let mut table = crate::data::Table::open(path, &bytes, &["name", "value"], progress)?;
+    let (ci, cv) = (table.col("name").unwrap(), table.col("value").unwrap());
     let specs = model.constants();
     let mut values = vec![f64::NAN; specs.len()];
-    for rec in rdr.records() {
-        let rec = rec.map_err(|e| {
-            let line = e.position().map(|p| p.line() as usize).unwrap_or(0);
-            Error::data(path, line, e.to_string())
-        })?;
-        let line = rec.position().map(|p| p.line() as usize).unwrap_or(0);
+    let mut rec = csv::StringRecord::new();
+    while let Some(line) = table.next_row(&mut rec)? {
         let name = rec.get(ci).unwrap_or("").trim();
         let text = rec.get(cv).unwrap_or("").trim();
         let v: f64 = text.parse().map_err(|_| {
             Error::data(
                 path,
                 line,
-                format!("field 'value': cannot parse '{text}' as a number"),
+                format!("column 'value': cannot parse '{text}' as a number"),
             )
         })?;
         if !v.is_finite() {
             return Err(Error::data(
                 path,
                 line,
-                format!("field 'value': '{text}' is not finite"),
+                format!("column 'value': '{text}' is not finite"),
             ));
         }
         match specs.iter().position(|s| s.name == name) {
@@ -138,7 +129,7 @@ pub fn read_constants(path: &Path, model: &dyn Model) -> Result<Vec<f64>> {
                     path,
                     line,
                     format!(
-                        "field 'name': '{name}' is not a constant of model {}",
+                        "column 'name': '{name}' is not a constant of model {}",
                         model.name()
                     ),
                 ))
@@ -167,6 +158,8 @@ pub struct ErrorRow {
     pub min_rate_err_pct: f64,
     pub rupture_strain_exp_pct: f64,
     pub rupture_strain_pred_pct: f64,
+    /// Specimen label of the curve, if the data have one.
+    pub specimen: Option<String>,
 }
 
 /// The error rows of a local fit.
@@ -187,13 +180,30 @@ pub fn error_rows(fit: &LocalFit, curves: &[Curve]) -> Vec<ErrorRow> {
                 min_rate_err_pct: fit.min_rate_err_pct[i],
                 rupture_strain_exp_pct: 100.0 * c.rupture_strain,
                 rupture_strain_pred_pct: 100.0 * p.rupture_strain,
+                specimen: c.specimen.clone(),
             }
         })
         .collect()
 }
 
-/// `errors.csv`.
+/// Whether a `specimen` column goes into per-curve outputs: when some curve has one. It is
+/// appended after the contract's columns, so readers by column name keep working.
+pub fn has_specimens(curves: &[Curve]) -> bool {
+    curves.iter().any(|c| c.specimen.is_some())
+}
+
+/// `header` plus `specimen` if `specimens`.
+pub fn with_specimen<'a>(header: &[&'a str], specimens: bool) -> Vec<&'a str> {
+    let mut h = header.to_vec();
+    if specimens {
+        h.push("specimen");
+    }
+    h
+}
+
+/// `errors.csv` (plus a last `specimen` column when some row has one).
 pub fn write_errors(path: &Path, rows: &[ErrorRow]) -> Result<()> {
+    let specimens = rows.iter().any(|r| r.specimen.is_some());
     let header = [
         "temperature_C",
         "stress_MPa",
@@ -223,37 +233,55 @@ pub fn write_errors(path: &Path, rows: &[ErrorRow]) -> Result<()> {
             ]
             .iter()
             .map(|v| num(*v))
+            .chain(specimens.then(|| r.specimen.clone().unwrap_or_default()))
             .collect()
         })
         .collect();
-    write_csv(path, &header, &rows)
+    write_csv(path, &with_specimen(&header, specimens), &rows)
 }
 
-/// `curves.csv` of a fit: measured and predicted strain at every measured time.
+/// `curves.csv` of a fit: measured and predicted strain at every measured time (plus a last
+/// `specimen` column when some curve has one).
 pub fn write_fit_curves(path: &Path, fit: &LocalFit, curves: &[Curve]) -> Result<()> {
-    let mut rows = Vec::new();
-    for (i, c) in curves.iter().enumerate() {
-        for (k, &t) in c.times_h.iter().enumerate() {
-            rows.push(vec![
+    let specimens = has_specimens(curves);
+    let rows = curves.iter().enumerate().flat_map(|(i, c)| {
+        c.times_h.iter().enumerate().map(move |(k, &t)| {
+            let mut row = vec![
                 num(c.temperature_c),
                 num(c.stress_mpa),
                 num(t),
                 num(100.0 * c.strains[k]),
                 num(100.0 * fit.eval.curves[i].strain[k]),
-            ]);
-        }
+            ];
+            if specimens {
+                row.push(c.specimen.clone().unwrap_or_default());
+            }
+            row
+        })
+    });
+    let header = [
+        "temperature_C",
+        "stress_MPa",
+        "time_h",
+        "strain_exp_pct",
+        "strain_pred_pct",
+    ];
+    write_csv_rows(path, &with_specimen(&header, specimens), rows)
+}
+
+/// At most about `max` of `points`, evenly spaced in index, first and last kept: what a plot
+/// draws of a logged curve (a million markers cost seconds and show nothing more).
+pub fn thin<T: Copy>(points: Vec<T>, max: usize) -> Vec<T> {
+    let n = points.len();
+    if n <= max.max(2) {
+        return points;
     }
-    write_csv(
-        path,
-        &[
-            "temperature_C",
-            "stress_MPa",
-            "time_h",
-            "strain_exp_pct",
-            "strain_pred_pct",
-        ],
-        &rows,
-    )
+    let stride = n.div_ceil(max.max(2) - 1);
+    let mut out: Vec<T> = points.iter().step_by(stride).copied().collect();
+    if !(n - 1).is_multiple_of(stride) {
+        out.push(points[n - 1]);
+    }
+    out
 }
 
 /// The paper-style table (Tables 6/7): lifetime and minimum-rate errors per stress.
@@ -264,7 +292,8 @@ pub fn error_table(rows: &[ErrorRow], min_rate_measured: bool) -> String {
     } else {
         "estimated from the curve"
     };
-    let _ = writeln!(
+    let specimens = rows.iter().any(|r| r.specimen.is_some());
+    let _ = write!(
         s,
         "{:>6} {:>7} | {:>10} {:>10} {:>8} | {:>11} {:>11} {:>8} | {:>7} {:>7}",
         "T(C)",
@@ -278,8 +307,9 @@ pub fn error_table(rows: &[ErrorRow], min_rate_measured: bool) -> String {
         "e_f exp",
         "e_f pred"
     );
+    let _ = writeln!(s, "{}", if specimens { " | specimen" } else { "" });
     for r in rows {
-        let _ = writeln!(
+        let _ = write!(
             s,
             "{:>6} {:>7} | {:>10.0} {:>10.0} {:>8.2} | {:>11.4e} {:>11.4e} {:>8.2} | {:>7.3} {:>7.3}",
             r.temperature_c,
@@ -293,6 +323,11 @@ pub fn error_table(rows: &[ErrorRow], min_rate_measured: bool) -> String {
             r.rupture_strain_exp_pct,
             r.rupture_strain_pred_pct
         );
+        let _ = match (&r.specimen, specimens) {
+            (Some(sp), _) => writeln!(s, " | {sp}"),
+            (None, true) => writeln!(s, " |"),
+            (None, false) => writeln!(s),
+        };
     }
     let mean = |f: &dyn Fn(&ErrorRow) -> f64| {
         let v: Vec<f64> = rows

@@ -19,6 +19,8 @@ pub mod array;
 mod journal;
 
 pub use analysis::{analyse, Analysis, Cluster, Spread};
+/// Read a sweep journal (`None` when the file does not exist): for tests and tools.
+pub use journal::read as read_journal;
 pub use journal::{Header, Solution};
 
 use std::io::IsTerminal;
