@@ -507,7 +507,6 @@ pub fn read_curves(path: &Path) -> Result<(Vec<RawCurve>, Vec<String>)> {
     let mut tracks: Vec<Track> = Vec::new();
     let mut index: HashMap<(u64, u64, Option<String>), usize> = HashMap::new();
     let mut prev: Option<usize> = None;
-    let mut split: Option<Split> = None;
     let mut rec = csv::StringRecord::new();
     while let Some(line) = table.next_row(&mut rec)? {
         let f = Field {
@@ -546,16 +545,22 @@ pub fn read_curves(path: &Path) -> Result<(Vec<RawCurve>, Vec<String>)> {
                         max_time: time,
                         max_line: line,
                         last_line: line,
+                        last_time: time,
+                        descents: 0,
+                        split: None,
                     });
                     curves.len() - 1
                 })
             }
         };
         let tr = &mut tracks[k];
-        if split.is_none() && curves[k].specimen.is_none() && !curves[k].times_h.is_empty() {
+        if !curves[k].times_h.is_empty() && time < tr.last_time {
+            tr.descents += 1;
+        }
+        if tr.split.is_none() && curves[k].specimen.is_none() && !curves[k].times_h.is_empty() {
             let new_block = prev != Some(k);
             if time <= tr.first_time && tr.max_time > tr.first_time {
-                split = Some(Split {
+                tr.split = Some(Split {
                     curve: k,
                     line,
                     before_last: tr.last_line,
@@ -566,7 +571,7 @@ pub fn read_curves(path: &Path) -> Result<(Vec<RawCurve>, Vec<String>)> {
                     ),
                 });
             } else if new_block && time < tr.max_time {
-                split = Some(Split {
+                tr.split = Some(Split {
                     curve: k,
                     line,
                     before_last: tr.last_line,
@@ -583,6 +588,7 @@ pub fn read_curves(path: &Path) -> Result<(Vec<RawCurve>, Vec<String>)> {
             tr.max_line = line;
         }
         tr.last_line = line;
+        tr.last_time = time;
         let c = &mut curves[k];
         c.times_h.push(time);
         c.strains.push(e / 100.0);
@@ -593,6 +599,15 @@ pub fn read_curves(path: &Path) -> Result<(Vec<RawCurve>, Vec<String>)> {
     if curves.is_empty() {
         return Err(Error::data(path, 0, "no data rows"));
     }
+    // A restart means two specimens only where the curve's rows are otherwise in time order
+    // (appended one after the other); rows in no order at all (a shuffled table: "times need
+    // not be sorted") cannot be told apart and load as one curve.
+    let split = tracks
+        .iter()
+        .zip(&curves)
+        .filter(|(tr, c)| tr.descents <= (c.times_h.len() / 10).max(3))
+        .filter_map(|(tr, _)| tr.split.as_ref())
+        .min_by_key(|sp| sp.line);
     if let Some(sp) = split {
         let c = &curves[sp.curve];
         return Err(Error::data(
@@ -718,6 +733,12 @@ struct Track {
     max_line: usize,
     /// Line of the curve's latest row.
     last_line: usize,
+    /// Time of the curve's latest row, h.
+    last_time: f64,
+    /// Rows whose time is below the curve's previous row's (in file order).
+    descents: usize,
+    /// The first place where the rows look like two specimens, if any.
+    split: Option<Split>,
 }
 
 /// The first place where a curve's rows look like two specimens.

@@ -442,6 +442,23 @@ fn two_specimens_without_specimen_column() {
     ))
     .unwrap();
     assert_eq!(ds.curves[0].times_h, vec![0.0, 0.0, 10.0, 10.0, 12.0, 20.0]);
+    // Rows in no order at all (a shuffled table; DESIGN: times need not be sorted) load as
+    // one curve each: nothing tells specimens apart there.
+    let mut rows: Vec<String> = (0..40)
+        .map(|k| format!("600,100,{},{}", k * 10, k as f64 * 0.1))
+        .chain((0..30).map(|k| format!("600,120,{},{}", k * 5, k as f64 * 0.2)))
+        .collect();
+    let mut x: u64 = 12345;
+    for i in (1..rows.len()).rev() {
+        x = x
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        rows.swap(i, (x >> 33) as usize % (i + 1));
+    }
+    let ds = load_text(&format!("{h}{}\n", rows.join("\n"))).unwrap();
+    assert_eq!(ds.curves.len(), 2);
+    assert_eq!(ds.curves[0].times_h.len(), 40);
+    assert!(ds.curves[0].times_h.windows(2).all(|w| w[0] < w[1]));
 }
 
 #[test]
