@@ -627,7 +627,13 @@ fn null_replicate(
         let (fk, _) = fit_best(spec, &data, &st, settings, ml);
         out[k] = fk.map_or(f64::NAN, |f| b0.neg2ll - f.neg2ll);
     }
-    out[n_ext] = gof::statistic(&data, b0.residuals.as_ref().expect("fitted"), &b0.noise).statistic;
+    out[n_ext] = gof::statistic(
+        &data,
+        b0.residuals.as_ref().expect("fitted"),
+        &b0.noise,
+        ml.lifetime_sd_floor,
+    )
+    .statistic;
     out[n_ext + 1] = 0.0;
     out
 }
@@ -642,7 +648,12 @@ fn gof_bootstrap(
     ml: &MlOptions,
     dc: &DiagnoseConfig,
 ) -> GofTest {
-    let g = gof::statistic(curves, fit.residuals.as_ref().expect("fitted"), &fit.noise);
+    let g = gof::statistic(
+        curves,
+        fit.residuals.as_ref().expect("fitted"),
+        &fit.noise,
+        ml.lifetime_sd_floor,
+    );
     let (reps, _) = bootstrap::sequential(&[g.statistic], dc.bootstrap, |b| {
         let mut rng = bootstrap::replicate_rng(dc.seed, GOF_STREAM, b);
         let data = bootstrap::replicate_data(
@@ -657,7 +668,13 @@ fn gof_bootstrap(
         }
         let (f, _) = fit_best(spec, &data, &st, settings, ml);
         vec![f.map_or(f64::NAN, |f| {
-            gof::statistic(&data, f.residuals.as_ref().expect("fitted"), &f.noise).statistic
+            gof::statistic(
+                &data,
+                f.residuals.as_ref().expect("fitted"),
+                &f.noise,
+                ml.lifetime_sd_floor,
+            )
+            .statistic
         })]
     });
     let sample: Vec<f64> = reps.iter().map(|r| r[0]).collect();
@@ -799,6 +816,7 @@ pub fn diagnose_with(cfg: &RunConfig, data: &Dataset, dc: &DiagnoseConfig) -> Re
         curves,
         base_fit.residuals.as_ref().expect("fitted"),
         &base_fit.noise,
+        ml.lifetime_sd_floor,
     );
 
     // 3. Null bootstrap under the base model. Refits start next to their optimum, where

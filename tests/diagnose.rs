@@ -1,0 +1,216 @@
+//! `diagnose` on data it was not made from.
+//!
+//! - A reduced battery of generated data sets (`creepfit::synth`: three material families,
+//!   3–5 stresses, digitised or logged sampling ending at 95–100 % of life, some curves cut at
+//!   a strain limit, white or AR(1) reading error, 1 % scatter of rupture times, shuffled rows;
+//!   every catalogued effect over a range of sizes, no effect, and two effects outside the
+//!   catalogue): false alarms on the no-effect sets and the share of detectable catalogued
+//!   effects named correctly. Fixed seeds 1001–1040 (development seeds; README's full battery
+//!   uses seeds that were not used while developing).
+//! - Real laboratory curves (Alloy 617, `data/alloy617/`) at every temperature: the verdict
+//!   and the cause are the same on all points and on every 10th point.
+//! - The contract of `diagnosis.json` on the seed's 560 °C data.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use creepfit::battery::{rates, run_battery, write_reports};
+use tempfile::TempDir;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn creepfit(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_creepfit"))
+        .args(args)
+        .current_dir(root())
+        .output()
+        .expect("binary runs")
+}
+
+fn json(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+#[test]
+fn battery_of_40_generated_sets() {
+    let dir = TempDir::new().unwrap();
+    let results = run_battery(dir.path(), 1001, 40, false).unwrap();
+    assert_eq!(results.len(), 40);
+    let r = write_reports(dir.path(), &results, 1001).unwrap();
+    for (i, res) in results.iter().enumerate() {
+        eprintln!(
+            "{i:2} {:8} {:20} λ {:12.1} {:5} → {} ({:?})",
+            res.name,
+            res.scenario,
+            res.lambda,
+            res.detectable,
+            res.outcome(),
+            res.error
+        );
+    }
+    assert_eq!(r.errors, 0, "every set generated and diagnosed");
+    assert_eq!(r.null_sets, 10);
+    assert!(
+        r.false_alarms <= 2,
+        "false alarms on no-effect data: {} of 10",
+        r.false_alarms
+    );
+    let (det, named): (usize, usize) = r.named.iter().fold((0, 0), |(d, k), e| (d + e.2, k + e.3));
+    assert!(det >= 10, "too few detectable catalogued sets: {det}");
+    assert!(
+        named as f64 >= 0.8 * det as f64,
+        "detectable catalogued effects named correctly: {named} of {det}"
+    );
+    // The reports add up: the confusion matrix counts every set once.
+    let conf = std::fs::read_to_string(dir.path().join("confusion.csv")).unwrap();
+    let total: usize = conf
+        .lines()
+        .skip(1)
+        .flat_map(|l| l.split(',').skip(1).map(|v| v.parse::<usize>().unwrap()))
+        .sum();
+    assert_eq!(total, 40);
+    assert!(dir.path().join("power.png").exists());
+    // Resuming a finished battery recomputes nothing and gives the same results.
+    let again = run_battery(dir.path(), 1001, 40, false).unwrap();
+    let text = |v: &[creepfit::battery::SetResult]| serde_json::to_string(v).unwrap();
+    assert_eq!(text(&again), text(&results));
+    assert_eq!(
+        serde_json::to_string(&rates(&again)).unwrap(),
+        serde_json::to_string(&r).unwrap()
+    );
+}
+
+/// `data/alloy617/` with every 10th point of each curve kept.
+fn every_tenth(dir: &Path) -> PathBuf {
+    let text = std::fs::read_to_string(root().join("data/alloy617/creep_alloy617.csv")).unwrap();
+    let mut seen: std::collections::HashMap<String, usize> = Default::default();
+    let mut out = String::new();
+    for (i, line) in text.lines().enumerate() {
+        if i == 0 {
+            out += line;
+            out.push('\n');
+            continue;
+        }
+        let f: Vec<&str> = line.split(',').collect();
+        let key = format!("{},{},{}", f[0], f[1], f[4]);
+        let k = seen.entry(key).or_insert(0);
+        if *k % 10 == 0 {
+            out += line;
+            out.push('\n');
+        }
+        *k += 1;
+    }
+    let p = dir.join("creep_10th.csv");
+    std::fs::write(&p, out).unwrap();
+    p
+}
+
+#[test]
+fn alloy617_verdict_does_not_depend_on_the_logging_density() {
+    let dir = TempDir::new().unwrap();
+    let thin = every_tenth(dir.path());
+    for t in [750, 850, 900, 950] {
+        let cfg = root().join(format!("configs/alloy617-{t}C.toml"));
+        let text = std::fs::read_to_string(&cfg)
+            .unwrap()
+            .replace(
+                "../data/alloy617/creep_alloy617.csv",
+                thin.to_str().unwrap(),
+            )
+            .replace(
+                "../data/alloy617/ruptures_alloy617.csv",
+                root()
+                    .join("data/alloy617/ruptures_alloy617.csv")
+                    .to_str()
+                    .unwrap(),
+            );
+        let thin_cfg = dir.path().join(format!("thin-{t}.toml"));
+        std::fs::write(&thin_cfg, text).unwrap();
+        let mut verdicts = Vec::new();
+        for (c, tag) in [(cfg, "all"), (thin_cfg, "tenth")] {
+            let out = dir.path().join(format!("{t}-{tag}"));
+            let o = creepfit(&[
+                "diagnose",
+                c.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+            ]);
+            assert!(
+                o.status.success(),
+                "{t} °C {tag}: {}",
+                String::from_utf8_lossy(&o.stderr)
+            );
+            let d = json(&out.join("diagnosis.json"));
+            verdicts.push((d["verdict"].clone(), d["cause"].clone()));
+            let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+            assert!(md.contains("What the calibrated base model gets wrong"));
+        }
+        assert_eq!(verdicts[0], verdicts[1], "{t} °C: all points vs every 10th");
+    }
+}
+
+#[test]
+fn diagnosis_json_keeps_its_contract() {
+    let dir = TempDir::new().unwrap();
+    let out = dir.path().join("d");
+    let o = creepfit(&[
+        "diagnose",
+        "configs/560C.toml",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let d = json(&out.join("diagnosis.json"));
+    assert!(["adequate", "extension", "unexplained"].contains(&d["verdict"].as_str().unwrap()));
+    assert_eq!(d["cause"].is_null(), d["verdict"] != "extension");
+    assert_eq!(d["alpha"], 0.05);
+    assert!(d["evidence"].is_array());
+    let cands = d["candidates"].as_array().unwrap();
+    assert_eq!(cands.len(), 4);
+    for c in cands.iter().chain(std::iter::once(&d["base"])) {
+        for k in [
+            "name",
+            "extra_constants",
+            "objective",
+            "delta_bic",
+            "loo_rmse",
+            "gain_pct",
+            "constants",
+            "p_value",
+        ] {
+            assert!(c.get(k).is_some(), "{} lacks {k}", c["name"]);
+        }
+    }
+    for c in cands {
+        let p = c["p_value"].as_f64().unwrap();
+        assert!(p > 0.0 && p <= 1.0, "{p}");
+    }
+    assert!(d["gof"]["p_value"].as_f64().unwrap() > 0.0);
+    assert!(out.join("report.md").exists());
+    assert!(out.join("residuals_base.png").exists());
+    // Identical for any thread count.
+    let out1 = dir.path().join("d1");
+    let o = creepfit(&[
+        "diagnose",
+        "configs/560C.toml",
+        "--threads",
+        "1",
+        "--out",
+        out1.to_str().unwrap(),
+    ]);
+    assert!(o.status.success());
+    let d1 = json(&out1.join("diagnosis.json"));
+    for k in ["verdict", "cause", "candidates", "base", "gof", "bootstrap"] {
+        let strip = |v: &serde_json::Value| {
+            let mut v = v.clone();
+            if let Some(o) = v.as_object_mut() {
+                o.remove("wall_s");
+                o.remove("phase_s");
+            }
+            v
+        };
+        assert_eq!(strip(&d[k]), strip(&d1[k]), "{k}");
+    }
+}
