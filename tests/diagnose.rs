@@ -96,7 +96,7 @@ fn every_tenth(dir: &Path) -> PathBuf {
         let f: Vec<&str> = line.split(',').collect();
         let key = format!("{},{},{}", f[0], f[1], f[4]);
         let k = seen.entry(key).or_insert(0);
-        if *k % 10 == 0 {
+        if (*k).is_multiple_of(10) {
             out += line;
             out.push('\n');
         }
