@@ -689,10 +689,7 @@ fn curve_plots(
     data.curves
         .iter()
         .map(|c| {
-            let load = Load {
-                stress_mpa: c.stress_mpa,
-                omega_f: cfg.objective.omega_f,
-            };
+            let load = Load::of_curve(c, cfg.objective.omega_f);
             let span = c
                 .rupture_time_h
                 .unwrap_or(0.0)
@@ -760,10 +757,7 @@ fn simulate(
     let specimen =
         |c: &crate::data::Curve| specimens.then(|| c.specimen.clone().unwrap_or_default());
     for c in &data.curves {
-        let load = Load {
-            stress_mpa: c.stress_mpa,
-            omega_f: cfg.objective.omega_f,
-        };
+        let load = Load::of_curve(c, cfg.objective.omega_f);
         let span = c
             .rupture_time_h
             .unwrap_or(0.0)

@@ -307,10 +307,7 @@ impl<'a> Objective<'a> {
     }
 
     fn load(&self, c: &Curve) -> Load {
-        Load {
-            stress_mpa: c.stress_mpa,
-            omega_f: self.omega_f,
-        }
+        Load::of_curve(c, self.omega_f)
     }
 
     fn ode_for(&self, c: &Curve) -> OdeOptions {

@@ -48,6 +48,7 @@ fn synth(
         .map(|&s| {
             let load = Load {
                 stress_mpa: s,
+                temperature_k: 560.0 + creepfit::model::ZERO_CELSIUS_K,
                 omega_f: 1.0 / 3.0,
             };
             let mut dummy = [];

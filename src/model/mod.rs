@@ -46,13 +46,40 @@ pub struct ConstantSpec {
     pub doc: &'static str,
 }
 
-/// The loading of one test: nominal stress and the damage at rupture.
+/// 0 °C in K: files give temperatures in °C, [`Load`] and the temperature laws work in K.
+pub const ZERO_CELSIUS_K: f64 = 273.15;
+
+/// The conditions of one test: nominal stress, temperature and the damage at rupture.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Load {
     /// Nominal (initial) stress, MPa.
     pub stress_mpa: f64,
+    /// Test temperature, K (the temperature laws of the constants read it; a model without
+    /// laws ignores it).
+    pub temperature_k: f64,
     /// Damage at rupture ω_f (the paper: 1/3).
     pub omega_f: f64,
+}
+
+impl Load {
+    /// The load at `stress_mpa` (MPa) and `temperature_c` (°C, as in the files).
+    pub fn new(stress_mpa: f64, temperature_c: f64, omega_f: f64) -> Load {
+        Load {
+            stress_mpa,
+            temperature_k: temperature_c + ZERO_CELSIUS_K,
+            omega_f,
+        }
+    }
+
+    /// The load of a measured curve: its stress and temperature.
+    pub fn of_curve(c: &crate::data::Curve, omega_f: f64) -> Load {
+        Load::new(c.stress_mpa, c.temperature_c, omega_f)
+    }
+
+    /// The temperature in °C.
+    pub fn temperature_c(&self) -> f64 {
+        self.temperature_k - ZERO_CELSIUS_K
+    }
 }
 
 /// A constitutive model with an `N`-component state, integrated by [`crate::ode`].
