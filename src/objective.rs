@@ -17,7 +17,7 @@ use nalgebra::DMatrix;
 
 use crate::config::LifetimeTerm;
 use crate::data::Curve;
-use crate::dual::{Dual, Scalar, SENS};
+use crate::dual::{Dual, Scalar, SENS, SENS_WIDE};
 use crate::lsq::{EvalFailure, LeastSquaresProblem};
 use crate::model::{Load, Model, Scale};
 use crate::ode::{OdeOptions, Outcome, SimResult};
@@ -26,8 +26,9 @@ use crate::ode::{OdeOptions, Outcome, SimResult};
 /// or last point): a prediction that has not ruptured by then is a failed simulation.
 pub const HORIZON_FACTOR: f64 = 1000.0;
 
-/// Largest number of constants a model may have (fixed-size parameter buffers).
-pub const MAX_PARAMS: usize = 16;
+/// Largest number of constants a model may have (fixed-size parameter buffers): the base
+/// model's six, the extensions' three and a temperature-law constant for each of them fit.
+pub const MAX_PARAMS: usize = 32;
 
 /// Bounds, scale and free/fixed status of every constant; maps to the unit box [0, 1]^k of
 /// the free constants, in which the optimiser works.
@@ -136,8 +137,9 @@ impl ParamSpace {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum JacobianMethod {
-    /// Forward sensitivities: one simulation per curve in dual numbers carries ∂r/∂u for up
-    /// to [`SENS`] free constants (finite differences beyond that).
+    /// Forward sensitivities: one simulation per curve in dual numbers carries ∂r/∂u: of up
+    /// to [`SENS`] free constants in the narrow dual numbers, of up to [`SENS_WIDE`] in the
+    /// wide ones, and of more in chunks of [`SENS_WIDE`] (one simulation per chunk).
     #[default]
     Sensitivity,
     /// Forward differences in the unit box, one extra simulation per free constant.
@@ -180,6 +182,19 @@ impl SimScalar for Dual<SENS> {
         opts: &OdeOptions,
     ) -> SimResult<Self> {
         model.simulate_sens(params, load, times, out, opts)
+    }
+}
+
+impl SimScalar for Dual<SENS_WIDE> {
+    fn simulate(
+        model: &dyn Model,
+        params: &[Self],
+        load: &Load,
+        times: &[f64],
+        out: &mut [Self],
+        opts: &OdeOptions,
+    ) -> SimResult<Self> {
+        model.simulate_sens_wide(params, load, times, out, opts)
     }
 }
 
@@ -492,26 +507,60 @@ impl LeastSquaresProblem for CreepProblem<'_> {
 
 impl CreepProblem<'_> {
     /// The sensitivity Jacobian (dual numbers), and the residuals with it if `r` is given;
-    /// `None` when finite differences are asked for or there are more than [`SENS`] free
-    /// constants.
+    /// `None` only when the configuration asks for finite differences. The width of the dual
+    /// numbers follows the number of free constants: [`SENS`] (the common case, as fast as
+    /// before there was a choice), [`SENS_WIDE`], or chunks of [`SENS_WIDE`] constants, one
+    /// simulation of every curve per chunk.
     fn sensitivities(
         &self,
         u: &[f64],
-        r: Option<&mut [f64]>,
+        mut r: Option<&mut [f64]>,
         jac: &mut DMatrix<f64>,
     ) -> Option<Result<(), EvalFailure>> {
-        let n_free = self.space.n_free();
-        if self.jacobian != JacobianMethod::Sensitivity || n_free > SENS {
+        if self.jacobian != JacobianMethod::Sensitivity {
             return None;
         }
+        let n_free = self.space.n_free();
+        if n_free <= SENS {
+            return Some(self.sensitivity_pass::<SENS>(u, 0, n_free, r, jac));
+        }
+        let mut first = 0;
+        while first < n_free {
+            let end = (first + SENS_WIDE).min(n_free);
+            if let Err(e) = self.sensitivity_pass::<SENS_WIDE>(u, first, end, r.take(), jac) {
+                return Some(Err(e));
+            }
+            first = end;
+        }
+        Some(Ok(()))
+    }
+
+    /// One simulation of every curve in `Dual<K>` with the free constants `first..end`
+    /// seeded (in free-constant order): fills those columns of `jac`, and `r` if given.
+    fn sensitivity_pass<const K: usize>(
+        &self,
+        u: &[f64],
+        first: usize,
+        end: usize,
+        r: Option<&mut [f64]>,
+        jac: &mut DMatrix<f64>,
+    ) -> Result<(), EvalFailure>
+    where
+        Dual<K>: SimScalar + DualBuffer,
+    {
+        debug_assert!(end - first <= K);
         let n = self.space.len();
         let mut x = [0.0; MAX_PARAMS];
         self.space.from_unit(u, &mut x[..n]);
-        let mut xd = [Dual::<SENS>::cst(0.0); MAX_PARAMS];
+        let mut xd = [Dual::<K>::cst(0.0); MAX_PARAMS];
         let mut k = 0;
         for j in 0..n {
             xd[j] = if self.space.free[j] {
-                let d = Dual::var(x[j], k, self.space.dx_du(j, x[j]));
+                let d = if (first..end).contains(&k) {
+                    Dual::var(x[j], k - first, self.space.dx_du(j, x[j]))
+                } else {
+                    Dual::cst(x[j])
+                };
                 k += 1;
                 d
             } else {
@@ -520,19 +569,16 @@ impl CreepProblem<'_> {
         }
         // The dual residuals go to a buffer kept per thread: for a logged curve of a million
         // points it is 72 MB, which a fresh allocation per Jacobian would page-fault in anew.
-        DUAL_RESIDUALS.with(|buf| {
-            let mut rd = buf.borrow_mut();
+        Dual::<K>::with_buffer(|rd| {
             rd.clear();
-            rd.resize(self.objective.n_residuals(), Dual::<SENS>::cst(0.0));
-            if let Err(e) = self.objective.residuals_in(&xd[..n], &mut rd) {
-                return Some(Err(e));
-            }
+            rd.resize(self.objective.n_residuals(), Dual::<K>::cst(0.0));
+            self.objective.residuals_in(&xd[..n], rd)?;
             // One pass over the dual residuals (the column-by-column copy reads them k times).
             let m = rd.len();
             let js = jac.as_mut_slice();
             for (i, ri) in rd.iter().enumerate() {
-                for k in 0..n_free {
-                    js[k * m + i] = ri.d[k];
+                for c in first..end {
+                    js[c * m + i] = ri.d[c - first];
                 }
             }
             if let Some(r) = r {
@@ -540,13 +586,34 @@ impl CreepProblem<'_> {
                     *ri = di.re();
                 }
             }
-            Some(Ok(()))
+            Ok(())
         })
     }
 }
 
+/// Dual numbers with a reusable residual buffer per thread (one per width).
+pub trait DualBuffer: Sized {
+    /// Run `f` on this thread's buffer.
+    fn with_buffer<R>(f: impl FnOnce(&mut Vec<Self>) -> R) -> R;
+}
+
 thread_local! {
-    /// Reused buffer of [`CreepProblem::sensitivities`].
+    /// Reused buffer of [`CreepProblem::sensitivity_pass`], narrow width.
     static DUAL_RESIDUALS: std::cell::RefCell<Vec<Dual<SENS>>> =
         const { std::cell::RefCell::new(Vec::new()) };
+    /// Reused buffer of [`CreepProblem::sensitivity_pass`], wide width.
+    static DUAL_RESIDUALS_WIDE: std::cell::RefCell<Vec<Dual<SENS_WIDE>>> =
+        const { std::cell::RefCell::new(Vec::new()) };
+}
+
+impl DualBuffer for Dual<SENS> {
+    fn with_buffer<R>(f: impl FnOnce(&mut Vec<Self>) -> R) -> R {
+        DUAL_RESIDUALS.with(|b| f(&mut b.borrow_mut()))
+    }
+}
+
+impl DualBuffer for Dual<SENS_WIDE> {
+    fn with_buffer<R>(f: impl FnOnce(&mut Vec<Self>) -> R) -> R {
+        DUAL_RESIDUALS_WIDE.with(|b| f(&mut b.borrow_mut()))
+    }
 }

@@ -12,7 +12,7 @@ mod khd;
 pub use ext::KhdExtended;
 pub use khd::{Khd, KhdReduced};
 
-use crate::dual::{Dual, Scalar, SENS};
+use crate::dual::{Dual, Scalar, SENS, SENS_WIDE};
 use crate::error::{Error, Result};
 use crate::ode::{self, OdeOptions, SimResult};
 
@@ -161,6 +161,16 @@ pub trait Model: Send + Sync {
         strain_out: &mut [Dual<SENS>],
         opts: &OdeOptions,
     ) -> SimResult<Dual<SENS>>;
+    /// [`Model::simulate_sens`] with the wide dual numbers, for more than [`SENS`] free
+    /// constants.
+    fn simulate_sens_wide(
+        &self,
+        params: &[Dual<SENS_WIDE>],
+        load: &Load,
+        times: &[f64],
+        strain_out: &mut [Dual<SENS_WIDE>],
+        opts: &OdeOptions,
+    ) -> SimResult<Dual<SENS_WIDE>>;
     /// Integrate and return the full state at each of `times` up to rupture (for reports).
     fn trajectory(
         &self,
@@ -225,6 +235,19 @@ impl<M: CreepModel<N>, const N: usize> Model for Integrated<M, N> {
             strain_out[k] = self.model.strain(&p, y)
         })
     }
+    fn simulate_sens_wide(
+        &self,
+        params: &[Dual<SENS_WIDE>],
+        load: &Load,
+        times: &[f64],
+        strain_out: &mut [Dual<SENS_WIDE>],
+        opts: &OdeOptions,
+    ) -> SimResult<Dual<SENS_WIDE>> {
+        let p = self.model.prepare(params, load);
+        ode::integrate(&self.model, &p, times, opts, |k, _t, y| {
+            strain_out[k] = self.model.strain(&p, y)
+        })
+    }
     fn trajectory(
         &self,
         params: &[f64],
@@ -279,6 +302,17 @@ impl Model for FastPath {
     ) -> SimResult<Dual<SENS>> {
         self.fast
             .simulate_sens(params, load, times, strain_out, opts)
+    }
+    fn simulate_sens_wide(
+        &self,
+        params: &[Dual<SENS_WIDE>],
+        load: &Load,
+        times: &[f64],
+        strain_out: &mut [Dual<SENS_WIDE>],
+        opts: &OdeOptions,
+    ) -> SimResult<Dual<SENS_WIDE>> {
+        self.fast
+            .simulate_sens_wide(params, load, times, strain_out, opts)
     }
     fn trajectory(
         &self,
