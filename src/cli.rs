@@ -748,9 +748,6 @@ fn simulate(
     let _lock = lock_folder(&out)?;
     let settings = FitSettings::from_config(&cfg);
     let ode = settings.ode;
-    let names = model.state_names();
-    let idx = |n: &str| names.iter().position(|s| *s == n);
-    let (ih, iphi, iom) = (idx("H"), idx("Phi"), idx("omega"));
     let mut trajectories = Vec::new();
     let mut rupture_rows = Vec::new();
     let specimens = tables::has_specimens(&data.curves);
@@ -803,28 +800,19 @@ fn simulate(
             100.0 * res.min_rate
         );
     }
-    let curve_header = [
-        "temperature_C",
-        "stress_MPa",
-        "time_h",
-        "strain_pct",
-        "H",
-        "Phi",
-        "omega",
-    ];
+    // The model's output columns (H, Phi, omega for KHD) after the strain.
+    let mut curve_header = vec!["temperature_C", "stress_MPa", "time_h", "strain_pct"];
+    curve_header.extend(model.output_names());
     // Rows formatted as they are written (a logged curve gives a million of them).
     let curve_rows = trajectories.iter().flat_map(|(c, traj)| {
         traj.iter().map(|(t, e, y)| {
-            let get = |i: Option<usize>| i.map(|i| num(y[i])).unwrap_or_default();
             let mut row = vec![
                 num(c.temperature_c),
                 num(c.stress_mpa),
                 num(*t),
                 num(100.0 * e),
-                get(ih),
-                get(iphi),
-                get(iom),
             ];
+            row.extend(y.iter().map(|v| num(*v)));
             row.extend(specimen(c));
             row
         })
