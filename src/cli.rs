@@ -135,6 +135,34 @@ pub enum Command {
         #[arg(long)]
         threads: Option<usize>,
     },
+    /// Predict at untested conditions: curves, rupture time, rupture strain and minimum
+    /// creep rate, beside the Larson–Miller baseline of the configuration's rupture times.
+    Predict {
+        /// Run configuration (TOML).
+        config: PathBuf,
+        /// constants.csv of a fit (name,value,…).
+        #[arg(long)]
+        constants: PathBuf,
+        /// Conditions T:stress in °C:MPa, comma-separated, e.g. 575:100,560:70 (default: the
+        /// configuration's [predict] at).
+        #[arg(long)]
+        at: Option<String>,
+        /// Output folder (default results/<name>/predict/).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// Leave one temperature out: fit on the others, predict the held-out tests' rupture
+    /// times and curves, and compare with the Larson–Miller baseline fitted to the same data.
+    Holdout {
+        /// Run configuration (TOML).
+        config: PathBuf,
+        /// The temperature to leave out, °C.
+        #[arg(long)]
+        temperature: f64,
+        /// Output folder (default results/<name>/holdout-<T>C/).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// Simulate the configured tests with given constants (dense curves, ruptures).
     Simulate {
         /// Run configuration (TOML).
@@ -206,6 +234,29 @@ pub fn run(cli: Cli) -> Result<()> {
             out,
             w,
         } => simulate(&config, constants, &out_only(out), w),
+        Command::Predict {
+            config,
+            constants,
+            at,
+            out,
+        } => {
+            let at = at
+                .map(|s| {
+                    crate::predict::Condition::parse_list(&s)
+                        .map_err(|m| Error::Invalid(format!("--at: {m}")))
+                })
+                .transpose()?;
+            let cli = Overrides {
+                predict_at: at,
+                ..out_only(out)
+            };
+            predict_cmd(&config, &constants, &cli)
+        }
+        Command::Holdout {
+            config,
+            temperature,
+            out,
+        } => crate::holdout::holdout_cmd(&config, temperature, &out_only(out)),
         Command::Sweep {
             config,
             starts,
@@ -307,6 +358,14 @@ pub fn run(cli: Cli) -> Result<()> {
     }
 }
 
+/// The distinct test temperatures of the data, °C, ascending.
+fn temperatures(data: &Dataset) -> Vec<f64> {
+    let mut t: Vec<f64> = data.curves.iter().map(|c| c.temperature_c).collect();
+    t.sort_by(f64::total_cmp);
+    t.dedup();
+    t
+}
+
 /// Run `f` on a pool of `threads` workers (rayon's default pool when `None`).
 fn with_threads<T: Send>(
     threads: Option<usize>,
@@ -324,6 +383,17 @@ fn with_threads<T: Send>(
 
 fn diagnose_cmd(config: &Path, cli: &Overrides) -> Result<()> {
     let (cfg, data) = load(config, cli)?;
+    let temps = temperatures(&data);
+    if temps.len() > 1 {
+        return Err(Error::config(
+            &cfg.path,
+            format!(
+                "temperature_C: diagnose works at one temperature; the data have {} ({} °C): set temperature_C",
+                temps.len(),
+                temps.iter().map(|t| t.to_string()).collect::<Vec<_>>().join(", ")
+            ),
+        ));
+    }
     let out = cfg.out_dir("diagnose");
     let _lock = lock_folder(&out)?;
     let d = with_threads(cfg.run.threads, || diagnose(&cfg, &data))?;
@@ -588,19 +658,6 @@ fn print_sweep(h: &sweep::Header, a: &sweep::Analysis) {
     }
 }
 
-/// Dense time grid from 0 to `t_end` (h), with extra resolution near the end of life.
-fn dense_grid(t_end: f64, n: usize) -> Vec<f64> {
-    let mut g: Vec<f64> = (0..=n)
-        .map(|i| {
-            let s = i as f64 / n as f64;
-            // uniform over most of life, refined near rupture
-            t_end * (1.0 - (1.0 - s).powi(2))
-        })
-        .collect();
-    g.dedup();
-    g
-}
-
 fn fit(config: &Path, cli: &Overrides) -> Result<()> {
     let (cfg, data) = load(config, cli)?;
     let out = cfg.out_dir("fit");
@@ -613,6 +670,7 @@ fn fit(config: &Path, cli: &Overrides) -> Result<()> {
         run.model.as_ref(),
         &run.space,
         &best.params,
+        cfg.has_laws().then_some(cfg.t_ref).flatten(),
     )?;
     let rows = tables::error_rows(best, curves);
     tables::write_errors(&out.join("errors.csv"), &rows)?;
@@ -642,11 +700,14 @@ fn fit(config: &Path, cli: &Overrides) -> Result<()> {
         best.lm.evaluations
     );
     for (j, c) in run.model.constants().iter().enumerate() {
-        let pin = run
-            .space
-            .at_bound(j, best.params[j], 1e-6)
-            .map(|s| format!("  (at {s} bound)"))
-            .unwrap_or_default();
+        let pin = if run.space.free[j] {
+            run.space
+                .at_bound(j, best.params[j], 1e-6)
+                .map(|s| format!("  (at {s} bound)"))
+                .unwrap_or_default()
+        } else {
+            "  (held)".to_string()
+        };
         println!(
             "  {:>6} = {:<12.6e} {}{}",
             c.name, best.params[j], c.unit, pin
@@ -679,7 +740,7 @@ fn fit(config: &Path, cli: &Overrides) -> Result<()> {
 const PLOT_POINTS: usize = 2000;
 
 /// Measured points and dense predicted curves for a plot.
-fn curve_plots(
+pub(crate) fn curve_plots(
     cfg: &RunConfig,
     data: &Dataset,
     params: &[f64],
@@ -699,7 +760,7 @@ fn curve_plots(
                 ..*ode
             };
             let res = model.simulate(params, &load, &[], &mut [], &o);
-            let grid = dense_grid(res.t_end, 400);
+            let grid = crate::predict::dense_grid(res.t_end, 400);
             let (_, traj) = model.trajectory(params, &load, &grid, &o);
             CurvePlot {
                 label: match &c.specimen {
@@ -720,6 +781,30 @@ fn curve_plots(
         .collect()
 }
 
+fn predict_cmd(config: &Path, constants: &Path, cli: &Overrides) -> Result<()> {
+    let (cfg, data) = load(config, cli)?;
+    if cfg.predict.at.is_empty() {
+        return Err(Error::config(
+            &cfg.path,
+            "predict.at: no conditions to predict: give --at T:stress[,T:stress…] or [predict] at",
+        ));
+    }
+    let model = cfg.build_model()?;
+    crate::predict::check_t_ref(constants, &cfg)?;
+    let params = tables::read_constants(constants, model.as_ref())?;
+    let out = cfg.out_dir("predict");
+    let _lock = lock_folder(&out)?;
+    let run = crate::predict::predict(&cfg, &data, model.as_ref(), &params, &cfg.predict.at);
+    for n in crate::predict::extrapolation_notes(&data, &cfg.predict.at) {
+        eprintln!("warning: {n}");
+    }
+    println!("{}: model {}", cfg.name, model.name());
+    print!("{}", crate::predict::table(&run));
+    let failures = crate::predict::write_outputs(&out, &cfg, &data, model.as_ref(), &params, &run)?;
+    println!("wrote {}", out.display());
+    plots_done(&out, failures)
+}
+
 fn simulate(
     config: &Path,
     constants: Option<PathBuf>,
@@ -734,9 +819,12 @@ fn simulate(
         }
     }
     let (cfg, data) = load(config, cli)?;
-    let model = build(&cfg.model, &cfg.extensions)?;
+    let model = cfg.build_model()?;
     let params = match constants {
-        Some(path) => tables::read_constants(&path, model.as_ref())?,
+        Some(path) => {
+            crate::predict::check_t_ref(&path, &cfg)?;
+            tables::read_constants(&path, model.as_ref())?
+        }
         None => cfg.starts_all_given().ok_or_else(|| {
             Error::config(
                 &cfg.path,
@@ -764,7 +852,7 @@ fn simulate(
             ..ode
         };
         let res = model.simulate(&params, &load, &[], &mut [], &o);
-        let mut grid = dense_grid(res.t_end, 200);
+        let mut grid = crate::predict::dense_grid(res.t_end, 200);
         grid.extend(c.times_h.iter().copied().filter(|t| *t <= res.t_end));
         grid.sort_by(|a, b| a.total_cmp(b));
         grid.dedup();

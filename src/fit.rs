@@ -17,12 +17,12 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 pub use crate::config::StartChoice;
-use crate::config::{LifetimeTerm, RunConfig};
+use crate::config::{LifetimeTerm, ObjectiveKind, RunConfig};
 use crate::data::{Curve, Dataset};
 use crate::error::{Error, Result};
 use crate::guess::{initial_guess, Guess};
 use crate::lsq::{minimize, LmOptions, LmReport, Termination};
-use crate::model::{build, Model};
+use crate::model::Model;
 use crate::objective::{
     mean_abs, CreepProblem, Evaluation, JacobianMethod, Objective, ObjectiveSettings, ParamSpace,
 };
@@ -42,6 +42,10 @@ pub struct FitSettings {
     pub lifetime: LifetimeTerm,
     /// How the local fits' Jacobian is computed.
     pub jacobian: JacobianMethod,
+    /// What the local fits minimise.
+    pub kind: ObjectiveKind,
+    /// Floor of the rupture-time scatter (ln scale) under [`ObjectiveKind::Likelihood`].
+    pub lifetime_sd_floor: f64,
 }
 
 impl FitSettings {
@@ -53,6 +57,8 @@ impl FitSettings {
             omega_f: cfg.objective.omega_f,
             lifetime: cfg.objective.lifetime_term,
             jacobian: cfg.solver.jacobian,
+            kind: cfg.objective.kind,
+            lifetime_sd_floor: cfg.objective.lifetime_sd_floor,
         }
     }
 
@@ -106,16 +112,28 @@ impl LocalFit {
     }
 }
 
-/// Bounds and scales of a configuration as a [`ParamSpace`].
+/// Bounds and scales of a configuration as a [`ParamSpace`]; held constants (law
+/// parameters given as a number, or of data at one temperature) are held at their start.
 pub fn param_space(cfg: &RunConfig) -> ParamSpace {
-    ParamSpace::new(
+    let mut space = ParamSpace::new(
         cfg.constants.iter().map(|c| c.lb).collect(),
         cfg.constants.iter().map(|c| c.ub).collect(),
         cfg.constants.iter().map(|c| c.scale).collect(),
-    )
+    );
+    for (j, c) in cfg.constants.iter().enumerate() {
+        if c.held {
+            space.hold(
+                j,
+                c.start.expect("a held constant has its value (validated)"),
+            );
+        }
+    }
+    space
 }
 
-/// Bounded LM from `start` (physical constants) at lifetime weights `w`.
+/// Bounded LM from `start` (physical constants) at lifetime weights `w` on the objective of
+/// `settings.kind`: eq. 8, or −2 ln L ([`crate::likelihood::ml_fit`]; `w` is then 1, and the
+/// fit's `eval.objective` is −2 ln L, its other fields eq. 8's at w = 1, both sides).
 pub fn local_fit(
     model: &dyn Model,
     curves: &[Curve],
@@ -126,6 +144,9 @@ pub fn local_fit(
     settings: &FitSettings,
 ) -> LocalFit {
     let t0 = Instant::now();
+    if settings.kind == ObjectiveKind::Likelihood {
+        return likelihood_fit(model, curves, space, start, start_label, settings, t0);
+    }
     let problem = CreepProblem {
         objective: Objective::new(model, curves, w.to_vec(), settings.objective()),
         space: space.clone(),
@@ -148,6 +169,45 @@ pub fn local_fit(
         min_rate_err_pct: eval.min_rate_errors_pct(curves),
         params,
         lm,
+        eval,
+        wall_s: t0.elapsed().as_secs_f64(),
+    }
+}
+
+/// [`local_fit`] under the likelihood objective.
+fn likelihood_fit(
+    model: &dyn Model,
+    curves: &[Curve],
+    space: &ParamSpace,
+    start: &[f64],
+    start_label: &str,
+    settings: &FitSettings,
+    t0: Instant,
+) -> LocalFit {
+    let opts = crate::likelihood::MlOptions {
+        lifetime_sd_floor: settings.lifetime_sd_floor,
+    };
+    let ml = crate::likelihood::ml_fit(model, curves, space, start, settings, &opts);
+    let mut eval = ml.eval.clone().unwrap_or_else(|| {
+        crate::likelihood::raw_objective(model, curves, settings).evaluate(&ml.params)
+    });
+    eval.objective = ml.neg2ll;
+    LocalFit {
+        start_label: start_label.to_string(),
+        start: start.to_vec(),
+        w: vec![1.0; curves.len()],
+        lifetime_err_pct: eval.lifetime_errors_pct(curves),
+        min_rate_err_pct: eval.min_rate_errors_pct(curves),
+        lm: LmReport {
+            x: space.to_unit(&ml.params),
+            objective: ml.neg2ll,
+            residuals: Vec::new(),
+            iterations: ml.iterations,
+            evaluations: ml.evaluations,
+            termination: ml.termination,
+            failure: ml.failure.clone(),
+        },
+        params: ml.params,
         eval,
         wall_s: t0.elapsed().as_secs_f64(),
     }
@@ -234,7 +294,7 @@ pub struct FitRun {
 /// `cfg.objective`'s.
 pub fn run_fit(cfg: &RunConfig, data: &Dataset) -> Result<FitRun> {
     let t0 = Instant::now();
-    let model = build(&cfg.model, &cfg.extensions)?;
+    let model = cfg.build_model()?;
     let space = param_space(cfg);
     let settings = FitSettings::from_config(cfg);
     let curves = &data.curves;
@@ -274,7 +334,14 @@ pub fn run_fit(cfg: &RunConfig, data: &Dataset) -> Result<FitRun> {
         })
         .collect();
     let used_min_rate = curves.iter().all(|c| c.min_rate_measured.is_some());
-    let best = choose_best(&fits, used_min_rate).ok_or_else(|| {
+    let best = match settings.kind {
+        ObjectiveKind::Eq8 => choose_best(&fits, used_min_rate),
+        // One weight: the highest likelihood among the starts.
+        ObjectiveKind::Likelihood => (0..fits.len())
+            .filter(|&i| fits[i].ok())
+            .min_by(|&a, &b| fits[a].eval.objective.total_cmp(&fits[b].eval.objective)),
+    };
+    let best = best.ok_or_else(|| {
         Error::Numerical(format!(
             "none of the {} local fits reached an evaluable point (first: {})",
             fits.len(),

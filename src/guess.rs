@@ -10,7 +10,8 @@
 use serde::Serialize;
 
 use crate::data::Curve;
-use crate::model::Model;
+use crate::model::law::Laws;
+use crate::model::{LawKind, Model, Scale, ZERO_CELSIUS_K};
 use crate::objective::ParamSpace;
 use crate::ode::OdeOptions;
 
@@ -29,8 +30,13 @@ pub enum GuessProcedure {
 
 /// A model's own initial-guess procedure: constants (model order) for `curves` of one
 /// temperature within `space`, with damage at rupture `omega_f` and integration options `ode`.
-pub type GuessFn =
-    fn(model: &dyn Model, curves: &[Curve], space: &ParamSpace, omega_f: f64, ode: &OdeOptions) -> Guess;
+pub type GuessFn = fn(
+    model: &dyn Model,
+    curves: &[Curve],
+    space: &ParamSpace,
+    omega_f: f64,
+    ode: &OdeOptions,
+) -> Guess;
 
 /// What the guess procedure found.
 #[derive(Debug, Clone, PartialEq)]
@@ -63,7 +69,8 @@ pub fn box_centre(space: &ParamSpace) -> Guess {
 }
 
 /// The initial guess of `model` on `curves` within `space`: the model's own procedure if its
-/// registry entry has one, else the centre of the box.
+/// registry entry has one, else the centre of the box; per temperature for a model with
+/// temperature laws ([`per_temperature`]).
 pub fn initial_guess(
     model: &dyn Model,
     curves: &[Curve],
@@ -71,8 +78,135 @@ pub fn initial_guess(
     omega_f: f64,
     ode: &OdeOptions,
 ) -> Guess {
-    match model.guess_procedure() {
-        Some(g) => g(model, curves, space, omega_f, ode),
-        None => box_centre(space),
+    model.initial_guess(curves, space, omega_f, ode)
+}
+
+/// The guess of a model with temperature laws: `inner`'s own guess at each temperature of
+/// `curves` (on that temperature's curves, in a box that holds every value the laws can reach
+/// there: the image of the constant's bounds and its law parameter's bounds), then each law
+/// fitted to its constant's per-temperature values ([`LawKind::fit`]: e.g. ln c against
+/// 1/T − 1/T_ref for an Arrhenius law); a held law parameter keeps its value and only c_ref
+/// is fitted. Values outside their bounds are put on them (listed in `clamped`).
+pub fn per_temperature(
+    inner: &dyn Model,
+    laws: &Laws,
+    curves: &[Curve],
+    space: &ParamSpace,
+    omega_f: f64,
+    ode: &OdeOptions,
+) -> Guess {
+    let n = laws.n_inner();
+    let specs = inner.constants();
+    // Temperatures in ascending order (the curves are sorted by temperature).
+    let mut temps: Vec<f64> = Vec::new();
+    for c in curves {
+        if !temps
+            .iter()
+            .any(|t| t.to_bits() == c.temperature_c.to_bits())
+        {
+            temps.push(c.temperature_c);
+        }
+    }
+    let bounds = |j: usize| (space.lb[j], space.ub[j]);
+    let param_bounds = |p: usize| {
+        if space.free[p] {
+            (space.lb[p], space.ub[p])
+        } else {
+            (space.fixed[p], space.fixed[p])
+        }
+    };
+    let mut per_t: Vec<(f64, Vec<f64>)> = Vec::with_capacity(temps.len());
+    let mut min_rates = Vec::new();
+    let mut clamped: Vec<String> = Vec::new();
+    for &t in &temps {
+        let t_k = t + ZERO_CELSIUS_K;
+        let group: Vec<Curve> = curves
+            .iter()
+            .filter(|c| c.temperature_c.to_bits() == t.to_bits())
+            .cloned()
+            .collect();
+        let (mut lb, mut ub) = (Vec::with_capacity(n), Vec::with_capacity(n));
+        for j in 0..n {
+            let (lo, hi) = match laws.param[j] {
+                Some(p) => laws.kinds[j].range_at(bounds(j), param_bounds(p), t_k, laws.t_ref_k),
+                None => bounds(j),
+            };
+            lb.push(lo);
+            ub.push(hi);
+        }
+        let t_space = ParamSpace::new(lb, ub, space.scale[..n].to_vec());
+        let g = inner.initial_guess(&group, &t_space, omega_f, ode);
+        min_rates.extend(g.min_rates.iter().copied());
+        for c in g.clamped {
+            if !clamped.contains(&c) {
+                clamped.push(c);
+            }
+        }
+        per_t.push((t, g.params));
+    }
+    let t_k: Vec<f64> = temps.iter().map(|t| t + ZERO_CELSIUS_K).collect();
+    let mut x: Vec<f64> = (0..space.len())
+        .map(|j| {
+            if space.free[j] {
+                space.from_unit_one(j, 0.5)
+            } else {
+                space.fixed[j]
+            }
+        })
+        .collect();
+    let put = |j: usize, v: f64, x: &mut Vec<f64>, clamped: &mut Vec<String>, name: &str| {
+        let (lo, hi) = (space.lb[j], space.ub[j]);
+        let c = if v.is_finite() {
+            v.clamp(lo, hi)
+        } else {
+            space.from_unit_one(j, 0.5)
+        };
+        if c != v && !clamped.iter().any(|s| s == name) {
+            clamped.push(name.to_string());
+        }
+        x[j] = c;
+    };
+    for j in 0..n {
+        let values: Vec<f64> = per_t.iter().map(|(_, p)| p[j]).collect();
+        let log = space.scale[j] == Scale::Log;
+        match laws.param[j] {
+            None => {
+                let (c, _) = LawKind::Constant
+                    .fit(&t_k, &values, laws.t_ref_k, Some(0.0), log)
+                    .unwrap_or((f64::NAN, 0.0));
+                put(j, c, &mut x, &mut clamped, specs[j].name);
+            }
+            Some(p) => {
+                let kind = laws.kinds[j];
+                let held = (!space.free[p]).then(|| space.fixed[p]);
+                // One temperature and a free parameter: the parameter from the centre of
+                // its box (it cannot be told from one temperature).
+                let fitted = kind
+                    .fit(&t_k, &values, laws.t_ref_k, held, log)
+                    .or_else(|| {
+                        kind.fit(
+                            &t_k[..1],
+                            &values[..1],
+                            laws.t_ref_k,
+                            Some(held.unwrap_or_else(|| space.from_unit_one(p, 0.5))),
+                            log,
+                        )
+                    });
+                let (c, q) = fitted.unwrap_or((f64::NAN, f64::NAN));
+                put(j, c, &mut x, &mut clamped, specs[j].name);
+                if space.free[p] {
+                    let name =
+                        crate::model::law::param_name(specs[j].name, kind).unwrap_or_default();
+                    put(p, q, &mut x, &mut clamped, &name);
+                }
+            }
+        }
+    }
+    Guess {
+        params: x,
+        min_rates,
+        clamped,
+        procedure: GuessProcedure::PerTemperature,
+        per_temperature: per_t,
     }
 }

@@ -177,12 +177,13 @@ fn every_setting_changed_alone_makes_resume_and_merge_refuse() {
         );
         tested.push(name.clone());
     }
-    // Only the constants' names cannot change alone: the model fixes them (changing one is
-    // an invalid configuration, caught by validation, not a different sweep).
+    // Only the constants' names and temperature laws cannot change alone: the model fixes
+    // the names, and a law brings its parameter as a constant of its own (changing either
+    // alone is an invalid configuration, caught by validation, not a different sweep).
     assert!(
         fixed_by_model
             .iter()
-            .all(|n| n.starts_with("constants.") && n.ends_with(".name")),
+            .all(|n| n.starts_with("constants.") && (n.ends_with(".name") || n.ends_with(".law"))),
         "fields no valid change was found for: {fixed_by_model:?}"
     );
     for must in [
@@ -195,6 +196,8 @@ fn every_setting_changed_alone_makes_resume_and_merge_refuse() {
         "sweep.starts",
         "sweep.seed",
         "constants.A.lb",
+        "constants.A.held",
+        "T_ref",
         "objective.w_grid",
         "objective.w_sets",
     ] {

@@ -1,7 +1,7 @@
 //! Recovery: curves simulated from known constants, fitted from a start elsewhere in the
 //! box, give the constants back (exactly without noise; stably with noise).
 
-use creepfit::config::LifetimeTerm;
+use creepfit::config::{LifetimeTerm, ObjectiveKind};
 use creepfit::data::{estimate_min_rate, Curve};
 use creepfit::fit::{local_fit, FitSettings};
 use creepfit::lsq::LmOptions;
@@ -107,6 +107,8 @@ fn settings() -> FitSettings {
         omega_f: 1.0 / 3.0,
         lifetime: LifetimeTerm::Both,
         jacobian: JacobianMethod::default(),
+        kind: ObjectiveKind::Eq8,
+        lifetime_sd_floor: 0.01,
     }
 }
 

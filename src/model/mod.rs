@@ -9,13 +9,17 @@
 pub mod ext;
 mod khd;
 pub mod khd_guess;
+pub mod law;
 
 pub use ext::KhdExtended;
 pub use khd::{Khd, KhdReduced};
+pub use law::{with_laws, LawKind, WithLaws};
 
+use crate::data::Curve;
 use crate::dual::{Dual, Scalar, SENS, SENS_WIDE};
 use crate::error::{Error, Result};
-use crate::guess::GuessFn;
+use crate::guess::{Guess, GuessFn};
+use crate::objective::ParamSpace;
 use crate::ode::{self, OdeOptions, SimResult};
 
 /// How a constant is mapped to the optimiser's unit box.
@@ -195,6 +199,31 @@ pub trait Model: Send + Sync {
     fn output_names(&self) -> Vec<&'static str>;
     /// The model's own initial-guess procedure (from its registry entry), if it has one.
     fn guess_procedure(&self) -> Option<GuessFn>;
+    /// Start constants for `curves` within `space`: the model's procedure, else the centre
+    /// of the box (a model with temperature laws makes the guess per temperature).
+    fn initial_guess(
+        &self,
+        curves: &[Curve],
+        space: &ParamSpace,
+        omega_f: f64,
+        ode: &OdeOptions,
+    ) -> Guess {
+        match self.guess_procedure() {
+            Some(g) => g(self.as_dyn(), curves, space, omega_f, ode),
+            None => crate::guess::box_centre(space),
+        }
+    }
+    /// The constants of the underlying model at `temperature_c` (°C) from a parameter
+    /// vector: the parameters themselves for a model without temperature laws.
+    fn constants_at(&self, params: &[f64], _temperature_c: f64) -> Vec<f64> {
+        params.to_vec()
+    }
+    /// The constants of the underlying model (without the laws' parameters).
+    fn inner_constants(&self) -> &[ConstantSpec] {
+        self.constants()
+    }
+    /// This model as a trait object.
+    fn as_dyn(&self) -> &dyn Model;
 }
 
 /// Adapts any [`CreepModel`] to the object-safe [`Model`]; the integration stays
@@ -300,6 +329,9 @@ impl<M: CreepModel<N>, const N: usize> Model for Integrated<M, N> {
     fn guess_procedure(&self) -> Option<GuessFn> {
         self.guess
     }
+    fn as_dyn(&self) -> &dyn Model {
+        self
+    }
 }
 
 /// A model simulated through a cheaper exact reduction (the fast path) and reported through
@@ -364,7 +396,13 @@ impl Model for FastPath {
     fn guess_procedure(&self) -> Option<GuessFn> {
         self.fast.guess_procedure()
     }
+    fn as_dyn(&self) -> &dyn Model {
+        self
+    }
 }
+
+/// How a registry entry builds its model with the given extensions.
+pub type BuildFn = fn(&ModelEntry, &[String]) -> Result<Box<dyn Model>>;
 
 /// One entry of the model registry: everything that is particular to a model — how it is
 /// built (with the catalogued extensions, where they apply) and its initial-guess procedure.
@@ -376,7 +414,7 @@ pub struct ModelEntry {
     /// One line on what it is.
     pub doc: &'static str,
     /// The model with the given extensions (an error if it takes none and some are given).
-    pub build: fn(&ModelEntry, &[String]) -> Result<Box<dyn Model>>,
+    pub build: BuildFn,
     /// Its initial-guess procedure, if it has one (else fits start from the configuration or
     /// the centre of the box).
     pub guess: Option<GuessFn>,
@@ -441,9 +479,7 @@ fn build_khd(e: &ModelEntry, extensions: &[String]) -> Result<Box<dyn Model>> {
             "khd" => Box::new(FastPath {
                 name: "khd",
                 fast: Box::new(khd1()),
-                full: Box::new(
-                    Integrated::new("khd4", Khd, khd::constants()).with_guess(e.guess),
-                ),
+                full: Box::new(Integrated::new("khd4", Khd, khd::constants()).with_guess(e.guess)),
             }),
             _ => Box::new(khd1()),
         });

@@ -72,14 +72,21 @@ pub fn jnum(v: f64) -> Value {
     }
 }
 
-/// `constants.csv`: name,value,unit,lb,ub
+/// Name of the row of `constants.csv` that holds the reference temperature of the
+/// temperature laws (°C): constants about one reference temperature mean other values about
+/// another, so `predict` and `simulate` check it against the configuration's.
+pub const T_REF_ROW: &str = "T_ref";
+
+/// `constants.csv`: name,value,unit,lb,ub; with temperature laws a last row `T_ref` (°C,
+/// lb = ub = value), the reference temperature the constants are about.
 pub fn write_constants(
     path: &Path,
     model: &dyn Model,
     space: &ParamSpace,
     params: &[f64],
+    t_ref_c: Option<f64>,
 ) -> Result<()> {
-    let rows: Vec<Vec<String>> = model
+    let mut rows: Vec<Vec<String>> = model
         .constants()
         .iter()
         .enumerate()
@@ -93,11 +100,21 @@ pub fn write_constants(
             ]
         })
         .collect();
+    if let Some(t) = t_ref_c {
+        rows.push(vec![
+            T_REF_ROW.to_string(),
+            num(t),
+            "°C".to_string(),
+            num(t),
+            num(t),
+        ]);
+    }
     write_csv(path, &["name", "value", "unit", "lb", "ub"], &rows)
 }
 
 /// Read a `constants.csv` (columns `name,value`, any order, extra columns ignored) into the
-/// model's order; every model constant must be present. Errors name the file's physical line.
+/// model's order; every model constant must be present. A `T_ref` row is skipped here
+/// ([`crate::predict::check_t_ref`] checks it). Errors name the file's physical line.
 pub fn read_constants(path: &Path, model: &dyn Model) -> Result<Vec<f64>> {
     let (bytes, progress) = crate::data::read_file(path)?;
     let mut table = crate::data::Table::open(path, &bytes, &["name", "value"], progress)?;
@@ -107,6 +124,9 @@ pub fn read_constants(path: &Path, model: &dyn Model) -> Result<Vec<f64>> {
     let mut rec = csv::StringRecord::new();
     while let Some(line) = table.next_row(&mut rec)? {
         let name = rec.get(ci).unwrap_or("").trim();
+        if name == T_REF_ROW && !model.constants().iter().any(|c| c.name == T_REF_ROW) {
+            continue;
+        }
         let text = rec.get(cv).unwrap_or("").trim();
         let v: f64 = text.parse().map_err(|_| {
             Error::data(
