@@ -145,7 +145,7 @@ pub enum Command {
         constants: PathBuf,
         /// Conditions T:stress in °C:MPa, comma-separated, e.g. 575:100,560:70 (default: the
         /// configuration's [predict] at).
-        #[arg(long)]
+        #[arg(long, allow_hyphen_values = true)]
         at: Option<String>,
         /// Output folder (default results/<name>/predict/).
         #[arg(long)]
@@ -159,6 +159,12 @@ pub enum Command {
         /// The temperature to leave out, °C.
         #[arg(long)]
         temperature: f64,
+        /// Latin-hypercube starts of the fit besides the guess (default: [sweep] starts).
+        #[arg(long)]
+        starts: Option<usize>,
+        /// Seed of the starts (default: [sweep] seed).
+        #[arg(long)]
+        seed: Option<u64>,
         /// Output folder (default results/<name>/holdout-<T>C/).
         #[arg(long)]
         out: Option<PathBuf>,
@@ -255,8 +261,17 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Holdout {
             config,
             temperature,
+            starts,
+            seed,
             out,
-        } => crate::holdout::holdout_cmd(&config, temperature, &out_only(out)),
+        } => {
+            let cli = Overrides {
+                starts,
+                seed,
+                ..out_only(out)
+            };
+            crate::holdout::holdout_cmd(&config, temperature, &cli)
+        }
         Command::Sweep {
             config,
             starts,
@@ -714,6 +729,26 @@ fn fit(config: &Path, cli: &Overrides) -> Result<()> {
         );
     }
     print!("{}", tables::error_table(&rows, run.used_min_rate));
+    let per_t = crate::fit::errors_per_temperature(best, curves);
+    if per_t.len() > 1 {
+        for e in &per_t {
+            let at = run.model.constants_at(&best.params, e.temperature_c);
+            println!(
+                "{:>6} °C: normalised residual {:.6}, mean |lifetime err| {:.2} %, mean |min-rate err| {:.2} %; constants there: {}",
+                e.temperature_c,
+                e.norm_residual,
+                e.mean_lifetime_err_pct,
+                e.mean_min_rate_err_pct,
+                run.model
+                    .inner_constants()
+                    .iter()
+                    .zip(&at)
+                    .map(|(c, v)| format!("{} = {v:.4e}", c.name))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+        }
+    }
 
     // Plot last: a plotting failure never loses the numeric outputs above.
     let plot_path = out.join("fit.png");

@@ -213,6 +213,54 @@ fn likelihood_fit(
     }
 }
 
+/// A fit's errors at one temperature of a joint calibration.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct TemperatureErrors {
+    /// Temperature, °C.
+    #[serde(rename = "temperature_C")]
+    pub temperature_c: f64,
+    /// Curves at it.
+    pub curves: usize,
+    /// Σ((ε_pred − ε)/ε_f)² over its curves: the strain term of eq. 8.
+    pub norm_residual: f64,
+    /// Mean |lifetime error| over its curves, %.
+    pub mean_lifetime_err_pct: f64,
+    /// Mean |minimum-rate error| over its curves, %.
+    pub mean_min_rate_err_pct: f64,
+}
+
+/// The errors of `fit` per temperature of `curves` (ascending temperature).
+pub fn errors_per_temperature(fit: &LocalFit, curves: &[Curve]) -> Vec<TemperatureErrors> {
+    let mut temps: Vec<f64> = curves.iter().map(|c| c.temperature_c).collect();
+    temps.sort_by(f64::total_cmp);
+    temps.dedup();
+    temps
+        .into_iter()
+        .map(|t| {
+            let idx: Vec<usize> = (0..curves.len())
+                .filter(|&i| curves[i].temperature_c == t)
+                .collect();
+            let norm_residual = idx
+                .iter()
+                .map(|&i| {
+                    let (c, p) = (&curves[i], &fit.eval.curves[i]);
+                    (0..c.times_h.len())
+                        .map(|k| ((p.strain[k] - c.strains[k]) / c.rupture_strain).powi(2))
+                        .sum::<f64>()
+                })
+                .sum();
+            let pick = |v: &[f64]| idx.iter().map(|&i| v[i]).collect::<Vec<f64>>();
+            TemperatureErrors {
+                temperature_c: t,
+                curves: idx.len(),
+                norm_residual,
+                mean_lifetime_err_pct: mean_abs(&pick(&fit.lifetime_err_pct)),
+                mean_min_rate_err_pct: mean_abs(&pick(&fit.min_rate_err_pct)),
+            }
+        })
+        .collect()
+}
+
 /// Resolution of the normalised residual in the best-w rule, relative.
 pub const RESOLUTION_REL: f64 = 1e-3;
 /// Resolution of the lifetime and min-rate errors in the best-w rule, percentage points.
@@ -293,6 +341,13 @@ pub struct FitRun {
 /// weight vector; the best by [`choose_best`]. The starts are `cfg.fit.starts`, the weights
 /// `cfg.objective`'s.
 pub fn run_fit(cfg: &RunConfig, data: &Dataset) -> Result<FitRun> {
+    run_fit_multistart(cfg, data, 0)
+}
+
+/// [`run_fit`] with `lhs` Latin-hypercube starts in the box besides the configured start and
+/// the guess (drawn from `cfg.sweep.seed`, as a sweep's): a global search in one command, for
+/// joint calibrations whose guess can lie in a poor basin (`holdout`).
+pub fn run_fit_multistart(cfg: &RunConfig, data: &Dataset, lhs: usize) -> Result<FitRun> {
     let t0 = Instant::now();
     let model = cfg.build_model()?;
     let space = param_space(cfg);
@@ -321,6 +376,17 @@ pub fn run_fit(cfg: &RunConfig, data: &Dataset) -> Result<FitRun> {
     }
     if choice != StartChoice::Config {
         starts.push(("guess".to_string(), guess.params.clone()));
+    }
+    if lhs > 0 {
+        let mut rng = <rand_chacha::ChaCha8Rng as rand::SeedableRng>::seed_from_u64(cfg.sweep.seed);
+        for (k, u) in crate::sweep::latin_hypercube(lhs, space.n_free(), &mut rng)
+            .into_iter()
+            .enumerate()
+        {
+            let mut x = vec![0.0; space.len()];
+            space.from_unit(&u, &mut x);
+            starts.push((format!("lhs:{k}"), x));
+        }
     }
     let ws = cfg.objective.weight_vectors(curves.len(), &cfg.path)?;
     let jobs: Vec<_> = starts

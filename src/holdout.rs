@@ -1,6 +1,7 @@
 //! Leave one temperature out: how well does a calibration predict a temperature it has not
-//! seen? `creepfit holdout CONFIG --temperature T` fits the configuration (the paper's
-//! procedure, `fit`) on every curve not at T, predicts the rupture time and the curve of
+//! seen? `creepfit holdout CONFIG --temperature T` fits the configuration on every curve not
+//! at T (`fit`'s procedure from the configured start, the guess and `[sweep] starts`
+//! Latin-hypercube starts: the held-out data choose nothing, not even the basin), predicts the rupture time and the curve of
 //! every test at T, and fits the Larson–Miller baseline to the same training rupture times.
 //! Both are scored by the mean |log10(t_predicted / t_measured)| over the held-out tests.
 
@@ -11,7 +12,7 @@ use serde_json::json;
 use crate::config::{Overrides, RunConfig};
 use crate::data::{Curve, Dataset};
 use crate::error::{Error, Result};
-use crate::fit::{run_fit, FitRun};
+use crate::fit::{run_fit_multistart, FitRun};
 use crate::lmp::LarsonMiller;
 use crate::objective::{mean_abs, Objective};
 use crate::output::lock_folder;
@@ -114,7 +115,7 @@ pub fn holdout(cfg: &RunConfig, data: &Dataset, temperature_c: f64) -> Result<Ho
         curves: train,
         warnings: Vec::new(),
     };
-    let fit = run_fit(cfg, &train_data)?;
+    let fit = run_fit_multistart(cfg, &train_data, cfg.sweep.starts)?;
     let best = &fit.fits[fit.best];
     let lmp = LarsonMiller::fit_curves(&train_data.curves, cfg.predict.lmp_degree)
         .map_err(|e| e.to_string());

@@ -58,6 +58,8 @@ fn candidates(v: &Value) -> Vec<Value> {
                 "sensitivity",
                 "config",
                 "guess",
+                "likelihood",
+                "eq8",
             ]
             .iter()
             .filter(|x| **x != s)
@@ -198,6 +200,8 @@ fn every_setting_changed_alone_makes_resume_and_merge_refuse() {
         "constants.A.lb",
         "constants.A.held",
         "T_ref",
+        "objective.kind",
+        "objective.lifetime_sd_floor",
         "objective.w_grid",
         "objective.w_sets",
     ] {

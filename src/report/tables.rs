@@ -408,7 +408,7 @@ pub fn fit_summary(cfg: &RunConfig, run: &FitRun, curves: &[Curve]) -> Value {
             })
         })
         .collect();
-    json!({
+    let mut summary = json!({
         "model": run.model.name(),
         "extensions": cfg.extensions,
         "run_id": crate::identity::hash_value(&crate::identity::identity(cfg)),
@@ -438,5 +438,39 @@ pub fn fit_summary(cfg: &RunConfig, run: &FitRun, curves: &[Curve]) -> Value {
         },
         "ode": {"rtol": run.settings.ode.rtol, "atol": run.settings.ode.atol},
         "candidates": candidates,
-    })
+    });
+    // A joint calibration across temperatures (or the likelihood objective) says so, with
+    // the errors and the model's constants at each temperature.
+    if cfg.has_laws() || cfg.objective.kind != crate::config::ObjectiveKind::Eq8 {
+        let inner: Vec<&str> = run.model.inner_constants().iter().map(|c| c.name).collect();
+        let at = |t: f64| -> Value {
+            let v = run.model.constants_at(&best.params, t);
+            Value::Object(
+                inner
+                    .iter()
+                    .zip(v)
+                    .map(|(n, x)| (n.to_string(), jnum(x)))
+                    .collect(),
+            )
+        };
+        let per_t: Vec<Value> = crate::fit::errors_per_temperature(best, curves)
+            .into_iter()
+            .map(|e| {
+                let mut v = json!(e);
+                v["constants"] = at(e.temperature_c);
+                v
+            })
+            .collect();
+        summary["objective_kind"] = json!(cfg.objective.kind);
+        summary["T_ref_C"] = json!(cfg.t_ref);
+        summary["per_temperature"] = json!(per_t);
+        summary["initial_guess"]["procedure"] = json!(run.guess.procedure);
+        summary["initial_guess"]["per_temperature"] = json!(run
+            .guess
+            .per_temperature
+            .iter()
+            .map(|(t, p)| json!({"temperature_C": t, "constants": inner.iter().zip(p).map(|(n, x)| (n.to_string(), jnum(*x))).collect::<serde_json::Map<_, _>>()}))
+            .collect::<Vec<_>>());
+    }
+    summary
 }
