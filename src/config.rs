@@ -113,6 +113,11 @@ pub struct ObjectiveConfig {
     /// Floor of the rupture-time scatter (ln scale) of the `likelihood` objective. Default
     /// 0.01 (1 %, the best reproducibility of a rupture time).
     pub lifetime_sd_floor: f64,
+    /// Most points per curve the run works on (0, the default: all): a longer curve is
+    /// averaged in groups of consecutive points (time and strain; the first point kept), as
+    /// `diagnose` does. A densely logged curve then weighs in the objective about as much as
+    /// a digitised one, not by its point count (README, "Alloy 617").
+    pub max_points: usize,
     /// Weights in [0, 1] applied to every curve alike; each gives one fit. Default 0.1, …, 1.0.
     pub w_grid: Vec<f64>,
     /// Explicit per-curve weight vectors (ascending-stress order), each weight in [0, 1];
@@ -129,6 +134,7 @@ impl Default for ObjectiveConfig {
         ObjectiveConfig {
             kind: ObjectiveKind::Eq8,
             lifetime_sd_floor: crate::errmodel::DEFAULT_LIFETIME_SD_FLOOR,
+            max_points: 0,
             w_grid: (1..=10).map(|k| k as f64 / 10.0).collect(),
             w_sets: Vec::new(),
             lifetime_term: LifetimeTerm::Late,
@@ -1105,9 +1111,16 @@ impl RunConfig {
         Ok(laws::with_laws(m, &kinds, t_ref))
     }
 
-    /// Load the run's data ([`data::load`] with [`RunConfig::load_options`]).
+    /// Load the run's data ([`data::load`] with [`RunConfig::load_options`]), each curve
+    /// averaged down to `objective.max_points` points when that is set.
     pub fn load_data(&self) -> Result<Dataset> {
-        data::load(&self.curves, &self.ruptures, &self.load_options())
+        let mut data = data::load(&self.curves, &self.ruptures, &self.load_options())?;
+        if self.objective.max_points > 0 {
+            for c in &mut data.curves {
+                *c = crate::diagnose::binned(c, self.objective.max_points);
+            }
+        }
+        Ok(data)
     }
 
     /// The start vector (model order) if every constant has a start, else `None`.
@@ -1242,6 +1255,15 @@ fn validate_objective(o: &ObjectiveConfig) -> std::result::Result<(), Invalid> {
                 ));
             }
         }
+    }
+    if (1..10).contains(&o.max_points) {
+        return Err(invalid(
+            "objective.max_points",
+            format!(
+                "must be 0 (all points) or at least 10 (got {})",
+                o.max_points
+            ),
+        ));
     }
     if !(o.lifetime_sd_floor > 0.0 && o.lifetime_sd_floor.is_finite()) {
         return Err(invalid(

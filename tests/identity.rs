@@ -36,6 +36,7 @@ fn candidates(v: &Value) -> Vec<Value> {
             let mut c = Vec::new();
             if n.is_u64() {
                 c.push(json!(n.as_u64().unwrap() + 1));
+                c.push(json!(n.as_u64().unwrap() + 60));
                 if n.as_u64().unwrap() > 1 {
                     c.push(json!(n.as_u64().unwrap() - 1));
                 }
@@ -202,6 +203,7 @@ fn every_setting_changed_alone_makes_resume_and_merge_refuse() {
         "T_ref",
         "objective.kind",
         "objective.lifetime_sd_floor",
+        "objective.max_points",
         "objective.w_grid",
         "objective.w_sets",
     ] {
