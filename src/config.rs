@@ -256,8 +256,9 @@ pub struct DiagnoseConfig {
     /// model's goodness of fit, Holm). Default 0.05.
     pub alpha: f64,
     /// Most parametric-bootstrap replicates per test family (fewer when every test is
-    /// clearly not significant; Besag–Clifford stopping). Default 99: the smallest p-value is
-    /// then 1/100, enough for Holm's first threshold α/5 at α = 0.05.
+    /// clearly not significant; Besag–Clifford stopping). Default 119: the smallest p-value is
+    /// then 1/120, enough for Holm's first threshold α/6 at α = 0.05 (four extensions and two
+    /// goodness-of-fit tests).
     pub bootstrap: usize,
     /// Latin-hypercube starts per model on the data (plus the initial guess). Default 16.
     pub starts: usize,
@@ -286,7 +287,7 @@ impl Default for DiagnoseConfig {
     fn default() -> Self {
         DiagnoseConfig {
             alpha: 0.05,
-            bootstrap: 99,
+            bootstrap: 119,
             starts: 16,
             replicate_basins: 3,
             replicate_starts: 0,
@@ -337,14 +338,14 @@ impl DiagnoseConfig {
                 return bad("extensions", format!("'{e}' is listed twice"));
             }
         }
-        // Holm's first threshold is α/m over m = extensions + 1 tests; the smallest bootstrap
-        // p-value is 1/(B + 1).
+        // Holm's first threshold is α/m over m = extensions + 2 goodness-of-fit tests; the
+        // smallest bootstrap p-value is 1/(B + 1).
         let m = if self.extensions.is_empty() {
-            EXTENSION_NAMES.len() + 1
+            EXTENSION_NAMES.len() + 2
         } else {
-            self.extensions.len() + 1
+            self.extensions.len() + 2
         };
-        let need = (m as f64 / self.alpha).ceil() as usize - 1;
+        let need = (m as f64 / self.alpha - 1e-9).ceil() as usize - 1;
         if self.bootstrap < need {
             return bad(
                 "bootstrap",

@@ -8,8 +8,8 @@
 //!    an extension the base optimum with the extension switched off, so that a nested
 //!    extension can never fit worse than the base).
 //! 2. **Statistics**: per extension the likelihood ratio T = −2 ln L_base − (−2 ln L_ext); for
-//!    the base model the goodness-of-fit statistic G of [`gof`] (a misfit shape common to the
-//!    curves).
+//!    the base model the goodness-of-fit statistics G of [`gof`] (a misfit shape common to the
+//!    curves, and one per curve).
 //! 3. **Null distributions** by a parametric bootstrap under the fitted base model and its
 //!    error model ([`bootstrap`]); every replicate is refitted by every model from warm starts
 //!    plus random starts.
@@ -408,7 +408,8 @@ pub struct Candidate {
 pub struct GofTest {
     /// The model tested (`base` or an extension name).
     pub model: String,
-    /// The statistic G and the common misfit shape behind it.
+    /// The statistic G, the alternative's shape (`common` or `per_curve`) and the misfit
+    /// shape behind it.
     pub gof: gof::Gof,
     /// Bootstrap p-value.
     pub p_value: f64,
@@ -463,10 +464,10 @@ pub struct Diagnosis {
     pub candidates: Vec<Candidate>,
     /// Significant extensions the data cannot tell apart from the cause.
     pub indistinguishable: Vec<Indistinguishable>,
-    /// Goodness of fit of the base model.
-    pub gof: GofTest,
-    /// Goodness of fit of the chosen extension, when one was significant.
-    pub cause_gof: Option<GofTest>,
+    /// Goodness of fit of the base model (one test per misfit shape).
+    pub gof: Vec<GofTest>,
+    /// Goodness of fit of the significant extension with the lowest AIC (empty without one).
+    pub cause_gof: Vec<GofTest>,
     /// The null bootstrap.
     pub bootstrap: BootstrapInfo,
     /// The decision, step by step, in words.
@@ -612,9 +613,10 @@ fn null_replicate(
         })
         .collect();
     let (b0, _) = fit_best(&specs[0], &data, &starts, settings, ml);
-    let mut out = vec![f64::NAN; n_ext + 2];
+    let ng = gof::SHAPES.len();
+    let mut out = vec![f64::NAN; n_ext + ng + 1];
     let Some(b0) = b0 else {
-        out[n_ext + 1] = 1.0; // base refit failed
+        out[n_ext + ng] = 1.0; // base refit failed
         return out;
     };
     let base_names = specs[0].names();
@@ -627,14 +629,17 @@ fn null_replicate(
         let (fk, _) = fit_best(spec, &data, &st, settings, ml);
         out[k] = fk.map_or(f64::NAN, |f| b0.neg2ll - f.neg2ll);
     }
-    out[n_ext] = gof::statistic(
-        &data,
-        b0.residuals.as_ref().expect("fitted"),
-        &b0.noise,
-        ml.lifetime_sd_floor,
-    )
-    .statistic;
-    out[n_ext + 1] = 0.0;
+    for (g, shape) in gof::SHAPES.iter().enumerate() {
+        out[n_ext + g] = gof::statistic(
+            &data,
+            b0.residuals.as_ref().expect("fitted"),
+            &b0.noise,
+            ml.lifetime_sd_floor,
+            *shape,
+        )
+        .statistic;
+    }
+    out[n_ext + ng] = 0.0;
     out
 }
 
@@ -647,14 +652,21 @@ fn gof_bootstrap(
     settings: &FitSettings,
     ml: &MlOptions,
     dc: &DiagnoseConfig,
-) -> GofTest {
-    let g = gof::statistic(
-        curves,
-        fit.residuals.as_ref().expect("fitted"),
-        &fit.noise,
-        ml.lifetime_sd_floor,
-    );
-    let (reps, _) = bootstrap::sequential(&[g.statistic], dc.bootstrap, |b| {
+) -> Vec<GofTest> {
+    let gs: Vec<gof::Gof> = gof::SHAPES
+        .iter()
+        .map(|sh| {
+            gof::statistic(
+                curves,
+                fit.residuals.as_ref().expect("fitted"),
+                &fit.noise,
+                ml.lifetime_sd_floor,
+                *sh,
+            )
+        })
+        .collect();
+    let observed: Vec<f64> = gs.iter().map(|g| g.statistic).collect();
+    let (reps, _) = bootstrap::sequential(&observed, dc.bootstrap, |b| {
         let mut rng = bootstrap::replicate_rng(dc.seed, GOF_STREAM, b);
         let data = bootstrap::replicate_data(
             curves,
@@ -667,24 +679,41 @@ fn gof_bootstrap(
             st.push(spec.random_start(&mut rng));
         }
         let (f, _) = fit_best(spec, &data, &st, settings, ml);
-        vec![f.map_or(f64::NAN, |f| {
-            gof::statistic(
-                &data,
-                f.residuals.as_ref().expect("fitted"),
-                &f.noise,
-                ml.lifetime_sd_floor,
-            )
-            .statistic
-        })]
+        gof::SHAPES
+            .iter()
+            .map(|sh| {
+                f.as_ref().map_or(f64::NAN, |f| {
+                    gof::statistic(
+                        &data,
+                        f.residuals.as_ref().expect("fitted"),
+                        &f.noise,
+                        ml.lifetime_sd_floor,
+                        *sh,
+                    )
+                    .statistic
+                })
+            })
+            .collect()
     });
-    let sample: Vec<f64> = reps.iter().map(|r| r[0]).collect();
-    GofTest {
-        model: spec.name.clone(),
-        p_value: bootstrap::p_value(g.statistic, &sample),
-        gof: g,
-        p_holm: None,
-        replicates: sample.len(),
-    }
+    let p: Vec<f64> = gs
+        .iter()
+        .enumerate()
+        .map(|(k, g)| {
+            let sample: Vec<f64> = reps.iter().map(|r| r[k]).collect();
+            bootstrap::p_value(g.statistic, &sample)
+        })
+        .collect();
+    let (_, adj) = decide::holm(&p, dc.alpha);
+    gs.into_iter()
+        .enumerate()
+        .map(|(k, g)| GofTest {
+            model: spec.name.clone(),
+            gof: g,
+            p_value: p[k],
+            p_holm: Some(adj[k]),
+            replicates: reps.len(),
+        })
+        .collect()
 }
 
 /// `c` with at most `max_points` points: the first point as it is, the others averaged (time
@@ -812,12 +841,19 @@ pub fn diagnose_with(cfg: &RunConfig, data: &Dataset, dc: &DiagnoseConfig) -> Re
                 .map_or(f64::NAN, |f| base_fit.neg2ll - f.neg2ll)
         })
         .collect();
-    let gof_obs = gof::statistic(
-        curves,
-        base_fit.residuals.as_ref().expect("fitted"),
-        &base_fit.noise,
-        ml.lifetime_sd_floor,
-    );
+    let gof_obs: Vec<gof::Gof> = gof::SHAPES
+        .iter()
+        .map(|sh| {
+            gof::statistic(
+                curves,
+                base_fit.residuals.as_ref().expect("fitted"),
+                &base_fit.noise,
+                ml.lifetime_sd_floor,
+                *sh,
+            )
+        })
+        .collect();
+    let ng = gof_obs.len();
 
     // 3. Null bootstrap under the base model. Refits start next to their optimum, where
     //    geodesic acceleration costs twice per iteration and saves no iterations (measured on
@@ -830,17 +866,21 @@ pub fn diagnose_with(cfg: &RunConfig, data: &Dataset, dc: &DiagnoseConfig) -> Re
         ..settings
     };
     let mut observed = lr_obs.clone();
-    observed.push(gof_obs.statistic);
+    observed.extend(gof_obs.iter().map(|g| g.statistic));
     let (reps, stopped_early) = bootstrap::sequential(&observed, dc.bootstrap, |b| {
         null_replicate(&specs, &fits, &basins, curves, &warm, &ml, dc, b)
     });
     phase.null_bootstrap = t0.elapsed().as_secs_f64() - phase.fits;
-    let failed_base_refits = reps.iter().filter(|r| r[n_ext + 1] > 0.0).count();
+    let failed_base_refits = reps.iter().filter(|r| r[n_ext + ng] > 0.0).count();
     let col = |k: usize| -> Vec<f64> { reps.iter().map(|r| r[k]).collect() };
     let p_ext: Vec<f64> = (0..n_ext)
         .map(|k| bootstrap::p_value(lr_obs[k], &col(k)))
         .collect();
-    let p_gof = bootstrap::p_value(gof_obs.statistic, &col(n_ext));
+    let p_gof: Vec<f64> = gof_obs
+        .iter()
+        .enumerate()
+        .map(|(g, o)| bootstrap::p_value(o.statistic, &col(n_ext + g)))
+        .collect();
     let spread: Vec<Vec<f64>> = (0..n_ext)
         .map(|j| {
             (0..n_ext)
@@ -865,11 +905,11 @@ pub fn diagnose_with(cfg: &RunConfig, data: &Dataset, dc: &DiagnoseConfig) -> Re
                 aic: cands[k + 1].aic,
             })
             .collect(),
-        base_gof_p: p_gof,
+        base_gof_p: p_gof.clone(),
         spread,
     });
     // Stage 2: the best extension's own goodness of fit.
-    let cause_gof = sel.best.map(|b| {
+    let cause_gof: Vec<GofTest> = sel.best.map_or(vec![], |b| {
         gof_bootstrap(
             &specs[b + 1],
             fits[b + 1]
@@ -882,8 +922,8 @@ pub fn diagnose_with(cfg: &RunConfig, data: &Dataset, dc: &DiagnoseConfig) -> Re
             dc,
         )
     });
-    let (verdict, cause_idx) =
-        decide::verdict(&sel, cause_gof.as_ref().map(|g| g.p_value), dc.alpha);
+    let cause_p: Vec<f64> = cause_gof.iter().map(|g| g.p_value).collect();
+    let (verdict, cause_idx) = decide::verdict(&sel, &cause_p, dc.alpha);
     let t_loo = Instant::now();
     phase.cause_bootstrap = t0.elapsed().as_secs_f64() - phase.fits - phase.null_bootstrap;
 
@@ -941,13 +981,24 @@ pub fn diagnose_with(cfg: &RunConfig, data: &Dataset, dc: &DiagnoseConfig) -> Re
     } else {
         vec![]
     };
-    let decision = decision_words(&cands, &sel, p_gof, cause_gof.as_ref(), verdict, dc);
+    let base_gof: Vec<GofTest> = gof_obs
+        .into_iter()
+        .enumerate()
+        .map(|(g, o)| GofTest {
+            model: "base".into(),
+            gof: o,
+            p_value: p_gof[g],
+            p_holm: Some(sel.base_gof_adjusted[g]),
+            replicates: reps.len(),
+        })
+        .collect();
+    let decision = decision_words(&cands, &sel, &base_gof, &cause_gof, verdict, dc);
     let failed_extension_refits = (0..n_ext)
         .map(|k| {
             (
                 specs[k + 1].name.clone(),
                 reps.iter()
-                    .filter(|r| r[k].is_nan() && r[n_ext + 1] == 0.0)
+                    .filter(|r| r[k].is_nan() && r[n_ext + ng] == 0.0)
                     .count(),
             )
         })
@@ -961,13 +1012,7 @@ pub fn diagnose_with(cfg: &RunConfig, data: &Dataset, dc: &DiagnoseConfig) -> Re
         base,
         candidates: cands,
         indistinguishable,
-        gof: GofTest {
-            model: "base".into(),
-            gof: gof_obs,
-            p_value: p_gof,
-            p_holm: Some(sel.base_gof_adjusted),
-            replicates: reps.len(),
-        },
+        gof: base_gof,
         cause_gof,
         bootstrap: BootstrapInfo {
             replicates: reps.len(),
@@ -983,6 +1028,14 @@ pub fn diagnose_with(cfg: &RunConfig, data: &Dataset, dc: &DiagnoseConfig) -> Re
     })
 }
 
+/// The shape's name in reports.
+pub fn shape_name(s: gof::Shape) -> &'static str {
+    match s {
+        gof::Shape::Common => "common",
+        gof::Shape::PerCurve => "per-curve",
+    }
+}
+
 /// Number of fitted constants of the base model.
 fn cands_k0(specs: &[Spec]) -> f64 {
     specs[0].space.n_free() as f64
@@ -991,16 +1044,17 @@ fn cands_k0(specs: &[Spec]) -> f64 {
 fn decision_words(
     cands: &[Candidate],
     sel: &decide::Selection,
-    p_gof: f64,
-    cause_gof: Option<&GofTest>,
+    base_gof: &[GofTest],
+    cause_gof: &[GofTest],
     verdict: Verdict,
     dc: &DiagnoseConfig,
 ) -> Vec<String> {
-    let m = cands.len() + 1; // extensions + base goodness of fit
+    let m = cands.len() + base_gof.len();
     let mut out = vec![format!(
-        "Family of {m} tests at α = {} (Holm): {} likelihood-ratio test(s) of an extension against the base model, and the base model's goodness of fit.",
+        "Family of {m} tests at α = {} (Holm): {} likelihood-ratio test(s) of an extension against the base model, and {} goodness-of-fit test(s) of the base model.",
         dc.alpha,
-        m - 1
+        cands.len(),
+        base_gof.len()
     )];
     for c in cands {
         out.push(format!(
@@ -1016,27 +1070,49 @@ fn decision_words(
             }
         ));
     }
-    out.push(format!(
-        "base goodness of fit: bootstrap p = {p_gof:.3}, Holm-adjusted {:.3} → {}",
-        sel.base_gof_adjusted,
-        if sel.base_gof_rejected {
-            "a misfit common to the curves remains"
-        } else {
-            "no common misfit beyond the error model"
-        }
-    ));
+    for g in base_gof {
+        let rejected = g.p_holm.unwrap_or(1.0) <= dc.alpha && sel.base_gof_rejected;
+        out.push(format!(
+            "base goodness of fit, {} shape: G {:.1}, bootstrap p = {:.3}, Holm-adjusted {:.3} → {}",
+            shape_name(g.gof.shape),
+            g.gof.statistic,
+            g.p_value,
+            g.p_holm.unwrap_or(f64::NAN),
+            if rejected {
+                "a misfit beyond the error model remains"
+            } else {
+                "no misfit of this shape beyond the error model"
+            }
+        ));
+    }
     if let Some(b) = sel.best {
         out.push(format!(
             "lowest AIC among the significant extensions: {}",
             cands[b].name
         ));
     }
-    if let Some(g) = cause_gof {
+    if !cause_gof.is_empty() {
+        let fails = decide::holm(
+            &cause_gof.iter().map(|g| g.p_value).collect::<Vec<_>>(),
+            dc.alpha,
+        )
+        .0
+        .iter()
+        .any(|r| *r);
         out.push(format!(
-            "{}'s own goodness of fit: bootstrap p = {:.3} → {}",
-            g.model,
-            g.p_value,
-            if g.p_value <= dc.alpha {
+            "{}'s own goodness of fit: {} → {}",
+            cause_gof[0].model,
+            cause_gof
+                .iter()
+                .map(|g| format!(
+                    "{} shape G {:.1}, p = {:.3}",
+                    shape_name(g.gof.shape),
+                    g.gof.statistic,
+                    g.p_value
+                ))
+                .collect::<Vec<_>>()
+                .join("; "),
+            if fails {
                 "still misfits: not an explanation"
             } else {
                 "fits within its error model"
