@@ -716,8 +716,14 @@ fn gof_bootstrap(
         .collect()
 }
 
-/// `c` with at most `max_points` points: the first point as it is, the others averaged (time
-/// and strain) in groups of ⌈(n − 1)/(max_points − 1)⌉ consecutive points.
+/// `c` with at most `max_points` points: the first point as it is, the others in groups of
+/// ⌈(n − 1)/(max_points − 1)⌉ consecutive points, each group replaced by one point at its mean
+/// time t̄ whose strain is the value at t̄ of a least-squares quadratic through the group's
+/// points (the group's mean for fewer than 4 points or no time spread). The quadratic matters
+/// where the curve bends: the plain mean of a group's strains exceeds the curve at t̄ by
+/// ε''·var(t)/2, which near rupture is larger than the reading error of a logged curve and
+/// would read as misfit; the local quadratic's value at t̄ is unbiased for a quadratic (and,
+/// for a symmetric group, a cubic) curve and still averages the reading error over the group.
 pub fn binned(c: &Curve, max_points: usize) -> Curve {
     let n = c.times_h.len();
     if n <= max_points || max_points < 2 {
@@ -729,15 +735,50 @@ pub fn binned(c: &Curve, max_points: usize) -> Curve {
     let mut j = 1;
     while j < n {
         let hi = (j + k).min(n);
-        let m = (hi - j) as f64;
-        times.push(c.times_h[j..hi].iter().sum::<f64>() / m);
-        strains.push(c.strains[j..hi].iter().sum::<f64>() / m);
+        let (t, e) = (&c.times_h[j..hi], &c.strains[j..hi]);
+        let tm = t.iter().sum::<f64>() / t.len() as f64;
+        times.push(tm);
+        strains.push(local_quadratic_at_mean(t, e, tm));
         j = hi;
     }
     Curve {
         times_h: times,
         strains,
         ..c.clone()
+    }
+}
+
+/// Value at `tm` (the mean of `t`) of the least-squares quadratic through (t, e); the mean of
+/// `e` when there are fewer than 4 points or the quadratic is degenerate.
+fn local_quadratic_at_mean(t: &[f64], e: &[f64], tm: f64) -> f64 {
+    let m = t.len();
+    let mean = e.iter().sum::<f64>() / m as f64;
+    if m < 4 {
+        return mean;
+    }
+    // Centred, scaled abscissa x = (t − t̄)/s; fit e = a + b x + c x².
+    let s = t.iter().map(|v| (v - tm).abs()).fold(0.0, f64::max);
+    if !(s > 0.0) {
+        return mean;
+    }
+    let (mut s0, mut s1, mut s2, mut s3, mut s4) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    let (mut r0, mut r1, mut r2) = (0.0, 0.0, 0.0);
+    for (ti, ei) in t.iter().zip(e) {
+        let x = (ti - tm) / s;
+        let x2 = x * x;
+        s0 += 1.0;
+        s1 += x;
+        s2 += x2;
+        s3 += x2 * x;
+        s4 += x2 * x2;
+        r0 += ei;
+        r1 += x * ei;
+        r2 += x2 * ei;
+    }
+    let a = nalgebra::Matrix3::new(s0, s1, s2, s1, s2, s3, s2, s3, s4);
+    match a.lu().solve(&nalgebra::Vector3::new(r0, r1, r2)) {
+        Some(c) if c[0].is_finite() => c[0],
+        _ => mean,
     }
 }
 
@@ -1135,7 +1176,7 @@ mod tests {
     }
 
     #[test]
-    fn binning_keeps_short_curves_and_averages_long_ones() {
+    fn binning_keeps_short_curves_and_follows_the_curve_where_it_bends() {
         let cfg = seed_config("");
         let data = cfg.load_data().unwrap();
         let c = &data.curves[0];
@@ -1143,10 +1184,38 @@ mod tests {
         let b = binned(c, 10);
         assert!(b.times_h.len() <= 10);
         assert_eq!(b.times_h[0], c.times_h[0]);
-        let k = (c.times_h.len() - 1).div_ceil(9);
-        let want: f64 = c.strains[1..1 + k].iter().sum::<f64>() / k as f64;
-        assert!((b.strains[1] - want).abs() < 1e-15);
         assert!(b.times_h.windows(2).all(|w| w[0] <= w[1]));
+        // A steeply bending logged curve (strain ∝ 1/(1 − t) up to 97 % of life), 2,000
+        // points: the binned value at each group's mean time is the curve's there to 1e-4 of
+        // the strain, and at least 10 times closer than the plain mean of the group, which is
+        // off by about ε''·var(t)/2.
+        let times: Vec<f64> = (0..2000).map(|k| 0.97 * k as f64 / 1999.0).collect();
+        let f = |t: f64| 0.01 / (1.0 - t);
+        let long = Curve {
+            times_h: times.clone(),
+            strains: times.iter().map(|&t| f(t)).collect(),
+            ..c.clone()
+        };
+        let b = binned(&long, 60);
+        assert_eq!(b.times_h.len(), 60);
+        let mut worst_mean = 0.0f64;
+        let k = (2000 - 1usize).div_ceil(59);
+        for (j, (&t, &e)) in b.times_h.iter().zip(&b.strains).enumerate().skip(1) {
+            let lo = 1 + (j - 1) * k;
+            let g: Vec<f64> = (lo..(lo + k).min(2000)).map(|i| f(times[i])).collect();
+            let mean = g.iter().sum::<f64>() / g.len() as f64;
+            let (err, err_mean) = ((e - f(t)).abs(), (mean - f(t)).abs());
+            assert!(err < 1e-4 * f(t), "group {j}: {e} vs {}", f(t));
+            assert!(
+                err <= err_mean / 10.0 + 1e-15,
+                "group {j}: {err} vs mean's {err_mean}"
+            );
+            worst_mean = worst_mean.max(err_mean / f(t));
+        }
+        assert!(
+            worst_mean > 1e-4,
+            "the plain mean would be biased: {worst_mean}"
+        );
     }
 
     #[test]
