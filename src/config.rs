@@ -279,7 +279,8 @@ pub struct DiagnoseConfig {
     /// Most points per curve `diagnose` works on: a longer curve is averaged in groups of
     /// consecutive points (time and strain; the first point is kept as it is). Averaging keeps
     /// what a curve says about a smooth model, and makes the verdict independent of how
-    /// densely a curve was logged. Default 60 (the seed's digitised curves have 36–70).
+    /// densely a curve was logged. Default 100: digitised curves (the seed's have 36–70
+    /// points) are used as they are, logged ones (hundreds to thousands) are reduced.
     pub max_points: usize,
 }
 
@@ -294,7 +295,7 @@ impl Default for DiagnoseConfig {
             seed: 1,
             lifetime_sd_floor: crate::errmodel::DEFAULT_LIFETIME_SD_FLOOR,
             extensions: Vec::new(),
-            max_points: 60,
+            max_points: 100,
         }
     }
 }

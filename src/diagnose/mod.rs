@@ -716,30 +716,30 @@ fn gof_bootstrap(
         .collect()
 }
 
-/// `c` with at most `max_points` points: the first point as it is, the others in groups of
-/// ⌈(n − 1)/(max_points − 1)⌉ consecutive points, each group replaced by one point at its mean
-/// time t̄ whose strain is the value at t̄ of a least-squares quadratic through the group's
-/// points (the group's mean for fewer than 4 points or no time spread). The quadratic matters
-/// where the curve bends: the plain mean of a group's strains exceeds the curve at t̄ by
-/// ε''·var(t)/2, which near rupture is larger than the reading error of a logged curve and
-/// would read as misfit; the local quadratic's value at t̄ is unbiased for a quadratic (and,
-/// for a symmetric group, a cubic) curve and still averages the reading error over the group.
+/// `c` with at most `max_points` points: the first point as it is, the others in
+/// `max_points − 1` groups of consecutive points whose sizes differ by at most one, each group
+/// replaced by one point at its mean time t̄ whose strain is the value at t̄ of a
+/// least-squares quadratic through the group's points (the group's mean for fewer than 4
+/// points or no time spread). The quadratic matters where the curve bends: the plain mean of a
+/// group's strains exceeds the curve at t̄ by ε''·var(t)/2, which near rupture is larger than
+/// the reading error of a logged curve and would read as misfit; the local quadratic's value
+/// at t̄ is unbiased for a quadratic (and, for a symmetric group, a cubic) curve and still
+/// averages the reading error over the group.
 pub fn binned(c: &Curve, max_points: usize) -> Curve {
     let n = c.times_h.len();
     if n <= max_points || max_points < 2 {
         return c.clone();
     }
-    let k = (n - 1).div_ceil(max_points - 1);
+    let groups = max_points - 1;
     let mut times = vec![c.times_h[0]];
     let mut strains = vec![c.strains[0]];
-    let mut j = 1;
-    while j < n {
-        let hi = (j + k).min(n);
-        let (t, e) = (&c.times_h[j..hi], &c.strains[j..hi]);
+    for g in 0..groups {
+        let lo = 1 + g * (n - 1) / groups;
+        let hi = 1 + (g + 1) * (n - 1) / groups;
+        let (t, e) = (&c.times_h[lo..hi], &c.strains[lo..hi]);
         let tm = t.iter().sum::<f64>() / t.len() as f64;
         times.push(tm);
         strains.push(local_quadratic_at_mean(t, e, tm));
-        j = hi;
     }
     Curve {
         times_h: times,
@@ -1186,7 +1186,7 @@ mod tests {
         assert_eq!(b.times_h[0], c.times_h[0]);
         assert!(b.times_h.windows(2).all(|w| w[0] <= w[1]));
         // A steeply bending logged curve (strain ∝ 1/(1 − t) up to 97 % of life), 2,000
-        // points: the binned value at each group's mean time is the curve's there to 1e-4 of
+        // points: the binned value at each group's mean time is the curve's there to 5e-4 of
         // the strain, and at least 10 times closer than the plain mean of the group, which is
         // off by about ε''·var(t)/2.
         let times: Vec<f64> = (0..2000).map(|k| 0.97 * k as f64 / 1999.0).collect();
@@ -1199,13 +1199,13 @@ mod tests {
         let b = binned(&long, 60);
         assert_eq!(b.times_h.len(), 60);
         let mut worst_mean = 0.0f64;
-        let k = (2000 - 1usize).div_ceil(59);
         for (j, (&t, &e)) in b.times_h.iter().zip(&b.strains).enumerate().skip(1) {
-            let lo = 1 + (j - 1) * k;
-            let g: Vec<f64> = (lo..(lo + k).min(2000)).map(|i| f(times[i])).collect();
+            let (lo, hi) = (1 + (j - 1) * 1999 / 59, 1 + j * 1999 / 59);
+            assert!((33..=34).contains(&(hi - lo)), "balanced groups");
+            let g: Vec<f64> = (lo..hi).map(|i| f(times[i])).collect();
             let mean = g.iter().sum::<f64>() / g.len() as f64;
             let (err, err_mean) = ((e - f(t)).abs(), (mean - f(t)).abs());
-            assert!(err < 1e-4 * f(t), "group {j}: {e} vs {}", f(t));
+            assert!(err < 5e-4 * f(t), "group {j}: {e} vs {}", f(t));
             assert!(
                 err <= err_mean / 10.0 + 1e-15,
                 "group {j}: {err} vs mean's {err_mean}"
