@@ -77,6 +77,27 @@ impl Spec {
             })
             .collect()
     }
+    /// Starts at the base optimum `from_base` (this model's constants, the added ones
+    /// switched off) with each added constant in turn at a quarter, half and three quarters
+    /// of its range: the base constants are already right where the extension is small, and
+    /// a random start of all constants rarely finds an added constant's basin when its effect
+    /// is large (a loading strain of 1 % at the base optimum with E_L off is far downhill of
+    /// nothing the LM can see).
+    fn grid_from(&self, from_base: &[f64]) -> Vec<Vec<f64>> {
+        let names = self.names();
+        let mut out = Vec::new();
+        for e in &self.extra {
+            let Some(j) = names.iter().position(|n| n == e) else {
+                continue;
+            };
+            for u in [0.25, 0.5, 0.75] {
+                let mut x = from_base.to_vec();
+                x[j] = self.space.from_unit_one(j, u);
+                out.push(x);
+            }
+        }
+        out
+    }
     /// A random start, uniform in the unit box.
     fn random_start(&self, rng: &mut ChaCha8Rng) -> Vec<f64> {
         let u: Vec<f64> = (0..self.space.len()).map(|_| rng.gen()).collect();
@@ -717,7 +738,8 @@ fn gof_bootstrap(
 }
 
 /// `c` with at most `max_points` points: the first point as it is, the others in
-/// `max_points − 1` groups of consecutive points whose sizes differ by at most one, each group
+/// `max_points − 1` groups (fewer where that would leave a group under 4 points) of consecutive
+/// points whose sizes differ by at most one, each group
 /// replaced by one point at its mean time t̄ whose strain is the value at t̄ of a
 /// least-squares quadratic through the group's points (the group's mean for fewer than 4
 /// points or no time spread). The quadratic matters where the curve bends: the plain mean of a
@@ -730,7 +752,10 @@ pub fn binned(c: &Curve, max_points: usize) -> Curve {
     if n <= max_points || max_points < 2 {
         return c.clone();
     }
-    let groups = max_points - 1;
+    // At least 4 points a group: the local quadratic needs them, and the plain mean a
+    // smaller group falls back to is biased where the curve bends (a 3-point mean in the
+    // first hours of a logged primary stage is off by more than its reading error).
+    let groups = (max_points - 1).min((n - 1) / 4).max(1);
     let mut times = vec![c.times_h[0]];
     let mut strains = vec![c.strains[0]];
     for g in 0..groups {
@@ -841,7 +866,9 @@ pub fn diagnose_with(cfg: &RunConfig, data: &Dataset, dc: &DiagnoseConfig) -> Re
         let mut starts = vec![spec.start_from_base(&khd_names, &guess.params)];
         if i > 0 {
             if let Some(b) = &fits[0] {
-                starts.insert(0, spec.start_from_base(&specs[0].names(), &b.params));
+                let from_base = spec.start_from_base(&specs[0].names(), &b.params);
+                starts.extend(spec.grid_from(&from_base));
+                starts.insert(0, from_base);
             }
         }
         let mut rng = ChaCha8Rng::seed_from_u64(dc.seed);
@@ -1196,6 +1223,14 @@ mod tests {
             strains: times.iter().map(|&t| f(t)).collect(),
             ..c.clone()
         };
+        // A curve too short for max_points groups of 4: fewer, larger groups, none under 4
+        // points (a 3-point group would fall back to its biased mean).
+        let short = Curve {
+            times_h: times[..300].to_vec(),
+            strains: times[..300].iter().map(|&t| f(t)).collect(),
+            ..c.clone()
+        };
+        assert_eq!(binned(&short, 100).times_h.len(), 1 + 299 / 4);
         let b = binned(&long, 60);
         assert_eq!(b.times_h.len(), 60);
         let mut worst_mean = 0.0f64;
