@@ -31,12 +31,17 @@ use crate::objective::{CreepProblem, Evaluation, Objective, ObjectiveSettings, P
 pub struct MlOptions {
     /// Floor of the rupture-time scatter (ln scale).
     pub lifetime_sd_floor: f64,
+    /// Fit with white reading errors first, then with the AR(1) model from there (a fresh
+    /// start); `false` polishes with the AR(1) model directly (a start at an optimum already
+    /// found, which the white stage could only lead away from).
+    pub white_first: bool,
 }
 
 impl Default for MlOptions {
     fn default() -> Self {
         MlOptions {
             lifetime_sd_floor: crate::errmodel::DEFAULT_LIFETIME_SD_FLOOR,
+            white_first: true,
         }
     }
 }
@@ -354,35 +359,44 @@ pub fn ml_fit(
     // stage missed) is what an AR(1) model with φ near 1 explains as noise; from such a start
     // the profiled likelihood cannot see it, and the LM stops where it began. With white
     // errors it is misfit and the constants move to remove it.
-    let white = LikelihoodProblem::white(
-        inner(),
-        ErrorModel::estimate_white(&res, opts.lifetime_sd_floor),
-        opts.lifetime_sd_floor,
-    );
-    let lm1 = minimize(&white, &u0, &lo, &hi, &settings.lm);
-    if lm1.termination == Termination::SimulationFailure {
-        return MlFit::failed(
-            start,
-            lm1.failure.unwrap_or_default(),
-            lm1.iterations,
-            lm1.evaluations,
+    let (u1, it1, ev1) = if opts.white_first {
+        let white = LikelihoodProblem::white(
+            inner(),
+            ErrorModel::estimate_white(&res, opts.lifetime_sd_floor),
+            opts.lifetime_sd_floor,
         );
-    }
+        let lm1 = minimize(&white, &u0, &lo, &hi, &settings.lm);
+        if lm1.termination == Termination::SimulationFailure {
+            return MlFit::failed(
+                start,
+                lm1.failure.unwrap_or_default(),
+                lm1.iterations,
+                lm1.evaluations,
+            );
+        }
+        (lm1.x, lm1.iterations, lm1.evaluations)
+    } else {
+        (u0, 0, 0)
+    };
     // Stage 2: the full error model, from stage 1's point.
-    let mut x1 = start.to_vec();
-    space.from_unit(&lm1.x, &mut x1);
-    let res1 = match residuals_at(model, curves, &x1, settings) {
-        Ok(r) => r,
-        Err(e) => return MlFit::failed(start, e.0, lm1.iterations, lm1.evaluations),
+    let res1 = if opts.white_first {
+        let mut x1 = start.to_vec();
+        space.from_unit(&u1, &mut x1);
+        match residuals_at(model, curves, &x1, settings) {
+            Ok(r) => r,
+            Err(e) => return MlFit::failed(start, e.0, it1, ev1),
+        }
+    } else {
+        res
     };
     let problem = LikelihoodProblem::new(
         inner(),
         ErrorModel::estimate(&res1, opts.lifetime_sd_floor),
         opts.lifetime_sd_floor,
     );
-    let mut lm = minimize(&problem, &lm1.x, &lo, &hi, &settings.lm);
-    lm.iterations += lm1.iterations;
-    lm.evaluations += lm1.evaluations;
+    let mut lm = minimize(&problem, &u1, &lo, &hi, &settings.lm);
+    lm.iterations += it1;
+    lm.evaluations += ev1;
     if lm.termination == Termination::SimulationFailure {
         return MlFit::failed(
             start,
