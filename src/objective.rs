@@ -18,7 +18,7 @@ use nalgebra::DMatrix;
 use crate::config::LifetimeTerm;
 use crate::data::Curve;
 use crate::dual::{Dual, Scalar, SENS};
-use crate::lsq::{EvalFailure, LeastSquaresProblem};
+use crate::lsq::{EvalFailure, LeastSquaresProblem, NormalEquations};
 use crate::model::{Load, Model, Scale};
 use crate::ode::{OdeOptions, Outcome, SimResult};
 
@@ -28,6 +28,12 @@ pub const HORIZON_FACTOR: f64 = 1000.0;
 
 /// Largest number of constants a model may have (fixed-size parameter buffers).
 pub const MAX_PARAMS: usize = 16;
+
+/// From this many residuals on, a [`CreepProblem`] with sensitivities hands the optimiser
+/// its normal equations, accumulated curve by curve as the integrator produces the
+/// predictions, instead of an m × k Jacobian (`lsq`'s large-problem mode). Below it the
+/// stored Jacobian's arithmetic is kept, so results on ordinary data stay bit for bit.
+pub const NORMAL_EQUATIONS_MIN_RESIDUALS: usize = 20_000;
 
 /// Bounds, scale and free/fixed status of every constant; maps to the unit box [0, 1]^k of
 /// the free constants, in which the optimiser works.
@@ -200,6 +206,9 @@ pub struct ObjectiveSettings {
 pub struct Objective<'a> {
     model: &'a dyn Model,
     curves: &'a [Curve],
+    /// A weight per measured point and curve (a bin-averaged point stands for √count of
+    /// them); `None`: every point weighs 1.
+    point_weights: Option<&'a [Vec<f64>]>,
     w: Vec<f64>,
     lifetime: LifetimeTerm,
     omega_f: f64,
@@ -289,10 +298,29 @@ impl<'a> Objective<'a> {
         Objective {
             model,
             curves,
+            point_weights: None,
             w,
             lifetime: settings.lifetime,
             omega_f: settings.omega_f,
             ode: settings.ode,
+        }
+    }
+
+    /// The same objective with every strain residual of curve `i`, point `k` multiplied by
+    /// `weights[i][k]` (one vector per curve, one weight per measured point): the objective
+    /// of bin-averaged curves ([`bin_curves`]).
+    pub fn with_point_weights(self, weights: &'a [Vec<f64>]) -> Self {
+        assert_eq!(
+            weights.len(),
+            self.curves.len(),
+            "one weight vector per curve"
+        );
+        for (wv, c) in weights.iter().zip(self.curves) {
+            assert_eq!(wv.len(), c.times_h.len(), "one weight per measured point");
+        }
+        Objective {
+            point_weights: Some(weights),
+            ..self
         }
     }
 
@@ -339,11 +367,27 @@ impl<'a> Objective<'a> {
             strain,
             &self.ode_for(c),
         );
+        self.conclude(i, &res, |k, s| strain[k] = s)
+    }
+
+    /// How simulation `res` of curve `i` ends for eq. 8: the post-rupture continuation
+    /// handed to `cont(k, strain)` for every measured time after the rupture, and (outcome,
+    /// rupture time, rupture strain, min rate), or the failure.
+    fn conclude<S: Scalar>(
+        &self,
+        i: usize,
+        res: &SimResult<S>,
+        mut cont: impl FnMut(usize, S),
+    ) -> Result<(Outcome, S, S, f64), EvalFailure> {
+        let c = &self.curves[i];
         let n = c.times_h.len();
         match res.outcome {
             Outcome::Ruptured => {
                 for k in res.n_out..n {
-                    strain[k] = res.strain_end + res.rate_end * (-res.t_end + c.times_h[k]);
+                    cont(
+                        k,
+                        res.strain_end + res.rate_end * (-res.t_end + c.times_h[k]),
+                    );
                 }
                 Ok((res.outcome, res.t_end, res.strain_end, res.min_rate))
             }
@@ -388,10 +432,61 @@ impl<'a> Objective<'a> {
             for k in 0..n {
                 r[off + k] = (r[off + k] - c.strains[k]) * inv;
             }
+            if let Some(pw) = self.point_weights {
+                for (rk, wk) in r[off..off + n].iter_mut().zip(&pw[i]) {
+                    *rk = *rk * *wk;
+                }
+            }
             r[off + n] = match c.rupture_time_h {
                 Some(t_exp) => self.lifetime_error(t_r, t_exp) * self.w[i].sqrt(),
                 None => S::cst(0.0),
             };
+            off += n + 1;
+        }
+        Ok(())
+    }
+
+    /// The residuals of [`Objective::residuals_in`] in dual numbers, handed to `sink(i0,
+    /// residuals)` in order and in chunks (residuals i0, i0 + 1, …) as the integrator
+    /// produces them: nothing as long as the data is stored. Same arithmetic as
+    /// `residuals_in`.
+    pub fn stream_residuals(
+        &self,
+        params: &[Dual<SENS>],
+        mut sink: impl FnMut(usize, &[Dual<SENS>]),
+    ) -> Result<(), EvalFailure> {
+        const CHUNK: usize = 256;
+        let mut buf = [Dual::<SENS>::cst(0.0); CHUNK];
+        let mut off = 0;
+        for (i, c) in self.curves.iter().enumerate() {
+            let n = c.times_h.len();
+            let inv = 1.0 / c.rupture_strain;
+            let pw = self.point_weights.map(|pw| &pw[i][..]);
+            let mut points = |k0: usize, strains: &[Dual<SENS>]| {
+                for (j0, part) in (k0..).step_by(CHUNK).zip(strains.chunks(CHUNK)) {
+                    for (j, (s, rk)) in part.iter().zip(buf.iter_mut()).enumerate() {
+                        let k = j0 + j;
+                        *rk = (*s - c.strains[k]) * inv;
+                        if let Some(pw) = pw {
+                            *rk = *rk * pw[k];
+                        }
+                    }
+                    sink(off + j0, &buf[..part.len()]);
+                }
+            };
+            let res = self.model.simulate_sens_each(
+                params,
+                &self.load(c),
+                &c.times_h,
+                &mut points,
+                &self.ode_for(c),
+            );
+            let (_, t_r, _, _) = self.conclude(i, &res, |k, s| points(k, &[s]))?;
+            let life = match c.rupture_time_h {
+                Some(t_exp) => self.lifetime_error(t_r, t_exp) * self.w[i].sqrt(),
+                None => Dual::cst(0.0),
+            };
+            sink(off + n, &[life]);
             off += n + 1;
         }
         Ok(())
@@ -407,9 +502,16 @@ impl<'a> Objective<'a> {
             let mut strain = vec![f64::NAN; n];
             match self.predict(i, params, &mut strain) {
                 Ok((outcome, t_r, e_r, min_rate)) => {
-                    let s: f64 = (0..n)
-                        .map(|k| ((strain[k] - c.strains[k]) / c.rupture_strain).powi(2))
-                        .sum();
+                    let s: f64 = match self.point_weights {
+                        None => (0..n)
+                            .map(|k| ((strain[k] - c.strains[k]) / c.rupture_strain).powi(2))
+                            .sum(),
+                        Some(pw) => (0..n)
+                            .map(|k| {
+                                ((strain[k] - c.strains[k]) / c.rupture_strain * pw[i][k]).powi(2)
+                            })
+                            .sum(),
+                    };
                     norm += s;
                     objective += s;
                     if let Some(t_exp) = c.rupture_time_h {
@@ -491,26 +593,119 @@ impl LeastSquaresProblem for CreepProblem<'_> {
     ) -> Option<Result<(), EvalFailure>> {
         self.sensitivities(u, Some(r), jac)
     }
+    fn prefers_normal_equations(&self) -> bool {
+        self.has_sensitivities() && self.objective.n_residuals() >= NORMAL_EQUATIONS_MIN_RESIDUALS
+    }
+    fn residuals_and_normal_equations(
+        &self,
+        u: &[f64],
+        r: &mut [f64],
+        ne: &mut NormalEquations,
+    ) -> Option<Result<(), EvalFailure>> {
+        let (xd, n_free) = self.dual_params(u)?;
+        let mut acc = NormalAccumulator::default();
+        let res = self
+            .objective
+            .stream_residuals(&xd[..self.space.len()], |i0, rs| {
+                for (ri, di) in r[i0..i0 + rs.len()].iter_mut().zip(rs) {
+                    *ri = di.v;
+                }
+                acc.add(rs);
+            });
+        Some(res.map(|()| acc.write(ne, n_free)))
+    }
+    fn geodesic_normal(
+        &self,
+        u: &[f64],
+        v: &[f64],
+        h: f64,
+        r: &[f64],
+        r_probe: &[f64],
+        jt_rvv: &mut [f64],
+    ) -> Option<Result<(), EvalFailure>> {
+        let (xd, n_free) = self.dual_params(u)?;
+        let mut vv = [0.0; SENS];
+        vv[..n_free].copy_from_slice(&v[..n_free]);
+        let mut sum = [0.0; SENS];
+        let res = self
+            .objective
+            .stream_residuals(&xd[..self.space.len()], |i0, rs| {
+                let mut part = [0.0; SENS];
+                for (i, ri) in (i0..).zip(rs) {
+                    let mut jv = 0.0;
+                    for k in 0..SENS {
+                        jv += ri.d[k] * vv[k];
+                    }
+                    let rvv = 2.0 / h * ((r_probe[i] - r[i]) / h - jv);
+                    for k in 0..SENS {
+                        part[k] += ri.d[k] * rvv;
+                    }
+                }
+                for k in 0..SENS {
+                    sum[k] += part[k];
+                }
+            });
+        jt_rvv[..n_free].copy_from_slice(&sum[..n_free]);
+        Some(res)
+    }
+}
+
+/// JᵀJ and Jᵀr of dual-number residuals, accumulated chunk by chunk: fixed 8 × 8 (the
+/// unused rows are zero) in local sums over a chunk (kept in registers) that are then added
+/// to the total, which also keeps the rounding of a million-term sum at that of a few
+/// hundred terms.
+#[derive(Default)]
+struct NormalAccumulator {
+    jtj: [[f64; SENS]; SENS],
+    jtr: [f64; SENS],
+}
+
+impl NormalAccumulator {
+    /// Add the residuals `rs` (values and gradients).
+    fn add(&mut self, rs: &[Dual<SENS>]) {
+        let mut jtj = [[0.0; SENS]; SENS];
+        let mut jtr = [0.0; SENS];
+        for ri in rs {
+            for a in 0..SENS {
+                jtr[a] += ri.d[a] * ri.v;
+                for b in 0..SENS {
+                    jtj[a][b] += ri.d[a] * ri.d[b];
+                }
+            }
+        }
+        for a in 0..SENS {
+            self.jtr[a] += jtr[a];
+            for b in 0..SENS {
+                self.jtj[a][b] += jtj[a][b];
+            }
+        }
+    }
+
+    /// The sums for the first `n` gradient components into `ne`.
+    fn write(self, ne: &mut NormalEquations, n: usize) {
+        ne.jtj = nalgebra::DMatrix::from_fn(n, n, |a, b| self.jtj[a][b]);
+        ne.jtr = nalgebra::DVector::from_fn(n, |a, _| self.jtr[a]);
+    }
 }
 
 impl CreepProblem<'_> {
-    /// The sensitivity Jacobian (dual numbers), and the residuals with it if `r` is given;
-    /// `None` when finite differences are asked for or there are more than [`SENS`] free
-    /// constants.
-    fn sensitivities(
-        &self,
-        u: &[f64],
-        r: Option<&mut [f64]>,
-        jac: &mut DMatrix<f64>,
-    ) -> Option<Result<(), EvalFailure>> {
-        let n_free = self.space.n_free();
-        if self.jacobian != JacobianMethod::Sensitivity || n_free > SENS {
+    /// Whether the Jacobian comes from sensitivities: asked for, and at most [`SENS`] free
+    /// constants (finite differences otherwise).
+    fn has_sensitivities(&self) -> bool {
+        self.jacobian == JacobianMethod::Sensitivity && self.space.n_free() <= SENS
+    }
+
+    /// The physical constants at unit-box point `u` as dual numbers seeded with dx/du of the
+    /// free ones, and the number of free ones; `None` without sensitivities.
+    fn dual_params(&self, u: &[f64]) -> Option<([Dual<SENS>; MAX_PARAMS], usize)> {
+        if !self.has_sensitivities() {
             return None;
         }
+        let n_free = self.space.n_free();
+        let mut xd = [Dual::<SENS>::cst(0.0); MAX_PARAMS];
         let n = self.space.len();
         let mut x = [0.0; MAX_PARAMS];
         self.space.from_unit(u, &mut x[..n]);
-        let mut xd = [Dual::<SENS>::cst(0.0); MAX_PARAMS];
         let mut k = 0;
         for j in 0..n {
             xd[j] = if self.space.free[j] {
@@ -521,6 +716,20 @@ impl CreepProblem<'_> {
                 Dual::cst(x[j])
             };
         }
+        Some((xd, n_free))
+    }
+
+    /// The sensitivity Jacobian (dual numbers), and the residuals with it if `r` is given;
+    /// `None` when finite differences are asked for or there are more than [`SENS`] free
+    /// constants.
+    fn sensitivities(
+        &self,
+        u: &[f64],
+        r: Option<&mut [f64]>,
+        jac: &mut DMatrix<f64>,
+    ) -> Option<Result<(), EvalFailure>> {
+        let (xd, n_free) = self.dual_params(u)?;
+        let n = self.space.len();
         // The dual residuals go to a buffer kept per thread: for a logged curve of a million
         // points it is 72 MB, which a fresh allocation per Jacobian would page-fault in anew.
         DUAL_RESIDUALS.with(|buf| {
