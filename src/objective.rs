@@ -206,9 +206,8 @@ pub struct ObjectiveSettings {
 pub struct Objective<'a> {
     model: &'a dyn Model,
     curves: &'a [Curve],
-    /// A weight per measured point and curve (a bin-averaged point stands for √count of
-    /// them); `None`: every point weighs 1.
-    point_weights: Option<&'a [Vec<f64>]>,
+    /// Bin-averaged data ([`Objective::binned`]): a weight per point and the scatter term.
+    bins: Option<&'a Binned>,
     w: Vec<f64>,
     lifetime: LifetimeTerm,
     omega_f: f64,
@@ -266,6 +265,77 @@ impl Evaluation {
     }
 }
 
+/// Bin-averaged curves for the first stage of a multi-resolution fit ([`bin_curves`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Binned {
+    /// The curves, each point at the mean time and mean strain of its bin.
+    pub curves: Vec<Curve>,
+    /// Weight of each point: √(points in its bin).
+    pub weights: Vec<Vec<f64>>,
+    /// The full data's strain residual that no prediction can change: Σ over bins and their
+    /// points of ((δε − s·δt)/ε_f)², δ the deviation from the bin's mean, s the bin's
+    /// least-squares slope (measurement scatter about a straight line within each bin).
+    pub scatter: f64,
+}
+
+/// Bin-averaged curves: a curve of more than `max_points` points becomes bins of ⌈n /
+/// max_points⌉ consecutive points (the last one may hold fewer), each a point at the mean
+/// time and mean strain of its bin with the weight √count; shorter curves are kept as they
+/// are (weight 1). Eq. 8 of these ([`Objective::binned`]) is eq. 8 of the full data up to
+/// terms of the order of the prediction's curvature and of its slope's misfit within a bin
+/// (Σ(ε_pred − ε)² over a bin = count·(ε_pred(t̄) − ε̄)² + scatter + those terms), so its
+/// minimum lies close to the full data's, and with the scatter included its value is on the
+/// full data's scale (the LM's tolerances are relative).
+pub fn bin_curves(curves: &[Curve], max_points: usize) -> Binned {
+    let max_points = max_points.max(1);
+    let mut scatter = 0.0;
+    let (curves, weights) = curves
+        .iter()
+        .map(|c| {
+            let n = c.times_h.len();
+            if n <= max_points {
+                return (c.clone(), vec![1.0; n]);
+            }
+            let size = n.div_ceil(max_points);
+            let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+            let (mut times, mut strains, mut weights) = (Vec::new(), Vec::new(), Vec::new());
+            for (t, e) in c.times_h.chunks(size).zip(c.strains.chunks(size)) {
+                let (tm, em) = (mean(t), mean(e));
+                let (mut stt, mut ste, mut see) = (0.0, 0.0, 0.0);
+                for (ti, ei) in t.iter().zip(e) {
+                    let (dt, de) = (ti - tm, ei - em);
+                    stt += dt * dt;
+                    ste += dt * de;
+                    see += de * de;
+                }
+                let fitted = if stt > 0.0 { ste * ste / stt } else { 0.0 };
+                scatter += (see - fitted).max(0.0) / (c.rupture_strain * c.rupture_strain);
+                times.push(tm);
+                strains.push(em);
+                weights.push((t.len() as f64).sqrt());
+            }
+            // Field by field: `..c.clone()` would copy the long vectors only to drop them.
+            let binned = Curve {
+                temperature_c: c.temperature_c,
+                stress_mpa: c.stress_mpa,
+                specimen: c.specimen.clone(),
+                times_h: times,
+                strains,
+                rupture_time_h: c.rupture_time_h,
+                rupture_strain: c.rupture_strain,
+                min_rate_measured: c.min_rate_measured,
+                min_rate_estimated: c.min_rate_estimated,
+            };
+            (binned, weights)
+        })
+        .unzip();
+    Binned {
+        curves,
+        weights,
+        scatter,
+    }
+}
+
 /// Mean of absolute values, skipping NaN (NaN if none).
 pub fn mean_abs(v: &[f64]) -> f64 {
     let f: Vec<f64> = v
@@ -298,7 +368,7 @@ impl<'a> Objective<'a> {
         Objective {
             model,
             curves,
-            point_weights: None,
+            bins: None,
             w,
             lifetime: settings.lifetime,
             omega_f: settings.omega_f,
@@ -306,21 +376,26 @@ impl<'a> Objective<'a> {
         }
     }
 
-    /// The same objective with every strain residual of curve `i`, point `k` multiplied by
-    /// `weights[i][k]` (one vector per curve, one weight per measured point): the objective
-    /// of bin-averaged curves ([`bin_curves`]).
-    pub fn with_point_weights(self, weights: &'a [Vec<f64>]) -> Self {
+    /// Eq. 8 of bin-averaged curves ([`bin_curves`]): the strain residual of curve `i`,
+    /// point `k` multiplied by `bins.weights[i][k]`, and one more residual after all curves'
+    /// residuals, the constant √`bins.scatter`.
+    pub fn binned(
+        model: &'a dyn Model,
+        bins: &'a Binned,
+        w: Vec<f64>,
+        settings: ObjectiveSettings,
+    ) -> Self {
         assert_eq!(
-            weights.len(),
-            self.curves.len(),
+            bins.weights.len(),
+            bins.curves.len(),
             "one weight vector per curve"
         );
-        for (wv, c) in weights.iter().zip(self.curves) {
+        for (wv, c) in bins.weights.iter().zip(&bins.curves) {
             assert_eq!(wv.len(), c.times_h.len(), "one weight per measured point");
         }
         Objective {
-            point_weights: Some(weights),
-            ..self
+            bins: Some(bins),
+            ..Objective::new(model, &bins.curves, w, settings)
         }
     }
 
@@ -329,9 +404,14 @@ impl<'a> Objective<'a> {
         &self.w
     }
 
-    /// Number of residuals: every measured point plus one lifetime term per curve.
+    /// Number of residuals: every measured point plus one lifetime term per curve (plus the
+    /// scatter term of binned data).
     pub fn n_residuals(&self) -> usize {
-        self.curves.iter().map(|c| c.times_h.len() + 1).sum()
+        self.curves
+            .iter()
+            .map(|c| c.times_h.len() + 1)
+            .sum::<usize>()
+            + usize::from(self.bins.is_some())
     }
 
     fn load(&self, c: &Curve) -> Load {
@@ -432,8 +512,8 @@ impl<'a> Objective<'a> {
             for k in 0..n {
                 r[off + k] = (r[off + k] - c.strains[k]) * inv;
             }
-            if let Some(pw) = self.point_weights {
-                for (rk, wk) in r[off..off + n].iter_mut().zip(&pw[i]) {
+            if let Some(b) = self.bins {
+                for (rk, wk) in r[off..off + n].iter_mut().zip(&b.weights[i]) {
                     *rk = *rk * *wk;
                 }
             }
@@ -442,6 +522,9 @@ impl<'a> Objective<'a> {
                 None => S::cst(0.0),
             };
             off += n + 1;
+        }
+        if let Some(b) = self.bins {
+            r[off] = S::cst(b.scatter.sqrt());
         }
         Ok(())
     }
@@ -461,7 +544,7 @@ impl<'a> Objective<'a> {
         for (i, c) in self.curves.iter().enumerate() {
             let n = c.times_h.len();
             let inv = 1.0 / c.rupture_strain;
-            let pw = self.point_weights.map(|pw| &pw[i][..]);
+            let pw = self.bins.map(|b| &b.weights[i][..]);
             let mut points = |k0: usize, strains: &[Dual<SENS>]| {
                 for (j0, part) in (k0..).step_by(CHUNK).zip(strains.chunks(CHUNK)) {
                     for (j, (s, rk)) in part.iter().zip(buf.iter_mut()).enumerate() {
@@ -489,6 +572,9 @@ impl<'a> Objective<'a> {
             sink(off + n, &[life]);
             off += n + 1;
         }
+        if let Some(b) = self.bins {
+            sink(off, &[Dual::cst(b.scatter.sqrt())]);
+        }
         Ok(())
     }
 
@@ -502,13 +588,14 @@ impl<'a> Objective<'a> {
             let mut strain = vec![f64::NAN; n];
             match self.predict(i, params, &mut strain) {
                 Ok((outcome, t_r, e_r, min_rate)) => {
-                    let s: f64 = match self.point_weights {
+                    let s: f64 = match self.bins {
                         None => (0..n)
                             .map(|k| ((strain[k] - c.strains[k]) / c.rupture_strain).powi(2))
                             .sum(),
-                        Some(pw) => (0..n)
+                        Some(b) => (0..n)
                             .map(|k| {
-                                ((strain[k] - c.strains[k]) / c.rupture_strain * pw[i][k]).powi(2)
+                                ((strain[k] - c.strains[k]) / c.rupture_strain * b.weights[i][k])
+                                    .powi(2)
                             })
                             .sum(),
                     };
@@ -546,9 +633,10 @@ impl<'a> Objective<'a> {
                 }
             }
         }
+        let scatter = self.bins.map_or(0.0, |b| b.scatter);
         Evaluation {
-            objective,
-            norm_residual: norm,
+            objective: objective + scatter,
+            norm_residual: norm + scatter,
             curves,
         }
     }

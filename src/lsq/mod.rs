@@ -229,6 +229,9 @@ pub struct LmReport {
     pub termination: Termination,
     /// Message of the evaluation failure, if any.
     pub failure: Option<String>,
+    /// Damping of the last step tried, relative to the largest diagonal of JᵀJ (NaN if no
+    /// step was tried): where a continued iteration ([`LmOptions::lambda0`]) picks up.
+    pub lambda: f64,
 }
 
 fn sumsq(r: &[f64]) -> f64 {
@@ -407,6 +410,8 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
     let mut x: Vec<f64> = (0..n).map(|j| x0[j].clamp(lb[j], ub[j])).collect();
     let mut r = vec![0.0; m];
     let mut evaluations = 1;
+    // Relative damping of the last step tried, for the report.
+    let last_lambda = std::cell::Cell::new(f64::NAN);
     let fail = |x: Vec<f64>, it, ev, e: EvalFailure, f: f64, r: Vec<f64>| LmReport {
         x,
         objective: f,
@@ -415,6 +420,7 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
         evaluations: ev,
         termination: Termination::SimulationFailure,
         failure: Some(e.0),
+        lambda: last_lambda.get(),
     };
     // Normal-equations mode: JᵀJ and Jᵀr of every evaluation, no m × n Jacobian.
     let mut ne = NormalEquations::zeros(n);
@@ -444,7 +450,7 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
     let mut r_trial = vec![0.0; m];
     let mut x_trial = vec![0.0; n];
     let mut x_probe = vec![0.0; n];
-    let mut r_probe = vec![0.0; m];
+    let mut r_probe = vec![0.0; if opts.geodesic.is_some() { m } else { 0 }];
     let mut jt_rvv = vec![0.0; n];
     let mut lambda = -1.0_f64;
     let mut nu = 2.0_f64;
@@ -456,6 +462,7 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
         evaluations: ev,
         termination: t,
         failure: None,
+        lambda: last_lambda.get(),
     };
 
     for iter in 1..=opts.max_iterations {
@@ -516,6 +523,7 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
         }
         // Inner loop: increase damping until a step reduces the objective.
         loop {
+            last_lambda.set(lambda / diag_max);
             // Solve on the free set; a free variable at a bound whose step points outward
             // would be cut to zero by the projection, leaving a step that is not a descent
             // step of the remaining variables: hold it and solve again.
