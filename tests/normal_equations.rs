@@ -95,3 +95,123 @@ fn streamed_normal_equations_equal_those_of_the_stored_jacobian() {
         }
     }
 }
+
+/// y = a·e^(−b·t) + c fitted to 60 points of such a curve with a kink added: r(x) with its
+/// analytic Jacobian, offered either as a stored Jacobian or as normal equations only.
+struct Decay {
+    t: Vec<f64>,
+    y: Vec<f64>,
+    normal: bool,
+}
+
+impl Decay {
+    fn new(normal: bool) -> Self {
+        let t: Vec<f64> = (0..60).map(|i| i as f64 * 0.1).collect();
+        let y = t
+            .iter()
+            .map(|&t| 2.5 * (-1.3 * t).exp() + 0.4 + 0.02 * (3.0 * t).sin())
+            .collect();
+        Decay { t, y, normal }
+    }
+    fn jac(&self, x: &[f64]) -> DMatrix<f64> {
+        DMatrix::from_fn(self.t.len(), 3, |i, j| {
+            let e = (-x[1] * self.t[i]).exp();
+            match j {
+                0 => e,
+                1 => -x[0] * self.t[i] * e,
+                _ => 1.0,
+            }
+        })
+    }
+}
+
+impl LeastSquaresProblem for Decay {
+    fn n_params(&self) -> usize {
+        3
+    }
+    fn n_residuals(&self) -> usize {
+        self.t.len()
+    }
+    fn residuals(&self, x: &[f64], r: &mut [f64]) -> Result<(), creepfit::lsq::EvalFailure> {
+        for i in 0..self.t.len() {
+            r[i] = x[0] * (-x[1] * self.t[i]).exp() + x[2] - self.y[i];
+        }
+        Ok(())
+    }
+    fn residuals_and_jacobian(
+        &self,
+        x: &[f64],
+        r: &mut [f64],
+        jac: &mut DMatrix<f64>,
+    ) -> Option<Result<(), creepfit::lsq::EvalFailure>> {
+        jac.copy_from(&self.jac(x));
+        Some(self.residuals(x, r))
+    }
+    fn prefers_normal_equations(&self) -> bool {
+        self.normal
+    }
+    fn residuals_and_normal_equations(
+        &self,
+        x: &[f64],
+        r: &mut [f64],
+        ne: &mut NormalEquations,
+    ) -> Option<Result<(), creepfit::lsq::EvalFailure>> {
+        self.residuals(x, r).unwrap();
+        *ne = NormalEquations::from_jacobian(&self.jac(x), r);
+        Some(Ok(()))
+    }
+    fn geodesic_normal(
+        &self,
+        x: &[f64],
+        v: &[f64],
+        h: f64,
+        r: &[f64],
+        r_probe: &[f64],
+        jt_rvv: &mut [f64],
+    ) -> Option<Result<(), creepfit::lsq::EvalFailure>> {
+        let jac = self.jac(x);
+        let jv = &jac * DVector::from_column_slice(v);
+        let rvv = DVector::from_iterator(
+            r.len(),
+            (0..r.len()).map(|i| 2.0 / h * ((r_probe[i] - r[i]) / h - jv[i])),
+        );
+        jt_rvv.copy_from_slice(jac.tr_mul(&rvv).as_slice());
+        Some(Ok(()))
+    }
+}
+
+#[test]
+fn the_iteration_on_normal_equations_follows_the_stored_one() {
+    use creepfit::lsq::{minimize, LmOptions};
+    // Unbounded, and with c held at an upper bound below its optimum; plain and geodesic.
+    for (ub_c, geodesic) in [
+        (10.0, None),
+        (10.0, Some(0.75)),
+        (0.3, None),
+        (0.3, Some(0.75)),
+    ] {
+        let opts = LmOptions {
+            geodesic,
+            ..LmOptions::default()
+        };
+        let (lb, ub) = ([0.0, 0.0, -10.0], [10.0, 10.0, ub_c]);
+        let x0 = [1.0, 0.2, 0.0];
+        let stored = minimize(&Decay::new(false), &x0, &lb, &ub, &opts);
+        let normal = minimize(&Decay::new(true), &x0, &lb, &ub, &opts);
+        assert!(stored.termination.converged(), "{:?}", stored.termination);
+        assert_eq!(normal.termination, stored.termination);
+        assert_eq!(normal.iterations, stored.iterations);
+        for j in 0..3 {
+            assert!(
+                (normal.x[j] - stored.x[j]).abs() < 1e-9,
+                "{ub_c} {geodesic:?}: {:?} vs {:?}",
+                normal.x,
+                stored.x
+            );
+        }
+        assert!((normal.objective / stored.objective - 1.0).abs() < 1e-12);
+        if ub_c < 1.0 {
+            assert_eq!(normal.x[2], ub_c, "held at its bound");
+        }
+    }
+}
