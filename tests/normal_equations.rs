@@ -133,8 +133,8 @@ impl LeastSquaresProblem for Decay {
         self.t.len()
     }
     fn residuals(&self, x: &[f64], r: &mut [f64]) -> Result<(), creepfit::lsq::EvalFailure> {
-        for i in 0..self.t.len() {
-            r[i] = x[0] * (-x[1] * self.t[i]).exp() + x[2] - self.y[i];
+        for ((ri, t), y) in r.iter_mut().zip(&self.t).zip(&self.y) {
+            *ri = x[0] * (-x[1] * t).exp() + x[2] - y;
         }
         Ok(())
     }
