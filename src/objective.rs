@@ -850,3 +850,54 @@ thread_local! {
     static DUAL_RESIDUALS: std::cell::RefCell<Vec<Dual<SENS>>> =
         const { std::cell::RefCell::new(Vec::new()) };
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn curve(times: Vec<f64>, strains: Vec<f64>) -> Curve {
+        Curve {
+            temperature_c: 560.0,
+            stress_mpa: 100.0,
+            specimen: None,
+            times_h: times,
+            strains,
+            rupture_time_h: Some(10.0),
+            rupture_strain: 0.5,
+            min_rate_measured: None,
+            min_rate_estimated: 0.01,
+        }
+    }
+
+    #[test]
+    fn bins_average_consecutive_points_and_keep_the_scatter_about_their_lines() {
+        // 7 points, at most 3 a curve: bins of 3, 3 and 1 point.
+        let t = vec![0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0];
+        // On a line but for ±d at the middle point of the first bin and the ends of the
+        // second: the scatter about each bin's least-squares line.
+        let d = 0.01;
+        let e: Vec<f64> = t
+            .iter()
+            .enumerate()
+            .map(|(k, &t)| 0.1 * t + [0.0, d, 0.0, d, 0.0, d, 0.0][k])
+            .collect();
+        let short = curve(vec![0.0, 1.0, 2.0], vec![0.0, 0.1, 0.2]);
+        let b = bin_curves(&[curve(t, e.clone()), short.clone()], 3);
+        assert_eq!(b.curves[1], short);
+        assert_eq!(b.weights[1], vec![1.0; 3]);
+        let c = &b.curves[0];
+        assert_eq!(c.times_h, vec![1.0, 4.0, 6.0]);
+        let close = |a: f64, b: f64| (a - b).abs() < 1e-15;
+        assert!(close(c.strains[0], 0.1 + d / 3.0));
+        assert!(close(c.strains[1], 0.4 + 2.0 * d / 3.0));
+        assert!(close(c.strains[2], e[6]));
+        let s3 = 3f64.sqrt();
+        assert_eq!(b.weights[0], vec![s3, s3, 1.0]);
+        // A bump (0, d, 0) or a dip (d, 0, d) about a line: deviations (−1, 2, −1)·d/3 from
+        // the mean, none of them along the slope: 6·d²/9 each, over ε_f² = 0.25.
+        let want = 2.0 * (6.0 * d * d / 9.0) / 0.25;
+        assert!((b.scatter - want).abs() < 1e-15, "{} vs {want}", b.scatter);
+        assert_eq!(c.rupture_strain, 0.5);
+        assert_eq!(c.min_rate_estimated, 0.01);
+    }
+}

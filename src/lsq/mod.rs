@@ -609,16 +609,20 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
                 }
                 evaluations += 1;
                 let probed = if normal {
-                    let ok = problem.residuals(&x_probe, &mut r_probe).is_ok();
-                    let geo = if ok {
-                        problem.geodesic_normal(&x, v.as_slice(), hh, &r, &r_probe, &mut jt_rvv)
-                    } else {
-                        Some(Err(EvalFailure(String::new())))
-                    };
-                    if ok && geo.is_some() {
-                        evaluations += 1;
+                    problem.residuals(&x_probe, &mut r_probe).is_ok() && {
+                        let geo = problem.geodesic_normal(
+                            &x,
+                            v.as_slice(),
+                            hh,
+                            &r,
+                            &r_probe,
+                            &mut jt_rvv,
+                        );
+                        if geo.is_some() {
+                            evaluations += 1;
+                        }
+                        matches!(geo, Some(Ok(())))
                     }
-                    geo.map(|res| res.is_ok())
                 } else {
                     let ok = problem.residuals(&x_probe, &mut r_probe).is_ok();
                     if ok {
@@ -629,9 +633,9 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
                         );
                         jt_rvv.copy_from_slice(jac.tr_mul(&rvv).as_slice());
                     }
-                    Some(ok)
+                    ok
                 };
-                let accel = if probed == Some(true) {
+                let accel = if probed {
                     let b = DVector::from_iterator(held.len(), held.iter().map(|&jp| -jt_rvv[jp]));
                     let a = ch.solve(&b);
                     (2.0 * a.norm() <= alpha * v.norm()).then_some(a)
