@@ -15,7 +15,7 @@
 //! **Large logged curves** (a curve of more than [`MULTIRES_MIN_POINTS`] points): each local
 //! fit runs in two stages, the LM on bin-averaged curves ([`bin_curves`], at most
 //! [`MULTIRES_BINNED_POINTS`] points a curve, weighted so that the binned objective is the
-//! full one up to a constant) and then the LM on the full data from that point, under the
+//! full one up to binning terms) and then the LM on the full data from that point, under the
 //! same options and termination rules: the reported fit is a converged fit of the full-data
 //! objective. Smaller data take exactly the one-stage path.
 
@@ -130,7 +130,7 @@ pub const MULTIRES_MIN_POINTS: usize = 20_000;
 /// 1 M-point benchmark (`scripts/bench_large.sh`): with 2,000 or 5,000 bins the binned fits
 /// from the computed guess crawled along the B–H* valley to the iteration limit (its
 /// minimum lies elsewhere along the valley than the full data's); 10,000, 20,000 and 50,000
-/// all converged with 31–51 iterations, 10,000 the fastest.
+/// all converged with 31–54 iterations, 10,000 the fastest.
 pub const MULTIRES_BINNED_POINTS: usize = 10_000;
 
 /// Whether fits to `curves` run in two stages (a curve above [`MULTIRES_MIN_POINTS`]).
@@ -173,16 +173,17 @@ pub fn local_fit(
         } else {
             &first.x
         };
-        // The iteration continues on the full data with the damping it had reached: the
-        // binned objective's JᵀJ is the full one's to first order, and a fresh λ0 (1e-3 of
-        // its largest diagonal) made the first step on a million points, from so close to
-        // the minimum, shorter than xtol: a false `converged_step`. Without geodesic
+        // The iteration continues on the full data with the damping it had reached (never
+        // more than a fresh start's): the binned objective's JᵀJ is the full one's to first
+        // order, and a fresh λ0 (1e-3 of its largest diagonal) made the first step on a
+        // million points, from so close to the minimum, shorter than xtol: a false
+        // `converged_step`. Without geodesic
         // acceleration: from next to the minimum the plain steps converged in 3–6 iterations
         // where the accelerated ones took 16–21 (1 M points; each also costs the probe and
         // the Jacobian once more).
         let opts = LmOptions {
             lambda0: if first.lambda.is_finite() {
-                first.lambda
+                first.lambda.min(settings.lm.lambda0)
             } else {
                 settings.lm.lambda0
             },
