@@ -749,6 +749,26 @@ fn fit(config: &Path, cli: &Overrides) -> Result<()> {
             );
         }
     }
+    if let Some(e) = summary.get("error_model").filter(|e| !e.is_null()) {
+        let list = |key: &str, prec: usize| -> String {
+            e["curves"]
+                .as_array()
+                .map(|v| {
+                    v.iter()
+                        .map(|c| format!("{:.prec$}", c[key].as_f64().unwrap_or(f64::NAN)))
+                        .collect::<Vec<_>>()
+                        .join(" / ")
+                })
+                .unwrap_or_default()
+        };
+        println!(
+            "error model at these constants (AR(1) per curve): residual sd {} % strain, φ {}; \
+             rupture-time scatter {:.2} % (summary.json: error_model)",
+            list("residual_sd_pct", 4),
+            list("ar1_phi", 2),
+            e["lifetime_sd_pct"].as_f64().unwrap_or(f64::NAN)
+        );
+    }
 
     // Plot last: a plotting failure never loses the numeric outputs above.
     let plot_path = out.join("fit.png");

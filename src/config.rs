@@ -114,8 +114,8 @@ pub struct ObjectiveConfig {
     /// 0.01 (1 %, the best reproducibility of a rupture time).
     pub lifetime_sd_floor: f64,
     /// Most points per curve the run works on (0, the default: all): a longer curve is
-    /// averaged in groups of consecutive points (time and strain; the first point kept), as
-    /// `diagnose` does. A densely logged curve then weighs in the objective about as much as
+    /// reduced as `diagnose` reduces it ([`crate::diagnose::binned`]: the first point kept,
+    /// the rest groups of consecutive points). A densely logged curve then weighs in the objective about as much as
     /// a digitised one, not by its point count (README, "Alloy 617").
     pub max_points: usize,
     /// Weights in [0, 1] applied to every curve alike; each gives one fit. Default 0.1, …, 1.0.
@@ -300,8 +300,9 @@ pub struct DiagnoseConfig {
     /// model's goodness of fit, Holm). Default 0.05.
     pub alpha: f64,
     /// Most parametric-bootstrap replicates per test family (fewer when every test is
-    /// clearly not significant; Besag–Clifford stopping). Default 99: the smallest p-value is
-    /// then 1/100, enough for Holm's first threshold α/5 at α = 0.05.
+    /// clearly not significant; Besag–Clifford stopping). Default 119: the smallest p-value is
+    /// then 1/120, enough for Holm's first threshold α/6 at α = 0.05 (four extensions and two
+    /// goodness-of-fit tests).
     pub bootstrap: usize,
     /// Latin-hypercube starts per model on the data (plus the initial guess). Default 16.
     pub starts: usize,
@@ -322,7 +323,8 @@ pub struct DiagnoseConfig {
     /// Most points per curve `diagnose` works on: a longer curve is averaged in groups of
     /// consecutive points (time and strain; the first point is kept as it is). Averaging keeps
     /// what a curve says about a smooth model, and makes the verdict independent of how
-    /// densely a curve was logged. Default 60 (the seed's digitised curves have 36–70).
+    /// densely a curve was logged. Default 100: digitised curves (the seed's have 36–70
+    /// points) are used as they are, logged ones (hundreds to thousands) are reduced.
     pub max_points: usize,
 }
 
@@ -330,14 +332,14 @@ impl Default for DiagnoseConfig {
     fn default() -> Self {
         DiagnoseConfig {
             alpha: 0.05,
-            bootstrap: 99,
+            bootstrap: 119,
             starts: 16,
             replicate_basins: 3,
             replicate_starts: 0,
             seed: 1,
             lifetime_sd_floor: crate::errmodel::DEFAULT_LIFETIME_SD_FLOOR,
             extensions: Vec::new(),
-            max_points: 60,
+            max_points: 100,
         }
     }
 }
@@ -381,14 +383,14 @@ impl DiagnoseConfig {
                 return bad("extensions", format!("'{e}' is listed twice"));
             }
         }
-        // Holm's first threshold is α/m over m = extensions + 1 tests; the smallest bootstrap
-        // p-value is 1/(B + 1).
+        // Holm's first threshold is α/m over m = extensions + 2 goodness-of-fit tests; the
+        // smallest bootstrap p-value is 1/(B + 1).
         let m = if self.extensions.is_empty() {
-            EXTENSION_NAMES.len() + 1
+            EXTENSION_NAMES.len() + 2
         } else {
-            self.extensions.len() + 1
+            self.extensions.len() + 2
         };
-        let need = (m as f64 / self.alpha).ceil() as usize - 1;
+        let need = (m as f64 / self.alpha - 1e-9).ceil() as usize - 1;
         if self.bootstrap < need {
             return bad(
                 "bootstrap",

@@ -11,6 +11,13 @@
 //! the ideal point. Candidates within [`TIE_SCORE`] of the best score are ties; among ties
 //! the largest lifetime weight wins (the paper's own choice at 560 °C was w = 1: weight the
 //! lifetime as much as it costs nothing), then the earlier candidate.
+//!
+//! **Large logged curves** (a curve of more than [`MULTIRES_MIN_POINTS`] points): each local
+//! fit runs in two stages, the LM on bin-averaged curves ([`bin_curves`], at most
+//! [`MULTIRES_BINNED_POINTS`] points a curve, weighted so that the binned objective is the
+//! full one up to binning terms) and then the LM on the full data from that point, under the
+//! same options and termination rules: the reported fit is a converged fit of the full-data
+//! objective. Smaller data take exactly the one-stage path.
 
 use std::time::Instant;
 
@@ -24,7 +31,8 @@ use crate::guess::{initial_guess, Guess};
 use crate::lsq::{minimize, LmOptions, LmReport, Termination};
 use crate::model::Model;
 use crate::objective::{
-    mean_abs, CreepProblem, Evaluation, JacobianMethod, Objective, ObjectiveSettings, ParamSpace,
+    bin_curves, mean_abs, CreepProblem, Evaluation, JacobianMethod, Objective, ObjectiveSettings,
+    ParamSpace,
 };
 use crate::ode::OdeOptions;
 
@@ -131,9 +139,25 @@ pub fn param_space(cfg: &RunConfig) -> ParamSpace {
     space
 }
 
+/// A fit whose data has a curve of more than this many points runs in two stages (module
+/// docs); its [`LocalFit::eval`] then holds no predicted strains ([`with_predictions`]).
+pub const MULTIRES_MIN_POINTS: usize = 20_000;
+/// Most points a curve has in the binned first stage of a two-stage fit. Measured on the
+/// 1 M-point benchmark (`scripts/bench_large.sh`): with 2,000 or 5,000 bins the binned fits
+/// from the computed guess crawled along the B–H* valley to the iteration limit (its
+/// minimum lies elsewhere along the valley than the full data's); 10,000, 20,000 and 50,000
+/// all converged with 31–54 iterations, 10,000 the fastest.
+pub const MULTIRES_BINNED_POINTS: usize = 10_000;
+
+/// Whether fits to `curves` run in two stages (a curve above [`MULTIRES_MIN_POINTS`]).
+pub fn is_large(curves: &[Curve]) -> bool {
+    curves.iter().any(|c| c.times_h.len() > MULTIRES_MIN_POINTS)
+}
+
 /// Bounded LM from `start` (physical constants) at lifetime weights `w` on the objective of
-/// `settings.kind`: eq. 8, or −2 ln L ([`crate::likelihood::ml_fit`]; `w` is then 1, and the
-/// fit's `eval.objective` is −2 ln L, its other fields eq. 8's at w = 1, both sides).
+/// `settings.kind`: eq. 8, on large data in two stages (module docs), whose iterations and
+/// evaluations the report adds up; or −2 ln L ([`crate::likelihood::ml_fit`]; `w` is then 1,
+/// and the fit's `eval.objective` is −2 ln L, its other fields eq. 8's at w = 1, both sides).
 pub fn local_fit(
     model: &dyn Model,
     curves: &[Curve],
@@ -154,13 +178,59 @@ pub fn local_fit(
     };
     let u0 = space.to_unit(start);
     let k = u0.len();
-    let mut lm = minimize(&problem, &u0, &vec![0.0; k], &vec![1.0; k], &settings.lm);
+    let (lb, ub) = (vec![0.0; k], vec![1.0; k]);
+    let large = is_large(curves);
+    let mut lm = if large {
+        let bins = bin_curves(curves, MULTIRES_BINNED_POINTS);
+        let coarse = CreepProblem {
+            objective: Objective::binned(model, &bins, w.to_vec(), settings.objective()),
+            space: space.clone(),
+            jacobian: settings.jacobian,
+        };
+        let first = minimize(&coarse, &u0, &lb, &ub, &settings.lm);
+        // A first stage that could not simulate at all leaves the start to the second.
+        let from = if first.termination == Termination::SimulationFailure {
+            &u0
+        } else {
+            &first.x
+        };
+        // The iteration continues on the full data with the damping it had reached (never
+        // more than a fresh start's): the binned objective's JᵀJ is the full one's to first
+        // order, and a fresh λ0 (1e-3 of its largest diagonal) made the first step on a
+        // million points, from so close to the minimum, shorter than xtol: a false
+        // `converged_step`. Without geodesic
+        // acceleration: from next to the minimum the plain steps converged in 3–6 iterations
+        // where the accelerated ones took 16–21 (1 M points; each also costs the probe and
+        // the Jacobian once more).
+        let opts = LmOptions {
+            lambda0: if first.lambda.is_finite() {
+                first.lambda.min(settings.lm.lambda0)
+            } else {
+                settings.lm.lambda0
+            },
+            geodesic: None,
+            ..settings.lm
+        };
+        let mut lm = minimize(&problem, from, &lb, &ub, &opts);
+        lm.iterations += first.iterations;
+        lm.evaluations += first.evaluations;
+        lm
+    } else {
+        minimize(&problem, &u0, &lb, &ub, &settings.lm)
+    };
     // `eval` below holds the predictions; the residual vector (8 bytes a measured point) is
     // not kept in each of the fits of a run.
     lm.residuals = Vec::new();
     let mut params = start.to_vec();
     space.from_unit(&lm.x, &mut params);
-    let eval = problem.objective.evaluate(&params);
+    let mut eval = problem.objective.evaluate(&params);
+    if large {
+        // Nor are a large fit's predictions (8 MB a million points, times every fit of a
+        // run): [`with_predictions`] recomputes them for the fit that is reported.
+        for p in &mut eval.curves {
+            p.strain = Vec::new();
+        }
+    }
     LocalFit {
         start_label: start_label.to_string(),
         start: start.to_vec(),
@@ -186,6 +256,7 @@ fn likelihood_fit(
 ) -> LocalFit {
     let opts = crate::likelihood::MlOptions {
         lifetime_sd_floor: settings.lifetime_sd_floor,
+        ..Default::default()
     };
     let ml = crate::likelihood::ml_fit(model, curves, space, start, settings, &opts);
     let mut eval = ml.eval.clone().unwrap_or_else(|| {
@@ -206,6 +277,7 @@ fn likelihood_fit(
             evaluations: ml.evaluations,
             termination: ml.termination,
             failure: ml.failure.clone(),
+            lambda: f64::NAN,
         },
         params: ml.params,
         eval,
@@ -259,6 +331,27 @@ pub fn errors_per_temperature(fit: &LocalFit, curves: &[Curve]) -> Vec<Temperatu
             }
         })
         .collect()
+}
+
+/// `fit` with its predicted strains at every measured time in [`LocalFit::eval`]: recomputed
+/// (the same numbers: the evaluation is deterministic) where [`local_fit`] did not keep them.
+pub fn with_predictions(
+    mut fit: LocalFit,
+    model: &dyn Model,
+    curves: &[Curve],
+    settings: &FitSettings,
+) -> LocalFit {
+    let complete = fit
+        .eval
+        .curves
+        .iter()
+        .zip(curves)
+        .all(|(p, c)| p.strain.len() == c.times_h.len());
+    if !complete {
+        fit.eval = Objective::new(model, curves, fit.w.clone(), settings.objective())
+            .evaluate(&fit.params);
+    }
+    fit
 }
 
 /// Resolution of the normalised residual in the best-w rule, relative.
@@ -393,7 +486,7 @@ pub fn run_fit_multistart(cfg: &RunConfig, data: &Dataset, lhs: usize) -> Result
         .iter()
         .flat_map(|s| ws.iter().map(move |w| (s, w)))
         .collect();
-    let fits: Vec<LocalFit> = jobs
+    let mut fits: Vec<LocalFit> = jobs
         .par_iter()
         .map(|((label, start), w)| {
             local_fit(model.as_ref(), curves, &space, w, start, label, &settings)
@@ -420,6 +513,10 @@ pub fn run_fit_multistart(cfg: &RunConfig, data: &Dataset, lhs: usize) -> Result
                 .unwrap_or_default()
         ))
     })?;
+    let chosen = fits.swap_remove(best);
+    fits.push(with_predictions(chosen, model.as_ref(), curves, &settings));
+    let last = fits.len() - 1;
+    fits.swap(best, last);
     Ok(FitRun {
         model,
         space,
@@ -450,6 +547,7 @@ mod tests {
                 evaluations: 1,
                 termination: Termination::ConvergedStep,
                 failure: None,
+                lambda: 1e-3,
             },
             eval: Evaluation {
                 objective: norm,

@@ -185,6 +185,24 @@ pub trait Model: Send + Sync {
         strain_out: &mut [Dual<SENS_WIDE>],
         opts: &OdeOptions,
     ) -> SimResult<Dual<SENS_WIDE>>;
+    /// [`Model::simulate_sens`] handing the predicted strains to `each(k0, strains)` in
+    /// order, in chunks (strains k0, k0 + 1, …), as the integrator produces them instead of
+    /// storing them all, so that a streaming consumer (the normal equations of a fit to a
+    /// logged curve of a million points) needs no dual-number buffer as long as the curve.
+    /// The default goes through such a buffer.
+    fn simulate_sens_each(
+        &self,
+        params: &[Dual<SENS>],
+        load: &Load,
+        times: &[f64],
+        each: &mut dyn FnMut(usize, &[Dual<SENS>]),
+        opts: &OdeOptions,
+    ) -> SimResult<Dual<SENS>> {
+        let mut buf = vec![Dual::cst(0.0); times.len()];
+        let res = self.simulate_sens(params, load, times, &mut buf, opts);
+        each(0, &buf[..res.n_out]);
+        res
+    }
     /// Integrate and return, at each of `times` up to rupture, the time, the strain and the
     /// model's outputs ([`Model::output_names`]), for reports.
     fn trajectory(
@@ -307,6 +325,30 @@ impl<M: CreepModel<N>, const N: usize> Model for Integrated<M, N> {
     ) -> SimResult<Dual<SENS_WIDE>> {
         self.run(params, load, times, strain_out, opts)
     }
+    fn simulate_sens_each(
+        &self,
+        params: &[Dual<SENS>],
+        load: &Load,
+        times: &[f64],
+        each: &mut dyn FnMut(usize, &[Dual<SENS>]),
+        opts: &OdeOptions,
+    ) -> SimResult<Dual<SENS>> {
+        // Chunks on the stack: the consumer's loop runs over a chunk, not one call a point.
+        const CHUNK: usize = 256;
+        let p = self.model.prepare(params, load);
+        let mut buf = [Dual::cst(0.0); CHUNK];
+        let (mut start, mut len) = (0, 0);
+        let res = ode::integrate(&self.model, &p, times, opts, |k, _t, y| {
+            if len == CHUNK {
+                each(start, &buf);
+                (start, len) = (k, 0);
+            }
+            buf[len] = self.model.strain(&p, y);
+            len += 1;
+        });
+        each(start, &buf[..len]);
+        res
+    }
     fn trajectory(
         &self,
         params: &[f64],
@@ -380,6 +422,17 @@ impl Model for FastPath {
     ) -> SimResult<Dual<SENS_WIDE>> {
         self.fast
             .simulate_sens_wide(params, load, times, strain_out, opts)
+    }
+    fn simulate_sens_each(
+        &self,
+        params: &[Dual<SENS>],
+        load: &Load,
+        times: &[f64],
+        each: &mut dyn FnMut(usize, &[Dual<SENS>]),
+        opts: &OdeOptions,
+    ) -> SimResult<Dual<SENS>> {
+        self.fast
+            .simulate_sens_each(params, load, times, each, opts)
     }
     fn trajectory(
         &self,

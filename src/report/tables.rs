@@ -370,6 +370,34 @@ pub fn error_table(rows: &[ErrorRow], min_rate_measured: bool) -> String {
     s
 }
 
+/// The error model of creep data ([`crate::errmodel`]) estimated from the residuals of `fit`'s
+/// chosen constants: per curve the marginal sd (% strain) and AR(1) correlation of the
+/// residuals — reading error plus whatever misfit the model leaves (φ near 1: mostly misfit) —, the scatter of rupture times (% on the log scale), and −2 ln L. `null` if the
+/// chosen constants cannot be evaluated.
+pub fn error_model_json(cfg: &RunConfig, run: &FitRun, curves: &[Curve]) -> Value {
+    let best = &run.fits[run.best];
+    let Ok(res) =
+        crate::likelihood::residuals_at(run.model.as_ref(), curves, &best.params, &run.settings)
+    else {
+        return Value::Null;
+    };
+    let m = crate::errmodel::ErrorModel::estimate(&res, cfg.diagnose.lifetime_sd_floor);
+    json!({
+        "curves": curves.iter().zip(&m.strain).zip(&res.strain).map(|((c, p), e)| json!({
+            "temperature_C": c.temperature_c,
+            "stress_MPa": c.stress_mpa,
+            "specimen": c.specimen,
+            "points": e.len(),
+            "residual_sd_pct": jnum(100.0 * p.marginal_sd()),
+            "ar1_phi": jnum(p.phi),
+        })).collect::<Vec<_>>(),
+        "lifetime_sd_pct": jnum(100.0 * m.lifetime_sd),
+        "lifetime_sd_floor_pct": jnum(100.0 * cfg.diagnose.lifetime_sd_floor),
+        "neg2_log_likelihood": jnum(m.neg2ll(&res)),
+        "effective_observations": jnum(m.effective_n(&res)),
+    })
+}
+
 /// `summary.json` of a fit of the configuration `cfg`.
 pub fn fit_summary(cfg: &RunConfig, run: &FitRun, curves: &[Curve]) -> Value {
     let best = &run.fits[run.best];
@@ -411,6 +439,7 @@ pub fn fit_summary(cfg: &RunConfig, run: &FitRun, curves: &[Curve]) -> Value {
     let mut summary = json!({
         "model": run.model.name(),
         "extensions": cfg.extensions,
+        "error_model": error_model_json(cfg, run, curves),
         "run_id": crate::identity::hash_value(&crate::identity::identity(cfg)),
         "data_hash": cfg.data_hash,
         "objective": jnum(best.eval.objective),

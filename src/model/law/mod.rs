@@ -344,6 +344,20 @@ impl Model for WithLaws {
     ) -> SimResult<Dual<SENS_WIDE>> {
         self.run(params, load, times, strain_out, opts)
     }
+    fn simulate_sens_each(
+        &self,
+        params: &[Dual<SENS>],
+        load: &Load,
+        times: &[f64],
+        each: &mut dyn FnMut(usize, &[Dual<SENS>]),
+        opts: &OdeOptions,
+    ) -> SimResult<Dual<SENS>> {
+        let n = self.laws.n_inner();
+        let mut at = [Dual::cst(0.0); MAX_PARAMS];
+        self.laws.at(params, load.temperature_k, &mut at[..n]);
+        self.inner
+            .simulate_sens_each(&at[..n], load, times, each, opts)
+    }
     fn trajectory(
         &self,
         params: &[f64],
