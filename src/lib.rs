@@ -28,5 +28,6 @@ pub mod output;
 pub mod report;
 pub mod sweep;
 pub mod synth;
+pub mod uncertainty;
 
 pub use error::{Error, Result};
