@@ -104,6 +104,18 @@ pub enum Quantity {
 }
 
 impl Quantity {
+    /// Largest first step of an interval search: the Wald standard error can be huge (a flat
+    /// direction of the constants) while the quantity itself is well determined. 0.5 on the
+    /// log scale (a factor 1.65), or half the value for a strain.
+    pub fn search_cap(&self, g: f64) -> f64 {
+        match self {
+            Quantity::Prediction {
+                what: Predicted::StrainAt(_),
+                ..
+            } => 0.5 * g.abs().max(1e-6),
+            _ => 0.5,
+        }
+    }
     /// Scale of the penalty that holds this quantity, as a fraction of its Wald standard
     /// error: 0.02, or 0.2 for a minimum rate (whose value is smooth only to ~1e-9, which a
     /// tighter penalty would turn into noise of the objective).

@@ -25,15 +25,13 @@ use rand_distr::{Distribution, StandardNormal};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::calibrate::bartlett;
 use super::constrained::{Predicted, Quantity};
 use super::predict::{bootstrap_predictions, percentile95, specimen_scatter};
-use super::profile::{profile_constants, quantity_interval, reinterval, Class};
-use super::report::{calibration_constants, context};
-use super::{fit_reference, normal_quantile, starts, Thresholds};
-use crate::config::RunConfig;
+use super::profile::{quantity_interval, reinterval, Class};
+use super::report::{context, core};
+use super::{normal_quantile, Thresholds};
+use crate::config::{ProfileConfig, RunConfig};
 use crate::error::{Error, Result};
-use crate::guess::initial_guess;
 use crate::model::{build, Load};
 use crate::ode::OdeOptions;
 use crate::synth::{generate, write_set};
@@ -54,7 +52,7 @@ pub struct CoverageSettings {
 impl Default for CoverageSettings {
     fn default() -> Self {
         CoverageSettings {
-            starts: 8,
+            starts: 16,
             calibrate: 40,
             bootstrap: 0,
             stress_factor: 0.85,
@@ -125,6 +123,9 @@ pub struct SetCoverage {
     pub rupture: Option<RuptureCoverage>,
     /// Inner fits of the profiles.
     pub fits: usize,
+    /// Times the profiles were redone from a better optimum found on them.
+    #[serde(default)]
+    pub restarts: usize,
     pub wall_s: f64,
     pub error: Option<String>,
 }
@@ -146,6 +147,7 @@ pub fn run_set(dir: &Path, seed: u64, s: &CoverageSettings) -> SetCoverage {
         constants: vec![],
         rupture: None,
         fits: 0,
+        restarts: 0,
         wall_s: f64::NAN,
         error: None,
     };
@@ -170,15 +172,6 @@ fn measure(dir: &Path, seed: u64, s: &CoverageSettings, out: &mut SetCoverage) -
     let data = cfg.load_data()?;
     let model = build(&cfg.model, &cfg.extensions)?;
     let ctx = context(&cfg, model.as_ref(), &data);
-    let guess = initial_guess(
-        ctx.model,
-        ctx.curves,
-        &ctx.space,
-        ctx.settings.omega_f,
-        &ctx.settings.ode,
-    );
-    let st = starts(&ctx, &[guess.params], s.starts, seed);
-    let reference = fit_reference(&ctx, &st)?;
 
     // The untested load and its true rupture time.
     let lowest = t.stresses.iter().copied().fold(f64::INFINITY, f64::min);
@@ -198,28 +191,22 @@ fn measure(dir: &Path, seed: u64, s: &CoverageSettings, out: &mut SetCoverage) -
         what: Predicted::LnRuptureTime,
     };
 
-    // Thresholds.
-    let (th, cal) = if s.calibrate > 0 {
-        let cons = calibration_constants(&ctx, &reference);
-        let c = bartlett(
-            &ctx,
-            &reference,
-            &cons,
-            &[("rupture".into(), q.clone())],
-            s.calibrate,
-            seed,
-        );
-        (Thresholds::chi2(c.factor), Some(c))
-    } else {
-        (Thresholds::chi2(1.0), None)
+    // What `creepfit profile` does: multistart, calibration, profiles with restarts.
+    let pc = ProfileConfig {
+        starts: s.starts,
+        seed,
+        calibrate: s.calibrate,
+        predict_stress_mpa: vec![load.stress_mpa],
+        ..cfg.profile.clone()
     };
+    let c = core(&ctx, &cfg, None, &pc, &[load])?;
+    let (reference, th, profiles) = (c.reference, c.thresholds, c.profiles);
     out.factor = th.factor;
-    out.mean_t = cal.as_ref().map_or(f64::NAN, |c| c.mean_t);
+    out.mean_t = c.calibration.as_ref().map_or(f64::NAN, |c| c.mean_t);
+    out.restarts = c.restarts;
     let plain = Thresholds::chi2(1.0);
 
     // Constants.
-    let all: Vec<usize> = (0..ctx.space.len()).collect();
-    let profiles = profile_constants(&ctx, &reference, &all, &th);
     out.fits = profiles.iter().map(|p| p.fits()).sum();
     let se = super::profile::wald_se(&ctx, &reference);
     let names = ctx.names();
@@ -249,7 +236,11 @@ fn measure(dir: &Path, seed: u64, s: &CoverageSettings, out: &mut SetCoverage) -
     // The rupture time at the untested stress.
     if truth_run.ruptured() {
         let qc = quantity_interval(&ctx, &reference, &q, &th);
-        let qp = quantity_interval(&ctx, &reference, &q, &plain);
+        let qp = if th.factor == 1.0 {
+            qc.clone()
+        } else {
+            quantity_interval(&ctx, &reference, &q, &plain)
+        };
         if let (Some(qc), Some(qp)) = (qc, qp) {
             out.fits += qc.fits() + qp.fits();
             let e = |iv: Iv| (iv.0.exp(), iv.1.exp());

@@ -554,7 +554,7 @@ pub fn quantity_se(ctx: &Context, reference: &Reference, q: &Quantity) -> (f64, 
 }
 
 /// Most fits per side of a quantity's interval search.
-pub const MAX_SEARCH: usize = 10;
+pub const MAX_SEARCH: usize = 12;
 
 /// Fit at g = `target` from the warm start, retried from the reference and the other optima.
 fn quantity_point(
@@ -598,7 +598,11 @@ fn quantity_point(
 }
 
 /// One side of a quantity's interval: secant steps on the signed root √Δ towards the 95 %
-/// threshold, from the Wald guess ĝ ± se·√t95, until |Δ − t95| ≤ 0.05·t95.
+/// threshold, from the Wald guess ĝ ± se·√t95 (se capped by [`Quantity::search_cap`]),
+/// until |Δ − t95| ≤ 0.05·t95. The penalty scale follows the profile's own width: after each
+/// point, s = |g − ĝ|/√Δ and τ = fraction · s (a penalty much wider than the profile would
+/// not move g). A side is `unreachable` when a step asked for moves g by less than 1 % of the
+/// way and Δ by less than 1 % of the threshold: the box stops the quantity there.
 fn quantity_side(
     ctx: &Context,
     reference: &Reference,
@@ -609,11 +613,17 @@ fn quantity_side(
     th: &Thresholds,
 ) -> Side {
     let rt = th.t95.sqrt();
-    let se = if se.is_finite() && se > 0.0 { se } else { 1.0 };
-    let tau = q.penalty_fraction() * se;
+    let cap = q.search_cap(g_hat);
+    let se = if se.is_finite() && se > 0.0 {
+        se.min(cap)
+    } else {
+        cap
+    };
+    let mut width = se;
     let mut points: Vec<ProfilePoint> = Vec::new();
     let mut target = g_hat + dir * se * rt;
     for _ in 0..MAX_SEARCH {
+        let tau = q.penalty_fraction() * width;
         // Warm start: the kept point nearest the target.
         let warm = points
             .iter()
@@ -630,12 +640,17 @@ fn quantity_side(
             target = g_hat + 0.5 * (target - g_hat);
             continue;
         }
-        let moved_before = points
+        let (far_before, delta_before) = points
             .iter()
             .filter(|p| p.ok())
-            .map(|p| (p.coord - g_hat) * dir)
-            .fold(0.0, f64::max);
+            .map(|p| ((p.coord - g_hat) * dir, p.delta))
+            .fold((0.0, 0.0), |a, b| if b.0 > a.0 { b } else { a });
         let (d, c) = (p.delta, p.coord);
+        let asked = (target - g_hat) * dir - far_before;
+        let got = (c - g_hat) * dir - far_before;
+        if d > 1e-3 {
+            width = width.min((c - g_hat).abs() / d.sqrt());
+        }
         points.push(p);
         if (d - th.t95).abs() <= 0.05 * th.t95 {
             return Side {
@@ -643,8 +658,7 @@ fn quantity_side(
                 end: SideEnd::Crossed,
             };
         }
-        if d < th.t95 && (c - g_hat) * dir <= moved_before + 1e-3 * se {
-            // Asked further out but got no further: the box stops the quantity here.
+        if d < th.t95 && asked > 0.0 && got < 0.01 * asked && d - delta_before < 0.01 * th.t95 {
             return Side {
                 points,
                 end: SideEnd::Unreachable,

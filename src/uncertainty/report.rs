@@ -46,7 +46,11 @@ pub struct Timings {
     pub calibration: f64,
     pub profiles: f64,
     pub combinations: f64,
+    /// Prediction phase: the intervals of rupture time, minimum rate and rupture strain (all
+    /// loads), and the bands.
     pub predictions: f64,
+    pub prediction_intervals: f64,
+    pub bands: f64,
     pub total: f64,
 }
 
@@ -123,28 +127,43 @@ pub fn calibration_constants(ctx: &Context, reference: &Reference) -> Vec<usize>
         .collect()
 }
 
-/// The whole computation: the reference (a multistart, or a local fit from `given`), the
-/// calibration, the profiles of every constant (redone from a better optimum if one turns up,
-/// at most [`MAX_RESTARTS`] times), the well-determined combinations and the predictions.
-pub fn run(
+/// The reference, the thresholds and the profiles of every constant (see [`run`]).
+#[derive(Debug, Clone)]
+pub struct Core {
+    pub reference: Reference,
+    pub reference_from: String,
+    pub given_neg2ll: Option<f64>,
+    pub thresholds: Thresholds,
+    pub calibration: Option<Calibration>,
+    pub profiles: Vec<ConstantProfile>,
+    pub restarts: usize,
+    pub timings: Timings,
+}
+
+/// The reference (a multistart, or a local fit from `given`), the calibration of the
+/// thresholds (over the constants of [`calibration_constants`] and the rupture time at every
+/// load of `loads`), and the profiles of every constant, redone from a better optimum if one
+/// turns up on them (at most [`MAX_RESTARTS`] times).
+pub fn core(
+    ctx: &Context,
     cfg: &RunConfig,
-    data: &Dataset,
     given: Option<&[f64]>,
     pc: &ProfileConfig,
-) -> Result<ProfileRun> {
+    loads: &[Load],
+) -> Result<Core> {
     let t0 = Instant::now();
-    let model = build(&cfg.model, &cfg.extensions)?;
-    let ctx = context(cfg, model.as_ref(), data);
     let (mut reference, from, given_neg2ll) = match given {
         Some(x) => {
             let f = ctx.fit(&ctx.space, x, false);
-            let at_given = crate::likelihood::residuals_at(ctx.model, ctx.curves, x, &ctx.settings)
-                .ok()
-                .map(|r| {
-                    crate::errmodel::ErrorModel::estimate(&r, ctx.ml.lifetime_sd_floor).neg2ll(&r)
-                });
+            let at_given =
+                crate::likelihood::residuals_at(ctx.model, ctx.curves, x, &ctx.settings)
+                    .ok()
+                    .map(|r| {
+                        crate::errmodel::ErrorModel::estimate(&r, ctx.ml.lifetime_sd_floor)
+                            .neg2ll(&r)
+                    });
             (
-                reference_from(&ctx, vec![f])?,
+                reference_from(ctx, vec![f])?,
                 "constants".to_string(),
                 at_given,
             )
@@ -161,23 +180,22 @@ pub fn run(
             if let Some(s) = cfg.starts_all_given() {
                 given.insert(0, s);
             }
-            let st = starts(&ctx, &given, pc.starts, pc.seed);
-            (fit_reference(&ctx, &st)?, "multistart".to_string(), None)
+            let st = starts(ctx, &given, pc.starts, pc.seed);
+            (fit_reference(ctx, &st)?, "multistart".to_string(), None)
         }
     };
     let mut timings = Timings {
         fit: t0.elapsed().as_secs_f64(),
         ..Timings::default()
     };
-    let loads = loads(cfg, data, pc);
     let mut restarts = 0;
-    let (thresholds, calibration, profiles) = loop {
+    loop {
         let t1 = Instant::now();
         let (th, cal) = if pc.calibrate > 0 {
-            let cons = calibration_constants(&ctx, &reference);
+            let cons = calibration_constants(ctx, &reference);
             let qs: Vec<(String, Quantity)> = loads
                 .iter()
-                .map(|(_, l)| {
+                .map(|l| {
                     (
                         format!("rupture time at {} MPa", l.stress_mpa),
                         Quantity::Prediction {
@@ -187,7 +205,7 @@ pub fn run(
                     )
                 })
                 .collect();
-            let cal = bartlett(&ctx, &reference, &cons, &qs, pc.calibrate, pc.seed);
+            let cal = bartlett(ctx, &reference, &cons, &qs, pc.calibrate, pc.seed);
             (Thresholds::chi2(cal.factor), Some(cal))
         } else {
             (Thresholds::chi2(1.0), None)
@@ -195,7 +213,7 @@ pub fn run(
         timings.calibration += t1.elapsed().as_secs_f64();
         let t2 = Instant::now();
         let all: Vec<usize> = (0..ctx.space.len()).collect();
-        let profiles = profile_constants(&ctx, &reference, &all, &th);
+        let profiles = profile_constants(ctx, &reference, &all, &th);
         timings.profiles += t2.elapsed().as_secs_f64();
         let better = profiles
             .iter()
@@ -205,24 +223,46 @@ pub fn run(
         match better {
             Some(p) if restarts < MAX_RESTARTS => {
                 restarts += 1;
-                let f = ctx.fit(&ctx.space, &p.params, false);
-                let mut fits = vec![f];
-                fits.push(ctx.fit(&ctx.space, &reference.params, true));
-                let basins = reference.basins.clone();
-                let mut r = reference_from(&ctx, fits)?;
-                if r.neg2ll >= reference.neg2ll {
-                    // The better point's own free fit did not beat the reference: keep the
-                    // point itself as the start of a fit without geodesic steps.
-                    let f = ctx.fit(&ctx.space, &p.params, true);
-                    r = reference_from(&ctx, vec![f])?;
-                }
-                r.basins = basins;
+                let fits = vec![
+                    ctx.fit(&ctx.space, &p.params, false),
+                    ctx.fit(&ctx.space, &p.params, true),
+                ];
+                let mut r = reference_from(ctx, fits)?;
+                r.basins = reference.basins.clone();
                 r.basins.insert(0, reference.params.clone());
                 reference = r;
             }
-            _ => break (th, cal, profiles),
+            _ => {
+                return Ok(Core {
+                    reference,
+                    reference_from: from,
+                    given_neg2ll,
+                    thresholds: th,
+                    calibration: cal,
+                    profiles,
+                    restarts,
+                    timings,
+                })
+            }
         }
-    };
+    }
+}
+
+/// The whole computation: [`core`], the well-determined combinations and the predictions at
+/// the configured untested stresses.
+pub fn run(
+    cfg: &RunConfig,
+    data: &Dataset,
+    given: Option<&[f64]>,
+    pc: &ProfileConfig,
+) -> Result<ProfileRun> {
+    let t0 = Instant::now();
+    let model = build(&cfg.model, &cfg.extensions)?;
+    let ctx = context(cfg, model.as_ref(), data);
+    let loads = loads(cfg, data, pc);
+    let only: Vec<Load> = loads.iter().map(|l| l.1).collect();
+    let c = core(&ctx, cfg, given, pc, &only)?;
+    let (reference, thresholds, mut timings) = (c.reference, c.thresholds, c.timings);
     let t3 = Instant::now();
     let combinations = well_determined(&ctx, &reference, &thresholds, 3);
     timings.combinations = t3.elapsed().as_secs_f64();
@@ -230,27 +270,33 @@ pub fn run(
     let fractions: Vec<f64> = (1..=pc.band_points)
         .map(|k| k as f64 / (pc.band_points + 1) as f64)
         .collect();
-    let predictions = loads
-        .iter()
-        .map(|(t, l)| LoadPrediction {
+    let mut predictions = Vec::with_capacity(loads.len());
+    for (t, l) in &loads {
+        let ti = Instant::now();
+        let quantities = prediction_intervals(&ctx, &reference, l, &thresholds);
+        timings.prediction_intervals += ti.elapsed().as_secs_f64();
+        let tb = Instant::now();
+        let band = prediction_band(&ctx, &reference, l, &fractions, &thresholds);
+        timings.bands += tb.elapsed().as_secs_f64();
+        predictions.push(LoadPrediction {
             temperature_c: *t,
             stress_mpa: l.stress_mpa,
-            quantities: prediction_intervals(&ctx, &reference, l, &thresholds),
-            band: prediction_band(&ctx, &reference, l, &fractions, &thresholds),
-        })
-        .collect();
+            quantities,
+            band,
+        });
+    }
     timings.predictions = t4.elapsed().as_secs_f64();
     timings.total = t0.elapsed().as_secs_f64();
     Ok(ProfileRun {
         reference,
-        reference_from: from,
-        given_neg2ll,
+        reference_from: c.reference_from,
+        given_neg2ll: c.given_neg2ll,
         thresholds,
-        calibration,
-        profiles,
+        calibration: c.calibration,
+        profiles: c.profiles,
         combinations,
         predictions,
-        restarts,
+        restarts: c.restarts,
         timings,
     })
 }
