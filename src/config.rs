@@ -376,7 +376,7 @@ pub struct ProfileConfig {
     /// Floor of the rupture-time scatter, ln scale. Default 0.01.
     pub lifetime_sd_floor: f64,
     /// Parametric-bootstrap replicates that calibrate the likelihood-ratio thresholds
-    /// (0: plain χ² thresholds). Default 40.
+    /// (0: plain χ² thresholds). Default 20.
     pub calibrate: usize,
     /// Untested stresses (MPa, at the data's temperature) to give prediction intervals at.
     /// Default none.
@@ -393,7 +393,7 @@ impl Default for ProfileConfig {
             starts: 16,
             seed: 1,
             lifetime_sd_floor: crate::errmodel::DEFAULT_LIFETIME_SD_FLOOR,
-            calibrate: 40,
+            calibrate: 20,
             predict_stress_mpa: Vec::new(),
             band_points: 9,
         }

@@ -53,7 +53,7 @@ impl Default for CoverageSettings {
     fn default() -> Self {
         CoverageSettings {
             starts: 16,
-            calibrate: 40,
+            calibrate: 20,
             bootstrap: 0,
             stress_factor: 0.85,
         }
@@ -63,6 +63,17 @@ impl Default for CoverageSettings {
 /// A (lo, hi) interval.
 pub type Iv = (f64, f64);
 
+/// An f64 that JSON wrote as `null` (NaN, ±∞) reads back as NaN.
+fn de_f64<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
+}
+
+/// [`de_f64`] for an interval.
+fn de_iv<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Iv, D::Error> {
+    let (a, b) = <(Option<f64>, Option<f64>)>::deserialize(d)?;
+    Ok((a.unwrap_or(f64::NAN), b.unwrap_or(f64::NAN)))
+}
+
 fn covers(iv: Iv, truth: f64) -> bool {
     iv.0 <= truth && truth <= iv.1
 }
@@ -71,36 +82,54 @@ fn covers(iv: Iv, truth: f64) -> bool {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ConstantCoverage {
     pub name: String,
+    #[serde(deserialize_with = "de_f64")]
     pub truth: f64,
+    #[serde(deserialize_with = "de_f64")]
     pub value: f64,
     /// Class under the shipped (calibrated) thresholds, and under plain χ².
     pub class: Class,
     pub class_chi2: Class,
     /// 95 % and 68 % intervals, calibrated thresholds.
+    #[serde(deserialize_with = "de_iv")]
     pub cal95: Iv,
+    #[serde(deserialize_with = "de_iv")]
     pub cal68: Iv,
     /// The same with plain χ² thresholds.
+    #[serde(deserialize_with = "de_iv")]
     pub chi95: Iv,
+    #[serde(deserialize_with = "de_iv")]
     pub chi68: Iv,
     /// Wald 95 % interval (unit box, clamped to the bounds).
+    #[serde(deserialize_with = "de_iv")]
     pub wald95: Iv,
 }
 
 /// The rupture time at the untested stress in one set (h).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RuptureCoverage {
+    #[serde(deserialize_with = "de_f64")]
     pub stress_mpa: f64,
+    #[serde(deserialize_with = "de_f64")]
     pub truth_h: f64,
+    #[serde(deserialize_with = "de_f64")]
     pub value_h: f64,
+    #[serde(deserialize_with = "de_iv")]
     pub cal95: Iv,
+    #[serde(deserialize_with = "de_iv")]
     pub cal68: Iv,
+    #[serde(deserialize_with = "de_iv")]
     pub chi95: Iv,
+    #[serde(deserialize_with = "de_iv")]
     pub chi68: Iv,
+    #[serde(deserialize_with = "de_iv")]
     pub wald95: Iv,
     /// Bootstrap percentile interval (NaN when not measured).
+    #[serde(deserialize_with = "de_iv")]
     pub boot95: Iv,
     /// 95 % prediction interval of a new test (calibrated), and the new test's life.
+    #[serde(deserialize_with = "de_iv")]
     pub pred95: Iv,
+    #[serde(deserialize_with = "de_f64")]
     pub new_test_h: f64,
     /// Whether the calibrated interval is open on a side.
     pub open: bool,
@@ -113,11 +142,14 @@ pub struct SetCoverage {
     pub seed: u64,
     pub family: String,
     pub sampling: String,
+    #[serde(deserialize_with = "de_f64")]
     pub noise_phi: f64,
     pub curves: usize,
     pub points: usize,
     /// Calibration factor and the mean LR statistic behind it.
+    #[serde(deserialize_with = "de_f64")]
     pub factor: f64,
+    #[serde(deserialize_with = "de_f64")]
     pub mean_t: f64,
     pub constants: Vec<ConstantCoverage>,
     pub rupture: Option<RuptureCoverage>,
@@ -126,6 +158,7 @@ pub struct SetCoverage {
     /// Times the profiles were redone from a better optimum found on them.
     #[serde(default)]
     pub restarts: usize,
+    #[serde(deserialize_with = "de_f64")]
     pub wall_s: f64,
     pub error: Option<String>,
 }
@@ -511,4 +544,32 @@ pub fn table_md(rows: &[Row]) -> String {
         );
     }
     md
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_result_with_nan_round_trips_through_json() {
+        let r = RuptureCoverage {
+            stress_mpa: 80.0,
+            truth_h: 1.0,
+            value_h: 1.0,
+            cal95: (0.5, 2.0),
+            cal68: (0.8, 1.2),
+            chi95: (0.5, 2.0),
+            chi68: (0.8, 1.2),
+            wald95: (f64::NAN, f64::INFINITY),
+            boot95: (f64::NAN, f64::NAN),
+            pred95: (0.4, 2.5),
+            new_test_h: 1.1,
+            open: false,
+        };
+        let text = serde_json::to_string(&r).unwrap();
+        let back: RuptureCoverage = serde_json::from_str(&text).unwrap();
+        assert!(back.boot95.0.is_nan() && back.wald95.1.is_nan());
+        assert_eq!(back.cal95, r.cal95);
+        assert!(covers(back.cal95, 1.0) && !covers(back.boot95, 1.0));
+    }
 }

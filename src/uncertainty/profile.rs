@@ -677,6 +677,16 @@ fn quantity_side(
                 above = Some((pc, pr));
             }
         }
+        if let Some((_, ar)) = above {
+            // A bracket narrow enough for the interpolation in √Δ (Δ within 1.5 around the
+            // threshold): done.
+            if ar * ar - below.1 * below.1 <= 1.5 {
+                return Side {
+                    points,
+                    end: SideEnd::Crossed,
+                };
+            }
+        }
         target = match above {
             Some((ac, ar)) if ar > below.1 => {
                 below.0 + (ac - below.0) * (rt - below.1) / (ar - below.1)
@@ -728,16 +738,25 @@ pub fn quantity_interval(
         c
     };
     let (cl, cu) = (curve(&lower, -1.0), curve(&upper, 1.0));
+    // Where a side stopped within 5 % of the threshold below it, the crossing is extrapolated
+    // in √Δ from its outermost point; a side that did not get there is open at the farthest
+    // point reached.
+    let end = |c: &[(f64, f64)], side: &Side, t: f64| {
+        crossing(c, t).or_else(|| {
+            let &(pc, pd) = c.last()?;
+            (side.end == SideEnd::Crossed && pd > 0.0)
+                .then(|| g_hat + (pc - g_hat) * (t / pd).sqrt())
+        })
+    };
     let far = |c: &[(f64, f64)]| c.last().map_or(g_hat, |p| p.0);
-    let end = |c: &[(f64, f64)], t: f64| crossing(c, t).unwrap_or(far(c));
     let interval = Interval {
         value: g_hat,
-        lo68: end(&cl, th.t68),
-        hi68: end(&cu, th.t68),
-        lo95: end(&cl, th.t95),
-        hi95: end(&cu, th.t95),
-        lo_open: crossing(&cl, th.t95).is_none(),
-        hi_open: crossing(&cu, th.t95).is_none(),
+        lo68: end(&cl, &lower, th.t68).unwrap_or(far(&cl)),
+        hi68: end(&cu, &upper, th.t68).unwrap_or(far(&cu)),
+        lo95: end(&cl, &lower, th.t95).unwrap_or(far(&cl)),
+        hi95: end(&cu, &upper, th.t95).unwrap_or(far(&cu)),
+        lo_open: end(&cl, &lower, th.t95).is_none(),
+        hi_open: end(&cu, &upper, th.t95).is_none(),
     };
     Some(QuantityInterval {
         interval,
