@@ -52,7 +52,11 @@ fn main() {
         errors
     );
     md += &table_md(&rows);
-    let factors: Vec<f64> = results.iter().map(|r| r.factor).filter(|f| f.is_finite()).collect();
+    let factors: Vec<f64> = results
+        .iter()
+        .map(|r| r.factor)
+        .filter(|f| f.is_finite())
+        .collect();
     if !factors.is_empty() {
         let mut f = factors.clone();
         f.sort_by(|a, b| a.total_cmp(b));
@@ -63,7 +67,11 @@ fn main() {
             f[(9 * f.len()) / 10]
         );
     }
-    let wall: f64 = results.iter().map(|r| r.wall_s).filter(|w| w.is_finite()).sum();
+    let wall: f64 = results
+        .iter()
+        .map(|r| r.wall_s)
+        .filter(|w| w.is_finite())
+        .sum();
     md += &format!(
         "Sum of per-set wall times {:.0} s; this invocation {:.0} s.\n",
         wall,

@@ -52,11 +52,7 @@ fn profile_writes_its_contract_on_the_seed_data() {
         "--out",
         out.to_str().unwrap(),
     ]);
-    assert!(
-        o.status.success(),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     // intervals.csv: the contract's columns, one row per constant, ordered ends, open ends at
     // the bound they reached.
     let text = std::fs::read_to_string(out.join("intervals.csv")).unwrap();
@@ -101,7 +97,11 @@ fn profile_writes_its_contract_on_the_seed_data() {
         for o in c["open"].as_array().unwrap() {
             let (side, limit) = (o["side"].as_str().unwrap(), o["limit"].as_f64().unwrap());
             if o["end"] == "bound" {
-                let (want, got) = if side == "lower" { (lb, lo95) } else { (ub, hi95) };
+                let (want, got) = if side == "lower" {
+                    (lb, lo95)
+                } else {
+                    (ub, hi95)
+                };
                 assert_eq!(limit, want, "{name} {side}");
                 assert_eq!(got, want, "{name}: an open side is the bound it reached");
             }
@@ -121,7 +121,15 @@ fn profile_writes_its_contract_on_the_seed_data() {
     let head: Vec<&str> = p.lines().next().unwrap().split(',').collect();
     assert_eq!(
         &head[..7],
-        &["name", "side", "value", "delta_neg2ll", "status", "fits", "termination"]
+        &[
+            "name",
+            "side",
+            "value",
+            "delta_neg2ll",
+            "status",
+            "fits",
+            "termination"
+        ]
     );
     assert_eq!(&head[7..], &["A", "B", "Hstar", "h", "Kc", "C"]);
     for l in p.lines().skip(1) {
@@ -192,7 +200,13 @@ fn coverage_on_a_reduced_battery() {
     for r in &rows {
         eprintln!(
             "{:40} {:2}/{:2} identifiable: 95 % {}/{}, 68 % {}/{}",
-            r.quantity, r.identifiable, r.sets, r.cal95.covered, r.cal95.n, r.cal68.covered, r.cal68.n
+            r.quantity,
+            r.identifiable,
+            r.sets,
+            r.cal95.covered,
+            r.cal95.n,
+            r.cal68.covered,
+            r.cal68.n
         );
         c95 += r.cal95.covered;
         c68 += r.cal68.covered;
@@ -201,7 +215,10 @@ fn coverage_on_a_reduced_battery() {
     assert!(n >= 60, "too few identifiable intervals: {n}");
     let (r95, r68) = (c95 as f64 / n as f64, c68 as f64 / n as f64);
     assert!(r95 >= 0.85, "95 % intervals cover {r95:.3} ({c95}/{n})");
-    assert!((0.45..=0.90).contains(&r68), "68 % intervals cover {r68:.3} ({c68}/{n})");
+    assert!(
+        (0.45..=0.90).contains(&r68),
+        "68 % intervals cover {r68:.3} ({c68}/{n})"
+    );
     // The rupture time at the untested stress is measured in every set.
     let rt = rows.last().unwrap();
     assert_eq!(rt.sets, 16);

@@ -5,21 +5,31 @@
 //! ([`Coord`]: ln x, ln(1 − H*) for H*), where a product or ratio of powers of constants is a
 //! linear combination. Its eigenvectors with the largest eigenvalues are the best-determined
 //! directions; each is scaled so that its largest exponent is 1, its exponents rounded to
-//! halves (|exponent| < 0.25 dropped), and the rounded combination Π x_j^{a_j} — such as
-//! B(1 − H*) — is kept when its Wald standard error on the log scale is at most
-//! [`WELL_DETERMINED_SE`] and at most a third of that of every constant in it (else the
-//! constant alone says as much). Its intervals come from its own profile likelihood
-//! ([`quantity_interval`]), not from the Wald approximation.
+//! halves (|exponent| < 0.25 dropped; tenths if halves lose the precision), and the rounded
+//! combination Π x_j^{a_j} — such as B(1 − H*) — is kept when the half-width of its own 95 %
+//! profile-likelihood interval ([`quantity_interval`]) is at most [`WELL_DETERMINED_HW`] on
+//! the log scale and at most a third of that of every main constant (exponent ≥ 0.5) in it
+//! alone (else the constant says as much by itself).
 
 use serde::Serialize;
 
 use super::constrained::{Coord, Quantity};
-use super::profile::{quantity_interval, Interval};
+use super::profile::{quantity_interval, ConstantProfile, Interval};
 use super::{covariance, information, Context, Reference, Thresholds};
 
-/// Largest Wald standard error (log scale, i.e. relative) of a combination called well
-/// determined: 5 %, a 95 % interval within about ±10 %.
-pub const WELL_DETERMINED_SE: f64 = 0.05;
+/// Largest half-width of the 95 % profile-likelihood interval (log scale, i.e. relative) of
+/// a combination called well determined: ±10 %.
+pub const WELL_DETERMINED_HW: f64 = 0.1;
+
+/// Half-width of constant j's 95 % profile interval in coordinate `c` (∞ if open or absent).
+fn member_halfwidth(profiles: &[ConstantProfile], j: usize, c: Coord) -> f64 {
+    match profiles.iter().find(|p| p.index == j) {
+        Some(p) if p.class == super::profile::Class::Identifiable => {
+            0.5 * (c.z(p.interval.hi95) - c.z(p.interval.lo95)).abs()
+        }
+        _ => f64::INFINITY,
+    }
+}
 
 /// A well-determined combination of constants.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -32,8 +42,9 @@ pub struct Combination {
     pub interval: Interval,
     /// Wald standard error of ln(combination).
     pub wald_se_ln: f64,
-    /// Smallest Wald standard error (ln scale) of the constants in it, alone.
-    pub best_single_se_ln: f64,
+    /// Narrowest 95 % half-width (its coordinate) of a main constant in it, alone (∞ if every
+    /// one of them is not identifiable).
+    pub best_single_halfwidth: f64,
     /// Eigenvalue rank it came from (1 = best determined direction).
     pub rank: usize,
     /// Fits run for its profile.
@@ -73,6 +84,11 @@ pub fn expression(names: &[&str], coords: &[Coord], exps: &[f64]) -> String {
 /// Round an eigenvector to exponents: scaled so the largest |component| is 1 (and positive),
 /// rounded to halves, components below 0.25 dropped.
 pub fn round_exponents(v: &[f64]) -> Vec<f64> {
+    round_exponents_to(v, 0.5)
+}
+
+/// [`round_exponents`] to multiples of `step` (components below `step`/2 dropped).
+pub fn round_exponents_to(v: &[f64], step: f64) -> Vec<f64> {
     let (imax, vmax) =
         v.iter().enumerate().fold(
             (0, 0.0),
@@ -85,10 +101,11 @@ pub fn round_exponents(v: &[f64]) -> Vec<f64> {
     v.iter()
         .map(|x| {
             let s = sign * x / vmax;
-            if s.abs() < 0.25 {
+            if s.abs() < 0.5 * step {
                 0.0
             } else {
-                (2.0 * s).round() / 2.0
+                let r = (s / step).round() * step;
+                (r * 1e6).round() / 1e6
             }
         })
         .collect()
@@ -99,6 +116,7 @@ pub fn round_exponents(v: &[f64]) -> Vec<f64> {
 pub fn well_determined(
     ctx: &Context,
     reference: &Reference,
+    profiles: &[ConstantProfile],
     th: &Thresholds,
     max: usize,
 ) -> Vec<Combination> {
@@ -120,7 +138,6 @@ pub fn well_determined(
         .collect();
     let info_z = nalgebra::DMatrix::from_fn(n, n, |a, b| info_u[(a, b)] / (d[a] * d[b]));
     let cov_z = covariance(&info_z);
-    let single_se: Vec<f64> = (0..n).map(|j| cov_z[(j, j)].max(0.0).sqrt()).collect();
     let eig = ((&info_z + info_z.transpose()) * 0.5).symmetric_eigen();
     let mut order: Vec<usize> = (0..n).collect();
     order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
@@ -131,28 +148,53 @@ pub fn well_determined(
             break;
         }
         let v: Vec<f64> = eig.eigenvectors.column(k).iter().copied().collect();
-        let a = round_exponents(&v);
-        let members: Vec<usize> = (0..n).filter(|&j| a[j] != 0.0).collect();
-        if members.len() < 2 || seen.contains(&a) {
-            continue;
+        // The simplest rounding whose own profile-likelihood interval is narrow: halves,
+        // else tenths. Judged on the profile (which respects the bounds), not on the Wald
+        // standard error (which does not: a constant pinned at a bound has a huge Wald
+        // variance that leaks into every combination containing it).
+        let mut pick = None;
+        for step in [0.5, 0.1] {
+            let a = round_exponents_to(&v, step);
+            let main: Vec<usize> = (0..n).filter(|&j| a[j].abs() >= 0.5).collect();
+            if (0..n).filter(|&j| a[j] != 0.0).count() < 2 || main.len() < 2 || seen.contains(&a) {
+                continue;
+            }
+            let av = nalgebra::DVector::from_column_slice(&a);
+            let se = (av.transpose() * &cov_z * &av)[(0, 0)].max(0.0).sqrt();
+            // The narrowest 95 % half-width (in its coordinate) of a main member alone.
+            let best_single = main
+                .iter()
+                .map(|&j| member_halfwidth(profiles, j, coords[j]))
+                .fold(f64::INFINITY, f64::min);
+            let q = Quantity::Combination {
+                coef: a.clone(),
+                coords: coords.clone(),
+            };
+            let Some(qi) = quantity_interval(ctx, reference, &q, th) else {
+                continue;
+            };
+            let iv = qi.interval;
+            let hw = 0.5 * (iv.hi95 - iv.lo95);
+            if std::env::var("CREEPFIT_DEBUG_COMBOS").is_ok() {
+                eprintln!(
+                    "rank {} λ {:.3e} a {:?} wald se {:.2e} half-width {:.3e} best single {:.3e}",
+                    rank + 1,
+                    eig.eigenvalues[k],
+                    a,
+                    se,
+                    hw,
+                    best_single
+                );
+            }
+            if !iv.lo_open && !iv.hi_open && hw <= WELL_DETERMINED_HW && hw <= best_single / 3.0 {
+                pick = Some((a, se, best_single, qi));
+                break;
+            }
         }
-        let av = nalgebra::DVector::from_column_slice(&a);
-        let se = (av.transpose() * &cov_z * &av)[(0, 0)].max(0.0).sqrt();
-        let best_single = members
-            .iter()
-            .map(|&j| single_se[j] * a[j].abs())
-            .fold(f64::INFINITY, f64::min);
-        if !(se <= WELL_DETERMINED_SE && se <= best_single / 3.0) {
+        let Some((a, se, best_single, qi)) = pick else {
             continue;
-        }
+        };
         seen.push(a.clone());
-        let q = Quantity::Combination {
-            coef: a.clone(),
-            coords: coords.clone(),
-        };
-        let Some(qi) = quantity_interval(ctx, reference, &q, th) else {
-            continue;
-        };
         let iv = qi.interval;
         let e = |g: f64| g.exp();
         out.push(Combination {
@@ -168,7 +210,7 @@ pub fn well_determined(
                 hi_open: iv.hi_open,
             },
             wald_se_ln: se,
-            best_single_se_ln: best_single,
+            best_single_halfwidth: best_single,
             rank: rank + 1,
             fits: qi.fits(),
         });

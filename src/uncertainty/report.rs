@@ -155,13 +155,11 @@ pub fn core(
     let (mut reference, from, given_neg2ll) = match given {
         Some(x) => {
             let f = ctx.fit(&ctx.space, x, false);
-            let at_given =
-                crate::likelihood::residuals_at(ctx.model, ctx.curves, x, &ctx.settings)
-                    .ok()
-                    .map(|r| {
-                        crate::errmodel::ErrorModel::estimate(&r, ctx.ml.lifetime_sd_floor)
-                            .neg2ll(&r)
-                    });
+            let at_given = crate::likelihood::residuals_at(ctx.model, ctx.curves, x, &ctx.settings)
+                .ok()
+                .map(|r| {
+                    crate::errmodel::ErrorModel::estimate(&r, ctx.ml.lifetime_sd_floor).neg2ll(&r)
+                });
             (
                 reference_from(ctx, vec![f])?,
                 "constants".to_string(),
@@ -264,7 +262,7 @@ pub fn run(
     let c = core(&ctx, cfg, given, pc, &only)?;
     let (reference, thresholds, mut timings) = (c.reference, c.thresholds, c.timings);
     let t3 = Instant::now();
-    let combinations = well_determined(&ctx, &reference, &thresholds, 3);
+    let combinations = well_determined(&ctx, &reference, &c.profiles, &thresholds, 3);
     timings.combinations = t3.elapsed().as_secs_f64();
     let t4 = Instant::now();
     let fractions: Vec<f64> = (1..=pc.band_points)
@@ -614,18 +612,21 @@ pub fn report_md(cfg: &RunConfig, run: &ProfileRun) -> String {
     if run.combinations.is_empty() {
         md += "No combination of two or more constants is determined markedly better than the constants themselves.\n\n";
     } else {
-        md += "| combination | value | 95 % | relative half-width | Wald se (ln) | best single constant's se (ln) |\n|---|---|---|---|---|---|\n";
+        md += "| combination | value | 95 % | relative half-width | narrowest member alone |\n|---|---|---|---|---|\n";
         for c in &run.combinations {
             let i = &c.interval;
             md += &format!(
-                "| {} | {} | [{}, {}] | ±{:.1} % | {:.4} | {:.4} |\n",
+                "| {} | {} | [{}, {}] | ±{:.2} % | {} |\n",
                 c.expression,
                 g(i.value),
                 g(i.lo95),
                 g(i.hi95),
                 50.0 * (i.hi95 - i.lo95) / i.value,
-                c.wald_se_ln,
-                c.best_single_se_ln
+                if c.best_single_halfwidth.is_finite() {
+                    format!("±{:.1} %", 100.0 * c.best_single_halfwidth)
+                } else {
+                    "not identifiable".into()
+                }
             );
         }
         md += "\n";
