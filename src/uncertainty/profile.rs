@@ -556,45 +556,80 @@ pub fn quantity_se(ctx: &Context, reference: &Reference, q: &Quantity) -> (f64, 
 /// Most fits per side of a quantity's interval search.
 pub const MAX_SEARCH: usize = 12;
 
-/// Fit at g = `target` from the warm start, retried from the reference and the other optima.
-fn quantity_point(
+/// Fit at g = `target` from the warm start, retried from the reference and the other optima
+/// if it fails; and, when it lands above the 68 % threshold, also from the reference (a
+/// penalised fit can stop short of its optimum in a narrow valley: measured, points at
+/// |g − ĝ| < 1e-8 with Δ = 93). Every successful fit is returned: each is a profile point or
+/// an upper bound on one, and [`envelope`] keeps the ones consistent with the others.
+fn quantity_points(
     ctx: &Context,
     reference: &Reference,
     q: &Quantity,
     target: f64,
     tau: f64,
     warm: &[f64],
-) -> ProfilePoint {
-    let mut fits = 1;
-    let mut best = constrained_fit(ctx, q, target, tau, warm, true);
-    let mut retried = false;
-    if !best.ok() {
-        retried = true;
-        let mut others = vec![reference.params.clone()];
-        others.extend(reference.basins.iter().cloned());
-        for s in others {
-            fits += 1;
-            let f = constrained_fit(ctx, q, target, tau, &s, false);
-            if f.ok() {
-                best = f;
-                break;
-            }
-        }
-    }
-    ProfilePoint {
-        value: best.coord,
-        coord: best.coord,
-        delta: if best.ok() {
-            best.neg2ll - reference.neg2ll
+    t68: f64,
+) -> Vec<ProfilePoint> {
+    let point = |f: PointFit, fits: usize, retried: bool| ProfilePoint {
+        value: f.coord,
+        coord: f.coord,
+        delta: if f.ok() {
+            f.neg2ll - reference.neg2ll
         } else {
             f64::NAN
         },
-        params: best.params,
+        params: f.params,
         fits,
         retried,
-        termination: best.termination,
-        failure: best.failure,
+        termination: f.termination,
+        failure: f.failure,
+    };
+    let first = constrained_fit(ctx, q, target, tau, warm, true);
+    if first.ok() {
+        let d = first.neg2ll - reference.neg2ll;
+        let mut out = vec![point(first, 1, false)];
+        if d > t68 && warm != reference.params.as_slice() {
+            let alt = constrained_fit(ctx, q, target, tau, &reference.params, true);
+            if alt.ok() {
+                out.push(point(alt, 1, true));
+            }
+        }
+        return out;
     }
+    let mut fits = 1;
+    let mut others = vec![reference.params.clone()];
+    others.extend(reference.basins.iter().cloned());
+    for s in others {
+        fits += 1;
+        let f = constrained_fit(ctx, q, target, tau, &s, false);
+        if f.ok() {
+            return vec![point(f, fits, true)];
+        }
+    }
+    vec![point(first, fits, true)]
+}
+
+/// The points of one side (`dir` = ±1 from ĝ) that can be profile points: outward from ĝ,
+/// a point is dropped when a point farther out has a lower Δ (a profile rises away from its
+/// optimum on each side; the dropped fit stopped above its optimum). Returns (coord, Δ),
+/// nearest first.
+pub fn envelope(points: &[ProfilePoint], g_hat: f64, dir: f64) -> Vec<(f64, f64)> {
+    let mut v: Vec<(f64, f64)> = points
+        .iter()
+        .filter(|p| p.ok() && (p.coord - g_hat) * dir >= 0.0)
+        .map(|p| (p.coord, p.delta))
+        .collect();
+    v.sort_by(|a, b| ((a.0 - g_hat) * dir).total_cmp(&((b.0 - g_hat) * dir)));
+    let mut keep = Vec::with_capacity(v.len());
+    let mut min_out = f64::INFINITY;
+    for &(c, d) in v.iter().rev() {
+        if d <= min_out + 1e-6 {
+            keep.push((c, d));
+            min_out = min_out.min(d);
+        }
+    }
+    keep.reverse();
+    keep
 }
 
 /// One side of a quantity's interval: secant steps on the signed root √Δ towards the 95 %
@@ -624,56 +659,53 @@ fn quantity_side(
     let mut target = g_hat + dir * se * rt;
     for _ in 0..MAX_SEARCH {
         let tau = q.penalty_fraction() * width;
+        let before = envelope(&points, g_hat, dir);
         // Warm start: the kept point nearest the target.
-        let warm = points
+        let warm = before
             .iter()
-            .filter(|p| p.ok())
-            .min_by(|a, b| {
-                (a.coord - target)
-                    .abs()
-                    .total_cmp(&(b.coord - target).abs())
-            })
+            .min_by(|a, b| (a.0 - target).abs().total_cmp(&(b.0 - target).abs()))
+            .and_then(|&(c, _)| points.iter().find(|p| p.ok() && p.coord == c))
             .map_or(reference.params.clone(), |p| p.params.clone());
-        let p = quantity_point(ctx, reference, q, target, tau, &warm);
-        if !p.ok() {
-            points.push(p);
+        let new = quantity_points(ctx, reference, q, target, tau, &warm, th.t68);
+        let any_ok = new.iter().any(|p| p.ok());
+        points.extend(new);
+        if !any_ok {
             target = g_hat + 0.5 * (target - g_hat);
             continue;
         }
-        let (far_before, delta_before) = points
-            .iter()
-            .filter(|p| p.ok())
-            .map(|p| ((p.coord - g_hat) * dir, p.delta))
-            .fold((0.0, 0.0), |a, b| if b.0 > a.0 { b } else { a });
-        let (d, c) = (p.delta, p.coord);
-        let asked = (target - g_hat) * dir - far_before;
-        let got = (c - g_hat) * dir - far_before;
-        if d > 1e-3 {
-            width = width.min((c - g_hat).abs() / d.sqrt());
+        let (far_before, delta_before) = before
+            .last()
+            .map_or((0.0, 0.0), |&(c, d)| ((c - g_hat) * dir, d));
+        let env = envelope(&points, g_hat, dir);
+        for &(c, d) in &env {
+            if d > 1e-3 && (c - g_hat).abs() > 0.0 {
+                width = width.min((c - g_hat).abs() / d.sqrt());
+            }
         }
-        points.push(p);
-        if (d - th.t95).abs() <= 0.05 * th.t95 {
+        if env.iter().any(|&(_, d)| (d - th.t95).abs() <= 0.05 * th.t95) {
             return Side {
                 points,
                 end: SideEnd::Crossed,
             };
         }
-        if d < th.t95 && asked > 0.0 && got < 0.01 * asked && d - delta_before < 0.01 * th.t95 {
+        let &(fc, fd) = env.last().expect("a point was kept");
+        let asked = (target - g_hat) * dir - far_before;
+        let got = (fc - g_hat) * dir - far_before;
+        if fd < th.t95 && asked > 0.0 && got < 0.01 * asked && fd - delta_before < 0.01 * th.t95
+        {
             return Side {
                 points,
                 end: SideEnd::Unreachable,
             };
         }
-        // Bracket in the signed root: the farthest point below, the nearest point above.
+        // Bracket in the signed root: the farthest kept point below, the nearest above.
         let mut below = (g_hat, 0.0);
         let mut above: Option<(f64, f64)> = None;
-        for p in points.iter().filter(|p| p.ok()) {
-            let (pc, pr) = (p.coord, p.delta.max(0.0).sqrt());
+        for &(pc, pd) in &env {
+            let pr = pd.max(0.0).sqrt();
             if pr < rt {
-                if (pc - g_hat) * dir > (below.0 - g_hat) * dir {
-                    below = (pc, pr);
-                }
-            } else if above.is_none_or(|a| (pc - g_hat) * dir < (a.0 - g_hat) * dir) {
+                below = (pc, pr);
+            } else if above.is_none() {
                 above = Some((pc, pr));
             }
         }
@@ -727,13 +759,7 @@ pub fn quantity_interval(
         || quantity_side(ctx, reference, q, g_hat, se, 1.0, th),
     );
     let curve = |s: &Side, dir: f64| {
-        let mut c: Vec<(f64, f64)> = s
-            .points
-            .iter()
-            .filter(|p| p.ok())
-            .map(|p| (p.coord, p.delta))
-            .collect();
-        c.sort_by(|a, b| ((a.0 - g_hat) * dir).total_cmp(&((b.0 - g_hat) * dir)));
+        let mut c = envelope(&s.points, g_hat, dir);
         c.insert(0, (g_hat, 0.0));
         c
     };
