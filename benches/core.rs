@@ -27,6 +27,7 @@ fn bench(c: &mut Criterion) {
     let curve = &data.curves[1];
     let load = Load {
         stress_mpa: curve.stress_mpa,
+        temperature_k: curve.temperature_c + creepfit::model::ZERO_CELSIUS_K,
         omega_f: cfg.objective.omega_f,
     };
     let ode = OdeOptions {

@@ -47,6 +47,7 @@ fn main() -> anyhow::Result<()> {
     for (stress, points) in [(85.0, 1000), (100.0, n), (110.0, 1000)] {
         let load = Load {
             stress_mpa: stress,
+            temperature_k: 560.0 + creepfit::model::ZERO_CELSIUS_K,
             omega_f: 1.0 / 3.0,
         };
         let opts = OdeOptions::default();

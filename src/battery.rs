@@ -63,7 +63,7 @@ pub struct SetResult {
     pub closest: Option<String>,
     /// Bootstrap p-values per extension, and of the base goodness of fit.
     pub p_values: Vec<(String, f64)>,
-    pub gof_p: f64,
+    pub gof_p: Vec<f64>,
     /// Bootstrap replicates drawn.
     pub replicates: usize,
     /// Wall time of `diagnose`, s.
@@ -159,7 +159,7 @@ pub fn run_one(dir: &Path, index: usize, seed: u64) -> SetResult {
         cause: None,
         closest: None,
         p_values: vec![],
-        gof_p: f64::NAN,
+        gof_p: vec![],
         replicates: 0,
         wall_s: f64::NAN,
         error: None,
@@ -190,7 +190,7 @@ pub fn run_one(dir: &Path, index: usize, seed: u64) -> SetResult {
             .iter()
             .map(|c| (c.name.clone(), c.p_value.unwrap_or(f64::NAN)))
             .collect();
-        r.gof_p = d.gof.p_value;
+        r.gof_p = d.gof.iter().map(|g| g.p_value).collect();
         r.replicates = d.bootstrap.replicates;
         r.wall_s = d.wall_s;
         Ok(())
@@ -493,7 +493,11 @@ pub fn write_reports(dir: &Path, results: &[SetResult], first_seed: u64) -> Resu
                     .map(|(n, p)| format!("{n}={p}"))
                     .collect::<Vec<_>>()
                     .join(";"),
-                num(r.gof_p),
+                r.gof_p
+                    .iter()
+                    .map(|p| num(*p))
+                    .collect::<Vec<_>>()
+                    .join(";"),
                 r.replicates.to_string(),
                 num(r.wall_s),
                 r.error.clone().unwrap_or_default(),

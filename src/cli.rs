@@ -151,6 +151,40 @@ pub enum Command {
         #[arg(long)]
         threads: Option<usize>,
     },
+    /// Predict at untested conditions: curves, rupture time, rupture strain and minimum
+    /// creep rate, beside the Larson–Miller baseline of the configuration's rupture times.
+    Predict {
+        /// Run configuration (TOML).
+        config: PathBuf,
+        /// constants.csv of a fit (name,value,…).
+        #[arg(long)]
+        constants: PathBuf,
+        /// Conditions T:stress in °C:MPa, comma-separated, e.g. 575:100,560:70 (default: the
+        /// configuration's [predict] at).
+        #[arg(long, allow_hyphen_values = true)]
+        at: Option<String>,
+        /// Output folder (default results/<name>/predict/).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// Leave one temperature out: fit on the others, predict the held-out tests' rupture
+    /// times and curves, and compare with the Larson–Miller baseline fitted to the same data.
+    Holdout {
+        /// Run configuration (TOML).
+        config: PathBuf,
+        /// The temperature to leave out, °C.
+        #[arg(long)]
+        temperature: f64,
+        /// Latin-hypercube starts of the fit besides the guess (default: [sweep] starts).
+        #[arg(long)]
+        starts: Option<usize>,
+        /// Seed of the starts (default: [sweep] seed).
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Output folder (default results/<name>/holdout-<T>C/).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// Simulate the configured tests with given constants (dense curves, ruptures).
     Simulate {
         /// Run configuration (TOML).
@@ -222,6 +256,38 @@ pub fn run(cli: Cli) -> Result<()> {
             out,
             w,
         } => simulate(&config, constants, &out_only(out), w),
+        Command::Predict {
+            config,
+            constants,
+            at,
+            out,
+        } => {
+            let at = at
+                .map(|s| {
+                    crate::predict::Condition::parse_list(&s)
+                        .map_err(|m| Error::Invalid(format!("--at: {m}")))
+                })
+                .transpose()?;
+            let cli = Overrides {
+                predict_at: at,
+                ..out_only(out)
+            };
+            predict_cmd(&config, &constants, &cli)
+        }
+        Command::Holdout {
+            config,
+            temperature,
+            starts,
+            seed,
+            out,
+        } => {
+            let cli = Overrides {
+                starts,
+                seed,
+                ..out_only(out)
+            };
+            crate::holdout::holdout_cmd(&config, temperature, &cli)
+        }
         Command::Sweep {
             config,
             starts,
@@ -342,6 +408,14 @@ pub fn run(cli: Cli) -> Result<()> {
     }
 }
 
+/// The distinct test temperatures of the data, °C, ascending.
+fn temperatures(data: &Dataset) -> Vec<f64> {
+    let mut t: Vec<f64> = data.curves.iter().map(|c| c.temperature_c).collect();
+    t.sort_by(f64::total_cmp);
+    t.dedup();
+    t
+}
+
 /// Run `f` on a pool of `threads` workers (rayon's default pool when `None`).
 fn with_threads<T: Send>(
     threads: Option<usize>,
@@ -359,6 +433,17 @@ fn with_threads<T: Send>(
 
 fn diagnose_cmd(config: &Path, cli: &Overrides) -> Result<()> {
     let (cfg, data) = load(config, cli)?;
+    let temps = temperatures(&data);
+    if temps.len() > 1 {
+        return Err(Error::config(
+            &cfg.path,
+            format!(
+                "temperature_C: diagnose works at one temperature; the data have {} ({} °C): set temperature_C",
+                temps.len(),
+                temps.iter().map(|t| t.to_string()).collect::<Vec<_>>().join(", ")
+            ),
+        ));
+    }
     let out = cfg.out_dir("diagnose");
     let _lock = lock_folder(&out)?;
     let d = with_threads(cfg.run.threads, || diagnose(&cfg, &data))?;
@@ -623,19 +708,6 @@ fn print_sweep(h: &sweep::Header, a: &sweep::Analysis) {
     }
 }
 
-/// Dense time grid from 0 to `t_end` (h), with extra resolution near the end of life.
-fn dense_grid(t_end: f64, n: usize) -> Vec<f64> {
-    let mut g: Vec<f64> = (0..=n)
-        .map(|i| {
-            let s = i as f64 / n as f64;
-            // uniform over most of life, refined near rupture
-            t_end * (1.0 - (1.0 - s).powi(2))
-        })
-        .collect();
-    g.dedup();
-    g
-}
-
 fn fit(config: &Path, cli: &Overrides) -> Result<()> {
     let (cfg, data) = load(config, cli)?;
     let out = cfg.out_dir("fit");
@@ -648,6 +720,7 @@ fn fit(config: &Path, cli: &Overrides) -> Result<()> {
         run.model.as_ref(),
         &run.space,
         &best.params,
+        cfg.has_laws().then_some(cfg.t_ref).flatten(),
     )?;
     let rows = tables::error_rows(best, curves);
     tables::write_errors(&out.join("errors.csv"), &rows)?;
@@ -677,17 +750,60 @@ fn fit(config: &Path, cli: &Overrides) -> Result<()> {
         best.lm.evaluations
     );
     for (j, c) in run.model.constants().iter().enumerate() {
-        let pin = run
-            .space
-            .at_bound(j, best.params[j], 1e-6)
-            .map(|s| format!("  (at {s} bound)"))
-            .unwrap_or_default();
+        let pin = if run.space.free[j] {
+            run.space
+                .at_bound(j, best.params[j], 1e-6)
+                .map(|s| format!("  (at {s} bound)"))
+                .unwrap_or_default()
+        } else {
+            "  (held)".to_string()
+        };
         println!(
             "  {:>6} = {:<12.6e} {}{}",
             c.name, best.params[j], c.unit, pin
         );
     }
     print!("{}", tables::error_table(&rows, run.used_min_rate));
+    let per_t = crate::fit::errors_per_temperature(best, curves);
+    if per_t.len() > 1 {
+        for e in &per_t {
+            let at = run.model.constants_at(&best.params, e.temperature_c);
+            println!(
+                "{:>6} °C: normalised residual {:.6}, mean |lifetime err| {:.2} %, mean |min-rate err| {:.2} %; constants there: {}",
+                e.temperature_c,
+                e.norm_residual,
+                e.mean_lifetime_err_pct,
+                e.mean_min_rate_err_pct,
+                run.model
+                    .inner_constants()
+                    .iter()
+                    .zip(&at)
+                    .map(|(c, v)| format!("{} = {v:.4e}", c.name))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+        }
+    }
+    if let Some(e) = summary.get("error_model").filter(|e| !e.is_null()) {
+        let list = |key: &str, prec: usize| -> String {
+            e["curves"]
+                .as_array()
+                .map(|v| {
+                    v.iter()
+                        .map(|c| format!("{:.prec$}", c[key].as_f64().unwrap_or(f64::NAN)))
+                        .collect::<Vec<_>>()
+                        .join(" / ")
+                })
+                .unwrap_or_default()
+        };
+        println!(
+            "error model at these constants (AR(1) per curve): residual sd {} % strain, φ {}; \
+             rupture-time scatter {:.2} % (summary.json: error_model)",
+            list("residual_sd_pct", 4),
+            list("ar1_phi", 2),
+            e["lifetime_sd_pct"].as_f64().unwrap_or(f64::NAN)
+        );
+    }
 
     // Plot last: a plotting failure never loses the numeric outputs above.
     let plot_path = out.join("fit.png");
@@ -714,7 +830,7 @@ fn fit(config: &Path, cli: &Overrides) -> Result<()> {
 const PLOT_POINTS: usize = 2000;
 
 /// Measured points and dense predicted curves for a plot.
-fn curve_plots(
+pub(crate) fn curve_plots(
     cfg: &RunConfig,
     data: &Dataset,
     params: &[f64],
@@ -724,10 +840,7 @@ fn curve_plots(
     data.curves
         .iter()
         .map(|c| {
-            let load = Load {
-                stress_mpa: c.stress_mpa,
-                omega_f: cfg.objective.omega_f,
-            };
+            let load = Load::of_curve(c, cfg.objective.omega_f);
             let span = c
                 .rupture_time_h
                 .unwrap_or(0.0)
@@ -737,7 +850,7 @@ fn curve_plots(
                 ..*ode
             };
             let res = model.simulate(params, &load, &[], &mut [], &o);
-            let grid = dense_grid(res.t_end, 400);
+            let grid = crate::predict::dense_grid(res.t_end, 400);
             let (_, traj) = model.trajectory(params, &load, &grid, &o);
             CurvePlot {
                 label: match &c.specimen {
@@ -758,6 +871,30 @@ fn curve_plots(
         .collect()
 }
 
+fn predict_cmd(config: &Path, constants: &Path, cli: &Overrides) -> Result<()> {
+    let (cfg, data) = load(config, cli)?;
+    if cfg.predict.at.is_empty() {
+        return Err(Error::config(
+            &cfg.path,
+            "predict.at: no conditions to predict: give --at T:stress[,T:stress…] or [predict] at",
+        ));
+    }
+    let model = cfg.build_model()?;
+    crate::predict::check_t_ref(constants, &cfg)?;
+    let params = tables::read_constants(constants, model.as_ref())?;
+    let out = cfg.out_dir("predict");
+    let _lock = lock_folder(&out)?;
+    let run = crate::predict::predict(&cfg, &data, model.as_ref(), &params, &cfg.predict.at);
+    for n in crate::predict::extrapolation_notes(&data, &cfg.predict.at) {
+        eprintln!("warning: {n}");
+    }
+    println!("{}: model {}", cfg.name, model.name());
+    print!("{}", crate::predict::table(&run));
+    let failures = crate::predict::write_outputs(&out, &cfg, &data, model.as_ref(), &params, &run)?;
+    println!("wrote {}", out.display());
+    plots_done(&out, failures)
+}
+
 fn simulate(
     config: &Path,
     constants: Option<PathBuf>,
@@ -772,9 +909,12 @@ fn simulate(
         }
     }
     let (cfg, data) = load(config, cli)?;
-    let model = build(&cfg.model, &cfg.extensions)?;
+    let model = cfg.build_model()?;
     let params = match constants {
-        Some(path) => tables::read_constants(&path, model.as_ref())?,
+        Some(path) => {
+            crate::predict::check_t_ref(&path, &cfg)?;
+            tables::read_constants(&path, model.as_ref())?
+        }
         None => cfg.starts_all_given().ok_or_else(|| {
             Error::config(
                 &cfg.path,
@@ -786,19 +926,13 @@ fn simulate(
     let _lock = lock_folder(&out)?;
     let settings = FitSettings::from_config(&cfg);
     let ode = settings.ode;
-    let names = model.state_names();
-    let idx = |n: &str| names.iter().position(|s| *s == n);
-    let (ih, iphi, iom) = (idx("H"), idx("Phi"), idx("omega"));
     let mut trajectories = Vec::new();
     let mut rupture_rows = Vec::new();
     let specimens = tables::has_specimens(&data.curves);
     let specimen =
         |c: &crate::data::Curve| specimens.then(|| c.specimen.clone().unwrap_or_default());
     for c in &data.curves {
-        let load = Load {
-            stress_mpa: c.stress_mpa,
-            omega_f: cfg.objective.omega_f,
-        };
+        let load = Load::of_curve(c, cfg.objective.omega_f);
         let span = c
             .rupture_time_h
             .unwrap_or(0.0)
@@ -808,7 +942,7 @@ fn simulate(
             ..ode
         };
         let res = model.simulate(&params, &load, &[], &mut [], &o);
-        let mut grid = dense_grid(res.t_end, 200);
+        let mut grid = crate::predict::dense_grid(res.t_end, 200);
         grid.extend(c.times_h.iter().copied().filter(|t| *t <= res.t_end));
         grid.sort_by(|a, b| a.total_cmp(b));
         grid.dedup();
@@ -844,28 +978,19 @@ fn simulate(
             100.0 * res.min_rate
         );
     }
-    let curve_header = [
-        "temperature_C",
-        "stress_MPa",
-        "time_h",
-        "strain_pct",
-        "H",
-        "Phi",
-        "omega",
-    ];
+    // The model's output columns (H, Phi, omega for KHD) after the strain.
+    let mut curve_header = vec!["temperature_C", "stress_MPa", "time_h", "strain_pct"];
+    curve_header.extend(model.output_names());
     // Rows formatted as they are written (a logged curve gives a million of them).
     let curve_rows = trajectories.iter().flat_map(|(c, traj)| {
         traj.iter().map(|(t, e, y)| {
-            let get = |i: Option<usize>| i.map(|i| num(y[i])).unwrap_or_default();
             let mut row = vec![
                 num(c.temperature_c),
                 num(c.stress_mpa),
                 num(*t),
                 num(100.0 * e),
-                get(ih),
-                get(iphi),
-                get(iom),
             ];
+            row.extend(y.iter().map(|v| num(*v)));
             row.extend(specimen(c));
             row
         })

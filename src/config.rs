@@ -20,9 +20,11 @@ use serde::{Deserialize, Serialize};
 use crate::data::{self, Dataset, LoadOptions};
 use crate::error::{Error, Result};
 use crate::lsq::LmOptions;
-use crate::model::{self, Scale};
+use crate::model::law::{self as laws, LawKind};
+use crate::model::{self, Model, Scale};
 use crate::objective::JacobianMethod;
 use crate::ode::OdeOptions;
+use crate::predict::Condition;
 
 /// Names of the extension catalogue (DESIGN.md §6).
 pub const EXTENSION_NAMES: &[&str] = model::ext::CATALOGUE;
@@ -32,10 +34,10 @@ pub const EXTENSION_NAMES: &[&str] = model::ext::CATALOGUE;
 /// name (`name`, only a label and the default output folder), where the data files are
 /// (`curves`, `ruptures`: their loaded content is in `data_hash` instead), and how and where
 /// the run is carried out (`run`: output folder, threads, shard, progress bar, test stop).
-/// `diagnose` and `profile` are left out too: they keep no journal, and their settings change
-/// no fit or sweep result.
+/// `diagnose`, `predict` and `profile` are left out too: they keep no journal, and their
+/// settings change no fit or sweep result.
 pub const IDENTITY_EXCLUDED: &[&str] = &[
-    "path", "name", "curves", "ruptures", "run", "diagnose", "profile",
+    "path", "name", "curves", "ruptures", "run", "diagnose", "predict", "profile",
 ];
 
 /// Which side of the lifetime error enters the objective (eq. 8).
@@ -47,6 +49,20 @@ pub enum LifetimeTerm {
     Late,
     /// Always.
     Both,
+}
+
+/// What a local fit minimises.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ObjectiveKind {
+    /// The seed paper's eq. 8 at each lifetime weight w (README, "Choices").
+    #[default]
+    Eq8,
+    /// −2 ln L under the error model ([`crate::likelihood`]: AR(1) reading error per curve,
+    /// log-normal rupture-time scatter, both estimated with the constants): the strain and
+    /// lifetime terms weighed by their own measured scatter instead of by w, and a densely
+    /// logged curve counts as much as its correlated errors say, not by its point count.
+    Likelihood,
 }
 
 /// Which start points `fit` uses.
@@ -79,12 +95,31 @@ pub struct ConstantConfig {
     pub start: Option<f64>,
     /// Scale in the optimiser.
     pub scale: Scale,
+    /// Temperature law of the constant (`constant` unless declared; `constant` for the laws'
+    /// own parameters). The bounds and start are those of its value at `T_ref`.
+    #[serde(default)]
+    pub law: LawKind,
+    /// Held at `start` by the optimiser (a law parameter given as a number; every law
+    /// parameter when the data have one temperature only).
+    #[serde(default)]
+    pub held: bool,
 }
 
 /// `[objective]`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ObjectiveConfig {
+    /// What the local fits minimise: `eq8` (default) or `likelihood`. Under `likelihood`
+    /// the lifetime weights do not enter (one fit per start, w = 1 reported).
+    pub kind: ObjectiveKind,
+    /// Floor of the rupture-time scatter (ln scale) of the `likelihood` objective. Default
+    /// 0.01 (1 %, the best reproducibility of a rupture time).
+    pub lifetime_sd_floor: f64,
+    /// Most points per curve the run works on (0, the default: all): a longer curve is
+    /// reduced as `diagnose` reduces it ([`crate::diagnose::binned`]: the first point kept,
+    /// the rest groups of consecutive points). A densely logged curve then weighs in the objective about as much as
+    /// a digitised one, not by its point count (README, "Alloy 617").
+    pub max_points: usize,
     /// Weights in [0, 1] applied to every curve alike; each gives one fit. Default 0.1, …, 1.0.
     pub w_grid: Vec<f64>,
     /// Explicit per-curve weight vectors (ascending-stress order), each weight in [0, 1];
@@ -99,6 +134,9 @@ pub struct ObjectiveConfig {
 impl Default for ObjectiveConfig {
     fn default() -> Self {
         ObjectiveConfig {
+            kind: ObjectiveKind::Eq8,
+            lifetime_sd_floor: crate::errmodel::DEFAULT_LIFETIME_SD_FLOOR,
+            max_points: 0,
             w_grid: (1..=10).map(|k| k as f64 / 10.0).collect(),
             w_sets: Vec::new(),
             lifetime_term: LifetimeTerm::Late,
@@ -112,6 +150,10 @@ impl ObjectiveConfig {
     /// curve, then the `w_sets`. A `w_sets` entry whose length is not `n_curves` is an error
     /// (reported against `path`, the configuration file).
     pub fn weight_vectors(&self, n_curves: usize, path: &Path) -> Result<Vec<Vec<f64>>> {
+        if self.kind == ObjectiveKind::Likelihood {
+            // The likelihood weighs the lifetimes by their estimated scatter, not by w.
+            return Ok(vec![vec![1.0; n_curves]]);
+        }
         let mut out: Vec<Vec<f64>> = self.w_grid.iter().map(|&w| vec![w; n_curves]).collect();
         for (k, set) in self.w_sets.iter().enumerate() {
             if set.len() != n_curves {
@@ -260,8 +302,9 @@ pub struct DiagnoseConfig {
     /// model's goodness of fit, Holm). Default 0.05.
     pub alpha: f64,
     /// Most parametric-bootstrap replicates per test family (fewer when every test is
-    /// clearly not significant; Besag–Clifford stopping). Default 99: the smallest p-value is
-    /// then 1/100, enough for Holm's first threshold α/5 at α = 0.05.
+    /// clearly not significant; Besag–Clifford stopping). Default 119: the smallest p-value is
+    /// then 1/120, enough for Holm's first threshold α/6 at α = 0.05 (four extensions and two
+    /// goodness-of-fit tests).
     pub bootstrap: usize,
     /// Latin-hypercube starts per model on the data (plus the initial guess). Default 16.
     pub starts: usize,
@@ -282,7 +325,8 @@ pub struct DiagnoseConfig {
     /// Most points per curve `diagnose` works on: a longer curve is averaged in groups of
     /// consecutive points (time and strain; the first point is kept as it is). Averaging keeps
     /// what a curve says about a smooth model, and makes the verdict independent of how
-    /// densely a curve was logged. Default 60 (the seed's digitised curves have 36–70).
+    /// densely a curve was logged. Default 100: digitised curves (the seed's have 36–70
+    /// points) are used as they are, logged ones (hundreds to thousands) are reduced.
     pub max_points: usize,
 }
 
@@ -290,14 +334,14 @@ impl Default for DiagnoseConfig {
     fn default() -> Self {
         DiagnoseConfig {
             alpha: 0.05,
-            bootstrap: 99,
+            bootstrap: 119,
             starts: 16,
             replicate_basins: 3,
             replicate_starts: 0,
             seed: 1,
             lifetime_sd_floor: crate::errmodel::DEFAULT_LIFETIME_SD_FLOOR,
             extensions: Vec::new(),
-            max_points: 60,
+            max_points: 100,
         }
     }
 }
@@ -341,14 +385,14 @@ impl DiagnoseConfig {
                 return bad("extensions", format!("'{e}' is listed twice"));
             }
         }
-        // Holm's first threshold is α/m over m = extensions + 1 tests; the smallest bootstrap
-        // p-value is 1/(B + 1).
+        // Holm's first threshold is α/m over m = extensions + 2 goodness-of-fit tests; the
+        // smallest bootstrap p-value is 1/(B + 1).
         let m = if self.extensions.is_empty() {
-            EXTENSION_NAMES.len() + 1
+            EXTENSION_NAMES.len() + 2
         } else {
-            self.extensions.len() + 1
+            self.extensions.len() + 2
         };
-        let need = (m as f64 / self.alpha).ceil() as usize - 1;
+        let need = (m as f64 / self.alpha - 1e-9).ceil() as usize - 1;
         if self.bootstrap < need {
             return bad(
                 "bootstrap",
@@ -361,6 +405,34 @@ impl DiagnoseConfig {
         }
         Ok(())
     }
+}
+
+/// `[predict]`: what `creepfit predict` predicts when the command line does not say.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PredictConfig {
+    /// Conditions to predict (`at = ["575:100", "560:70"]` in the file: °C:MPa); `--at`
+    /// replaces them.
+    pub at: Vec<Condition>,
+    /// Degree of the Larson–Miller master curve in log10 σ. Default 2.
+    pub lmp_degree: usize,
+}
+
+impl Default for PredictConfig {
+    fn default() -> Self {
+        PredictConfig {
+            at: Vec::new(),
+            lmp_degree: crate::lmp::DEFAULT_DEGREE,
+        }
+    }
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct RawPredict {
+    #[serde(default)]
+    at: Vec<String>,
+    lmp_degree: Option<usize>,
 }
 
 /// `[profile]`: the profile likelihoods, intervals and prediction intervals of
@@ -469,6 +541,8 @@ pub struct Overrides {
     pub fit_starts: Option<StartChoice>,
     /// `diagnose`'s command-line settings.
     pub diagnose: DiagnoseOverrides,
+    /// `--at`: conditions of `predict`, replacing `[predict] at`.
+    pub predict_at: Option<Vec<Condition>>,
     /// Where and how to run (never part of the identity).
     pub run: RunOptions,
 }
@@ -507,6 +581,11 @@ pub struct RunConfig {
     /// Keep only curves at this temperature (°C).
     #[serde(rename = "temperature_C")]
     pub temperature_c: Option<f64>,
+    /// Reference temperature of the temperature laws, °C: the constants' bounds and starts
+    /// are their values there. Default, when some constant has a law: the mean test
+    /// temperature of the data (resolved by [`RunConfig::with_data`]).
+    #[serde(rename = "T_ref")]
+    pub t_ref: Option<f64>,
     /// Model registry name. Default `khd`.
     pub model: String,
     /// Extension names (DESIGN.md §6), in the order given.
@@ -526,8 +605,12 @@ pub struct RunConfig {
     /// `[diagnose]`, with the command line applied. Not part of the run identity: no
     /// journal is kept for `diagnose`, and these settings change no fit or sweep.
     pub diagnose: DiagnoseConfig,
+    /// `[predict]`, with `--at` applied. Not part of the run identity (it changes no fit).
+    #[serde(default)]
+    pub predict: PredictConfig,
     /// `[profile]`. Not part of the run identity: no journal is kept for `profile`, and these
     /// settings change no fit or sweep.
+    #[serde(default)]
     pub profile: ProfileConfig,
     /// Where and how the run is carried out (not part of the identity).
     pub run: RunOptions,
@@ -545,6 +628,8 @@ struct RawConfig {
     ruptures: PathBuf,
     #[serde(rename = "temperature_C")]
     temperature_c: Option<f64>,
+    #[serde(rename = "T_ref")]
+    t_ref: Option<f64>,
     #[serde(default = "default_model")]
     model: String,
     #[serde(default)]
@@ -562,6 +647,8 @@ struct RawConfig {
     #[serde(default)]
     diagnose: DiagnoseConfig,
     #[serde(default)]
+    predict: RawPredict,
+    #[serde(default)]
     profile: ProfileConfig,
 }
 
@@ -569,13 +656,65 @@ fn default_model() -> String {
     "khd".to_string()
 }
 
+/// A constant as the file gives it: its box, start and scale, its temperature law and the
+/// law's parameter under the parameter's name (e.g. `Q = { lb = 200, ub = 500 }`). Unknown
+/// keys land in `rest` and are reported by name (serde cannot deny them next to a flattened
+/// map).
 #[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
 struct RawConstant {
     lb: f64,
     ub: f64,
     start: Option<f64>,
     scale: Option<Scale>,
+    law: Option<LawKind>,
+    #[serde(flatten)]
+    rest: BTreeMap<String, RawLawParam>,
+}
+
+/// A law parameter: a number (held at that value) or a box like a constant's.
+enum RawLawParam {
+    Held(f64),
+    Free(RawBox),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawBox {
+    lb: f64,
+    ub: f64,
+    start: Option<f64>,
+    scale: Option<Scale>,
+}
+
+impl<'de> Deserialize<'de> for RawLawParam {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = RawLawParam;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str(
+                    "a number (the parameter held at it) or a table { lb, ub[, start][, scale] }",
+                )
+            }
+            fn visit_f64<E: serde::de::Error>(self, v: f64) -> std::result::Result<Self::Value, E> {
+                Ok(RawLawParam::Held(v))
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> std::result::Result<Self::Value, E> {
+                Ok(RawLawParam::Held(v as f64))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> std::result::Result<Self::Value, E> {
+                Ok(RawLawParam::Held(v as f64))
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                map: A,
+            ) -> std::result::Result<Self::Value, A::Error> {
+                RawBox::deserialize(serde::de::value::MapAccessDeserializer::new(map))
+                    .map(RawLawParam::Free)
+            }
+        }
+        d.deserialize_any(V)
+    }
 }
 
 /// `[solver]` as the file gives it: the keys a user may set.
@@ -629,8 +768,42 @@ impl RunConfig {
     }
 
     /// Bind the configuration to the content hash of its loaded data.
+    ///
+    /// With temperature laws this also resolves what depends on the data: `T_ref` defaults
+    /// to the mean test temperature (over the curves; exactly their temperature when they
+    /// share one), and with one temperature in the data every law parameter is held (at its
+    /// start, else at 0 or the bound nearest to it): it cannot be determined from one
+    /// temperature, and the fit is then the fit without laws (bit for bit at the default
+    /// `T_ref`).
     pub fn with_data(mut self, data: &Dataset) -> RunConfig {
         self.data_hash = crate::identity::data_hash(data);
+        if self.has_laws() && !data.curves.is_empty() {
+            let temps: Vec<f64> = data.curves.iter().map(|c| c.temperature_c).collect();
+            let lo = temps.iter().cloned().fold(f64::INFINITY, f64::min);
+            let one = temps.iter().all(|t| *t == lo);
+            if self.t_ref.is_none() {
+                // lo + mean(t − lo): exactly lo when all are equal.
+                let mean_dev = temps.iter().map(|t| t - lo).sum::<f64>() / temps.len() as f64;
+                self.t_ref = Some(lo + mean_dev);
+            }
+            if one {
+                let mut held = Vec::new();
+                let n = self.n_model_constants();
+                for c in self.constants[n..].iter_mut().filter(|c| !c.held) {
+                    let v = c.start.unwrap_or_else(|| 0.0f64.clamp(c.lb, c.ub));
+                    c.start = Some(v);
+                    c.held = true;
+                    held.push(format!("{} = {v}", c.name));
+                }
+                if !held.is_empty() {
+                    self.warnings.push(format!(
+                        "{}: the data are at one temperature ({lo} °C): the temperature laws' parameters cannot be determined and are held ({})",
+                        self.path.display(),
+                        held.join(", ")
+                    ));
+                }
+            }
+        }
         self
     }
 
@@ -693,6 +866,8 @@ impl RunConfig {
                     ub: r.ub,
                     start: r.start,
                     scale: r.scale.unwrap_or(s.scale),
+                    law: r.law.unwrap_or_default(),
+                    held: false,
                 },
                 None => {
                     if j < n_base {
@@ -714,11 +889,86 @@ impl RunConfig {
                         ub: s.ub,
                         start: None,
                         scale: s.scale,
+                        law: LawKind::Constant,
+                        held: false,
                     }
                 }
             };
             validate_constant(&c).map_err(|m| invalid(format!("constants.{}", c.name), m))?;
             constants.push(c);
+        }
+        // The laws' parameters, after the model's constants (model order).
+        let with_params =
+            laws::constants_with_laws(specs, &constants.iter().map(|c| c.law).collect::<Vec<_>>());
+        for (s, c) in specs.iter().zip(constants.clone()) {
+            let allowed = c.law.param();
+            if let Some(r) = raw.constants.get(s.name) {
+                if let Some(key) = r.rest.keys().find(|k| Some(k.as_str()) != allowed) {
+                    let what = match LawKind::ALL.iter().find(|l| l.param() == Some(key.as_str())) {
+                        Some(l) => format!(
+                            "`{key}` is the parameter of law \"{}\", but the constant's law is \"{}\"{}",
+                            l.name(),
+                            c.law.name(),
+                            if c.law == LawKind::Constant { " (say law = \"...\")" } else { "" }
+                        ),
+                        None => format!(
+                            "unknown field `{key}`, expected one of `lb`, `ub`, `start`, `scale`, `law`{}",
+                            allowed.map(|p| format!(", `{p}`")).unwrap_or_default()
+                        ),
+                    };
+                    return Err(invalid(format!("constants.{}.{key}", s.name), what));
+                }
+            }
+            let Some(param) = allowed else { continue };
+            let name = format!("{}.{param}", s.name);
+            let spec = with_params
+                .iter()
+                .find(|p| p.name == name)
+                .expect("a law parameter for every law");
+            let given = raw.constants.get(s.name).and_then(|r| r.rest.get(param));
+            let p = match given {
+                Some(RawLawParam::Held(v)) => ConstantConfig {
+                    name: name.clone(),
+                    unit: spec.unit,
+                    lb: *v,
+                    ub: *v,
+                    start: Some(*v),
+                    scale: Scale::Linear,
+                    law: LawKind::Constant,
+                    held: true,
+                },
+                Some(RawLawParam::Free(b)) => ConstantConfig {
+                    name: name.clone(),
+                    unit: spec.unit,
+                    lb: b.lb,
+                    ub: b.ub,
+                    start: b.start,
+                    scale: b.scale.unwrap_or(Scale::Linear),
+                    law: LawKind::Constant,
+                    held: false,
+                },
+                None => {
+                    warnings.push(format!(
+                        "{}: constants.{name}: not given; the law's default bounds [{}, {}] {} apply, without a start",
+                        path.display(),
+                        spec.lb,
+                        spec.ub,
+                        spec.unit
+                    ));
+                    ConstantConfig {
+                        name: name.clone(),
+                        unit: spec.unit,
+                        lb: spec.lb,
+                        ub: spec.ub,
+                        start: None,
+                        scale: Scale::Linear,
+                        law: LawKind::Constant,
+                        held: false,
+                    }
+                }
+            };
+            validate_constant(&p).map_err(|m| invalid(format!("constants.{name}"), m))?;
+            constants.push(p);
         }
         if !missing_base.is_empty() {
             return Err(invalid(
@@ -767,6 +1017,7 @@ impl RunConfig {
             ruptures: dir.join(&raw.ruptures),
             data_hash: String::new(),
             temperature_c: raw.temperature_c,
+            t_ref: raw.t_ref,
             model: raw.model,
             extensions: raw.extensions,
             interrupted: raw.interrupted,
@@ -784,6 +1035,21 @@ impl RunConfig {
                 alpha: cli.diagnose.alpha.unwrap_or(raw.diagnose.alpha),
                 ..raw.diagnose
             },
+            predict: PredictConfig {
+                at: match &cli.predict_at {
+                    Some(at) => at.clone(),
+                    None => raw
+                        .predict
+                        .at
+                        .iter()
+                        .enumerate()
+                        .map(|(k, s)| {
+                            Condition::parse(s).map_err(|m| invalid(format!("predict.at[{k}]"), m))
+                        })
+                        .collect::<std::result::Result<_, _>>()?,
+                },
+                lmp_degree: raw.predict.lmp_degree.unwrap_or(crate::lmp::DEFAULT_DEGREE),
+            },
             profile: raw.profile,
             run: cli.run.clone(),
             warnings,
@@ -797,7 +1063,20 @@ impl RunConfig {
         validate_extensions(&self.extensions)?;
         let m = model::build(&self.model, &self.extensions)
             .map_err(|e| invalid("extensions", e.to_string()))?;
-        let names: Vec<&str> = m.constants().iter().map(|s| s.name).collect();
+        let n_inner = m.constants().len();
+        if self.constants.len() < n_inner {
+            return Err(invalid(
+                "constants",
+                format!(
+                    "the model '{}' has {n_inner} constants, the configuration {}",
+                    m.name(),
+                    self.constants.len()
+                ),
+            ));
+        }
+        let kinds: Vec<LawKind> = self.constants[..n_inner].iter().map(|c| c.law).collect();
+        let all = laws::constants_with_laws(m.constants(), &kinds);
+        let names: Vec<&str> = all.iter().map(|s| s.name).collect();
         if self.constant_names() != names {
             return Err(invalid(
                 "constants",
@@ -811,6 +1090,22 @@ impl RunConfig {
         }
         for c in &self.constants {
             validate_constant(c).map_err(|m| invalid(format!("constants.{}", c.name), m))?;
+        }
+        for c in &self.constants[n_inner..] {
+            if c.law != LawKind::Constant {
+                return Err(invalid(
+                    format!("constants.{}", c.name),
+                    "a law's parameter has no law of its own",
+                ));
+            }
+        }
+        if let Some(t) = self.t_ref {
+            if !(t.is_finite() && t > -crate::model::ZERO_CELSIUS_K) {
+                return Err(invalid(
+                    "T_ref",
+                    format!("must be a finite temperature above absolute zero, °C (got {t})"),
+                ));
+            }
         }
         if let Some(t) = self.temperature_c {
             if !t.is_finite() {
@@ -834,6 +1129,12 @@ impl RunConfig {
         }
         validate_solver(&self.solver)?;
         self.diagnose.validate()?;
+        if self.predict.lmp_degree > 4 {
+            return Err(invalid(
+                "predict.lmp_degree",
+                format!("must be at most 4 (got {})", self.predict.lmp_degree),
+            ));
+        }
         self.profile.validate()?;
         validate_run(&self.run)
     }
@@ -859,13 +1160,55 @@ impl RunConfig {
         LoadOptions {
             temperature_c: self.temperature_c,
             interrupted: self.interrupted.clone(),
-            ..LoadOptions::default()
+            several_temperatures: self.has_laws(),
         }
     }
 
-    /// Load the run's data ([`data::load`] with [`RunConfig::load_options`]).
+    /// Whether some constant follows a temperature law other than `constant`.
+    pub fn has_laws(&self) -> bool {
+        self.constants.iter().any(|c| c.law != LawKind::Constant)
+    }
+
+    /// Number of the model's own constants (the laws' parameters follow them).
+    pub fn n_model_constants(&self) -> usize {
+        let n_params = self
+            .constants
+            .iter()
+            .filter(|c| c.law.param().is_some())
+            .count();
+        self.constants.len() - n_params
+    }
+
+    /// The model of the run: the registry's model with its extensions and, when some
+    /// constant has a temperature law, the laws about `T_ref` ([`laws::with_laws`]).
+    pub fn build_model(&self) -> Result<Box<dyn Model>> {
+        let m = model::build(&self.model, &self.extensions)?;
+        if !self.has_laws() {
+            return Ok(m);
+        }
+        let t_ref = self.t_ref.ok_or_else(|| {
+            Error::config(
+                &self.path,
+                "T_ref: not resolved; bind the configuration to its data (RunConfig::resolve or with_data) or give T_ref",
+            )
+        })?;
+        let kinds: Vec<LawKind> = self.constants[..m.constants().len()]
+            .iter()
+            .map(|c| c.law)
+            .collect();
+        Ok(laws::with_laws(m, &kinds, t_ref))
+    }
+
+    /// Load the run's data ([`data::load`] with [`RunConfig::load_options`]), each curve
+    /// averaged down to `objective.max_points` points when that is set.
     pub fn load_data(&self) -> Result<Dataset> {
-        data::load(&self.curves, &self.ruptures, &self.load_options())
+        let mut data = data::load(&self.curves, &self.ruptures, &self.load_options())?;
+        if self.objective.max_points > 0 {
+            for c in &mut data.curves {
+                *c = crate::diagnose::binned(c, self.objective.max_points);
+            }
+        }
+        Ok(data)
     }
 
     /// The start vector (model order) if every constant has a start, else `None`.
@@ -934,8 +1277,23 @@ fn validate_constant(c: &ConstantConfig) -> std::result::Result<(), String> {
             c.lb, c.ub
         ));
     }
-    if c.lb >= c.ub {
+    if c.held {
+        // Held at its start, which must lie in [lb, ub] (lb = ub = start for a law parameter
+        // given as a number).
+        if c.start.is_none() {
+            return Err("a held constant needs its value (start)".into());
+        }
+        if c.lb > c.ub {
+            return Err(format!("lb ({}) must not be above ub ({})", c.lb, c.ub));
+        }
+    } else if c.lb >= c.ub {
         return Err(format!("lb ({}) must be below ub ({})", c.lb, c.ub));
+    }
+    if c.law == LawKind::Arrhenius && c.lb <= 0.0 {
+        return Err(format!(
+            "law \"arrhenius\" needs a positive constant (lb > 0, lb = {})",
+            c.lb
+        ));
     }
     if c.scale == Scale::Log && c.lb <= 0.0 {
         return Err(format!("scale \"log\" needs lb > 0 (lb = {})", c.lb));
@@ -985,6 +1343,21 @@ fn validate_objective(o: &ObjectiveConfig) -> std::result::Result<(), Invalid> {
                 ));
             }
         }
+    }
+    if (1..10).contains(&o.max_points) {
+        return Err(invalid(
+            "objective.max_points",
+            format!(
+                "must be 0 (all points) or at least 10 (got {})",
+                o.max_points
+            ),
+        ));
+    }
+    if !(o.lifetime_sd_floor > 0.0 && o.lifetime_sd_floor.is_finite()) {
+        return Err(invalid(
+            "objective.lifetime_sd_floor",
+            format!("must be positive (got {})", o.lifetime_sd_floor),
+        ));
     }
     if !(o.omega_f > 0.0 && o.omega_f < 1.0) {
         return Err(invalid(
@@ -1269,6 +1642,7 @@ rtol = 1e-8
                 bootstrap: Some(199),
                 ..DiagnoseOverrides::default()
             },
+            predict_at: None,
             run: RunOptions {
                 out: Some("o".into()),
                 threads: Some(1),

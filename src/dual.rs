@@ -131,9 +131,15 @@ pub fn cbrt(x: f64) -> f64 {
 }
 
 /// Number of constants a [`Dual`] carries derivatives for in the fit's sensitivity Jacobian
-/// (the base model's six plus two extension constants); more free constants fall back to
-/// finite differences.
+/// when at most this many constants are free (the base model's six plus two): the narrow,
+/// fast width.
 pub const SENS: usize = 8;
+
+/// The wide width of the sensitivity Jacobian: used when more than [`SENS`] constants are
+/// free (extensions, temperature laws); above it the constants are seeded in chunks of this
+/// many, one simulation per chunk ([`crate::objective::CreepProblem`]). Never finite
+/// differences unless the configuration asks for them.
+pub const SENS_WIDE: usize = 16;
 
 /// A value and its gradient with respect to `K` independent variables.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -271,6 +271,18 @@ impl ErrorModel {
         }
     }
 
+    /// As [`ErrorModel::estimate`] with every curve's reading error white (φ = 0): the first
+    /// stage of a maximum-likelihood fit, where a smooth misfit is still seen as misfit.
+    pub fn estimate_white(res: &Residuals, lifetime_sd_floor: f64) -> ErrorModel {
+        let mut m = ErrorModel::estimate(res, lifetime_sd_floor);
+        for (a, e) in m.strain.iter_mut().zip(&res.strain) {
+            let n = e.len().max(1) as f64;
+            let ms = e.iter().map(|v| v * v).sum::<f64>() / n;
+            *a = Ar1::white(ms.sqrt().max(SIGMA_FLOOR));
+        }
+        m
+    }
+
     /// Exact −2 ln L of `res` under this model (strain and lifetime parts).
     pub fn neg2ll(&self, res: &Residuals) -> f64 {
         self.neg2ll_parts(res).iter().sum()

@@ -11,20 +11,28 @@
 //! the ideal point. Candidates within [`TIE_SCORE`] of the best score are ties; among ties
 //! the largest lifetime weight wins (the paper's own choice at 560 °C was w = 1: weight the
 //! lifetime as much as it costs nothing), then the earlier candidate.
+//!
+//! **Large logged curves** (a curve of more than [`MULTIRES_MIN_POINTS`] points): each local
+//! fit runs in two stages, the LM on bin-averaged curves ([`bin_curves`], at most
+//! [`MULTIRES_BINNED_POINTS`] points a curve, weighted so that the binned objective is the
+//! full one up to binning terms) and then the LM on the full data from that point, under the
+//! same options and termination rules: the reported fit is a converged fit of the full-data
+//! objective. Smaller data take exactly the one-stage path.
 
 use std::time::Instant;
 
 use rayon::prelude::*;
 
 pub use crate::config::StartChoice;
-use crate::config::{LifetimeTerm, RunConfig};
+use crate::config::{LifetimeTerm, ObjectiveKind, RunConfig};
 use crate::data::{Curve, Dataset};
 use crate::error::{Error, Result};
 use crate::guess::{initial_guess, Guess};
 use crate::lsq::{minimize, LmOptions, LmReport, Termination};
-use crate::model::{build, Model};
+use crate::model::Model;
 use crate::objective::{
-    mean_abs, CreepProblem, Evaluation, JacobianMethod, Objective, ObjectiveSettings, ParamSpace,
+    bin_curves, mean_abs, CreepProblem, Evaluation, JacobianMethod, Objective, ObjectiveSettings,
+    ParamSpace,
 };
 use crate::ode::OdeOptions;
 
@@ -42,6 +50,10 @@ pub struct FitSettings {
     pub lifetime: LifetimeTerm,
     /// How the local fits' Jacobian is computed.
     pub jacobian: JacobianMethod,
+    /// What the local fits minimise.
+    pub kind: ObjectiveKind,
+    /// Floor of the rupture-time scatter (ln scale) under [`ObjectiveKind::Likelihood`].
+    pub lifetime_sd_floor: f64,
 }
 
 impl FitSettings {
@@ -53,6 +65,8 @@ impl FitSettings {
             omega_f: cfg.objective.omega_f,
             lifetime: cfg.objective.lifetime_term,
             jacobian: cfg.solver.jacobian,
+            kind: cfg.objective.kind,
+            lifetime_sd_floor: cfg.objective.lifetime_sd_floor,
         }
     }
 
@@ -106,16 +120,44 @@ impl LocalFit {
     }
 }
 
-/// Bounds and scales of a configuration as a [`ParamSpace`].
+/// Bounds and scales of a configuration as a [`ParamSpace`]; held constants (law
+/// parameters given as a number, or of data at one temperature) are held at their start.
 pub fn param_space(cfg: &RunConfig) -> ParamSpace {
-    ParamSpace::new(
+    let mut space = ParamSpace::new(
         cfg.constants.iter().map(|c| c.lb).collect(),
         cfg.constants.iter().map(|c| c.ub).collect(),
         cfg.constants.iter().map(|c| c.scale).collect(),
-    )
+    );
+    for (j, c) in cfg.constants.iter().enumerate() {
+        if c.held {
+            space.hold(
+                j,
+                c.start.expect("a held constant has its value (validated)"),
+            );
+        }
+    }
+    space
 }
 
-/// Bounded LM from `start` (physical constants) at lifetime weights `w`.
+/// A fit whose data has a curve of more than this many points runs in two stages (module
+/// docs); its [`LocalFit::eval`] then holds no predicted strains ([`with_predictions`]).
+pub const MULTIRES_MIN_POINTS: usize = 20_000;
+/// Most points a curve has in the binned first stage of a two-stage fit. Measured on the
+/// 1 M-point benchmark (`scripts/bench_large.sh`): with 2,000 or 5,000 bins the binned fits
+/// from the computed guess crawled along the B–H* valley to the iteration limit (its
+/// minimum lies elsewhere along the valley than the full data's); 10,000, 20,000 and 50,000
+/// all converged with 31–54 iterations, 10,000 the fastest.
+pub const MULTIRES_BINNED_POINTS: usize = 10_000;
+
+/// Whether fits to `curves` run in two stages (a curve above [`MULTIRES_MIN_POINTS`]).
+pub fn is_large(curves: &[Curve]) -> bool {
+    curves.iter().any(|c| c.times_h.len() > MULTIRES_MIN_POINTS)
+}
+
+/// Bounded LM from `start` (physical constants) at lifetime weights `w` on the objective of
+/// `settings.kind`: eq. 8, on large data in two stages (module docs), whose iterations and
+/// evaluations the report adds up; or −2 ln L ([`crate::likelihood::ml_fit`]; `w` is then 1,
+/// and the fit's `eval.objective` is −2 ln L, its other fields eq. 8's at w = 1, both sides).
 pub fn local_fit(
     model: &dyn Model,
     curves: &[Curve],
@@ -126,6 +168,9 @@ pub fn local_fit(
     settings: &FitSettings,
 ) -> LocalFit {
     let t0 = Instant::now();
+    if settings.kind == ObjectiveKind::Likelihood {
+        return likelihood_fit(model, curves, space, start, start_label, settings, t0);
+    }
     let problem = CreepProblem {
         objective: Objective::new(model, curves, w.to_vec(), settings.objective()),
         space: space.clone(),
@@ -133,13 +178,59 @@ pub fn local_fit(
     };
     let u0 = space.to_unit(start);
     let k = u0.len();
-    let mut lm = minimize(&problem, &u0, &vec![0.0; k], &vec![1.0; k], &settings.lm);
+    let (lb, ub) = (vec![0.0; k], vec![1.0; k]);
+    let large = is_large(curves);
+    let mut lm = if large {
+        let bins = bin_curves(curves, MULTIRES_BINNED_POINTS);
+        let coarse = CreepProblem {
+            objective: Objective::binned(model, &bins, w.to_vec(), settings.objective()),
+            space: space.clone(),
+            jacobian: settings.jacobian,
+        };
+        let first = minimize(&coarse, &u0, &lb, &ub, &settings.lm);
+        // A first stage that could not simulate at all leaves the start to the second.
+        let from = if first.termination == Termination::SimulationFailure {
+            &u0
+        } else {
+            &first.x
+        };
+        // The iteration continues on the full data with the damping it had reached (never
+        // more than a fresh start's): the binned objective's JᵀJ is the full one's to first
+        // order, and a fresh λ0 (1e-3 of its largest diagonal) made the first step on a
+        // million points, from so close to the minimum, shorter than xtol: a false
+        // `converged_step`. Without geodesic
+        // acceleration: from next to the minimum the plain steps converged in 3–6 iterations
+        // where the accelerated ones took 16–21 (1 M points; each also costs the probe and
+        // the Jacobian once more).
+        let opts = LmOptions {
+            lambda0: if first.lambda.is_finite() {
+                first.lambda.min(settings.lm.lambda0)
+            } else {
+                settings.lm.lambda0
+            },
+            geodesic: None,
+            ..settings.lm
+        };
+        let mut lm = minimize(&problem, from, &lb, &ub, &opts);
+        lm.iterations += first.iterations;
+        lm.evaluations += first.evaluations;
+        lm
+    } else {
+        minimize(&problem, &u0, &lb, &ub, &settings.lm)
+    };
     // `eval` below holds the predictions; the residual vector (8 bytes a measured point) is
     // not kept in each of the fits of a run.
     lm.residuals = Vec::new();
     let mut params = start.to_vec();
     space.from_unit(&lm.x, &mut params);
-    let eval = problem.objective.evaluate(&params);
+    let mut eval = problem.objective.evaluate(&params);
+    if large {
+        // Nor are a large fit's predictions (8 MB a million points, times every fit of a
+        // run): [`with_predictions`] recomputes them for the fit that is reported.
+        for p in &mut eval.curves {
+            p.strain = Vec::new();
+        }
+    }
     LocalFit {
         start_label: start_label.to_string(),
         start: start.to_vec(),
@@ -151,6 +242,116 @@ pub fn local_fit(
         eval,
         wall_s: t0.elapsed().as_secs_f64(),
     }
+}
+
+/// [`local_fit`] under the likelihood objective.
+fn likelihood_fit(
+    model: &dyn Model,
+    curves: &[Curve],
+    space: &ParamSpace,
+    start: &[f64],
+    start_label: &str,
+    settings: &FitSettings,
+    t0: Instant,
+) -> LocalFit {
+    let opts = crate::likelihood::MlOptions {
+        lifetime_sd_floor: settings.lifetime_sd_floor,
+        ..Default::default()
+    };
+    let ml = crate::likelihood::ml_fit(model, curves, space, start, settings, &opts);
+    let mut eval = ml.eval.clone().unwrap_or_else(|| {
+        crate::likelihood::raw_objective(model, curves, settings).evaluate(&ml.params)
+    });
+    eval.objective = ml.neg2ll;
+    LocalFit {
+        start_label: start_label.to_string(),
+        start: start.to_vec(),
+        w: vec![1.0; curves.len()],
+        lifetime_err_pct: eval.lifetime_errors_pct(curves),
+        min_rate_err_pct: eval.min_rate_errors_pct(curves),
+        lm: LmReport {
+            x: space.to_unit(&ml.params),
+            objective: ml.neg2ll,
+            residuals: Vec::new(),
+            iterations: ml.iterations,
+            evaluations: ml.evaluations,
+            termination: ml.termination,
+            failure: ml.failure.clone(),
+            lambda: f64::NAN,
+        },
+        params: ml.params,
+        eval,
+        wall_s: t0.elapsed().as_secs_f64(),
+    }
+}
+
+/// A fit's errors at one temperature of a joint calibration.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct TemperatureErrors {
+    /// Temperature, °C.
+    #[serde(rename = "temperature_C")]
+    pub temperature_c: f64,
+    /// Curves at it.
+    pub curves: usize,
+    /// Σ((ε_pred − ε)/ε_f)² over its curves: the strain term of eq. 8.
+    pub norm_residual: f64,
+    /// Mean |lifetime error| over its curves, %.
+    pub mean_lifetime_err_pct: f64,
+    /// Mean |minimum-rate error| over its curves, %.
+    pub mean_min_rate_err_pct: f64,
+}
+
+/// The errors of `fit` per temperature of `curves` (ascending temperature).
+pub fn errors_per_temperature(fit: &LocalFit, curves: &[Curve]) -> Vec<TemperatureErrors> {
+    let mut temps: Vec<f64> = curves.iter().map(|c| c.temperature_c).collect();
+    temps.sort_by(f64::total_cmp);
+    temps.dedup();
+    temps
+        .into_iter()
+        .map(|t| {
+            let idx: Vec<usize> = (0..curves.len())
+                .filter(|&i| curves[i].temperature_c == t)
+                .collect();
+            let norm_residual = idx
+                .iter()
+                .map(|&i| {
+                    let (c, p) = (&curves[i], &fit.eval.curves[i]);
+                    (0..c.times_h.len())
+                        .map(|k| ((p.strain[k] - c.strains[k]) / c.rupture_strain).powi(2))
+                        .sum::<f64>()
+                })
+                .sum();
+            let pick = |v: &[f64]| idx.iter().map(|&i| v[i]).collect::<Vec<f64>>();
+            TemperatureErrors {
+                temperature_c: t,
+                curves: idx.len(),
+                norm_residual,
+                mean_lifetime_err_pct: mean_abs(&pick(&fit.lifetime_err_pct)),
+                mean_min_rate_err_pct: mean_abs(&pick(&fit.min_rate_err_pct)),
+            }
+        })
+        .collect()
+}
+
+/// `fit` with its predicted strains at every measured time in [`LocalFit::eval`]: recomputed
+/// (the same numbers: the evaluation is deterministic) where [`local_fit`] did not keep them.
+pub fn with_predictions(
+    mut fit: LocalFit,
+    model: &dyn Model,
+    curves: &[Curve],
+    settings: &FitSettings,
+) -> LocalFit {
+    let complete = fit
+        .eval
+        .curves
+        .iter()
+        .zip(curves)
+        .all(|(p, c)| p.strain.len() == c.times_h.len());
+    if !complete {
+        fit.eval = Objective::new(model, curves, fit.w.clone(), settings.objective())
+            .evaluate(&fit.params);
+    }
+    fit
 }
 
 /// Resolution of the normalised residual in the best-w rule, relative.
@@ -233,8 +434,15 @@ pub struct FitRun {
 /// weight vector; the best by [`choose_best`]. The starts are `cfg.fit.starts`, the weights
 /// `cfg.objective`'s.
 pub fn run_fit(cfg: &RunConfig, data: &Dataset) -> Result<FitRun> {
+    run_fit_multistart(cfg, data, 0)
+}
+
+/// [`run_fit`] with `lhs` Latin-hypercube starts in the box besides the configured start and
+/// the guess (drawn from `cfg.sweep.seed`, as a sweep's): a global search in one command, for
+/// joint calibrations whose guess can lie in a poor basin (`holdout`).
+pub fn run_fit_multistart(cfg: &RunConfig, data: &Dataset, lhs: usize) -> Result<FitRun> {
     let t0 = Instant::now();
-    let model = build(&cfg.model, &cfg.extensions)?;
+    let model = cfg.build_model()?;
     let space = param_space(cfg);
     let settings = FitSettings::from_config(cfg);
     let curves = &data.curves;
@@ -262,19 +470,37 @@ pub fn run_fit(cfg: &RunConfig, data: &Dataset) -> Result<FitRun> {
     if choice != StartChoice::Config {
         starts.push(("guess".to_string(), guess.params.clone()));
     }
+    if lhs > 0 {
+        let mut rng = <rand_chacha::ChaCha8Rng as rand::SeedableRng>::seed_from_u64(cfg.sweep.seed);
+        for (k, u) in crate::sweep::latin_hypercube(lhs, space.n_free(), &mut rng)
+            .into_iter()
+            .enumerate()
+        {
+            let mut x = vec![0.0; space.len()];
+            space.from_unit(&u, &mut x);
+            starts.push((format!("lhs:{k}"), x));
+        }
+    }
     let ws = cfg.objective.weight_vectors(curves.len(), &cfg.path)?;
     let jobs: Vec<_> = starts
         .iter()
         .flat_map(|s| ws.iter().map(move |w| (s, w)))
         .collect();
-    let fits: Vec<LocalFit> = jobs
+    let mut fits: Vec<LocalFit> = jobs
         .par_iter()
         .map(|((label, start), w)| {
             local_fit(model.as_ref(), curves, &space, w, start, label, &settings)
         })
         .collect();
     let used_min_rate = curves.iter().all(|c| c.min_rate_measured.is_some());
-    let best = choose_best(&fits, used_min_rate).ok_or_else(|| {
+    let best = match settings.kind {
+        ObjectiveKind::Eq8 => choose_best(&fits, used_min_rate),
+        // One weight: the highest likelihood among the starts.
+        ObjectiveKind::Likelihood => (0..fits.len())
+            .filter(|&i| fits[i].ok())
+            .min_by(|&a, &b| fits[a].eval.objective.total_cmp(&fits[b].eval.objective)),
+    };
+    let best = best.ok_or_else(|| {
         Error::Numerical(format!(
             "none of the {} local fits reached an evaluable point (first: {})",
             fits.len(),
@@ -287,6 +513,10 @@ pub fn run_fit(cfg: &RunConfig, data: &Dataset) -> Result<FitRun> {
                 .unwrap_or_default()
         ))
     })?;
+    let chosen = fits.swap_remove(best);
+    fits.push(with_predictions(chosen, model.as_ref(), curves, &settings));
+    let last = fits.len() - 1;
+    fits.swap(best, last);
     Ok(FitRun {
         model,
         space,
@@ -317,6 +547,7 @@ mod tests {
                 evaluations: 1,
                 termination: Termination::ConvergedStep,
                 failure: None,
+                lambda: 1e-3,
             },
             eval: Evaluation {
                 objective: norm,

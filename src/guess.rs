@@ -1,133 +1,76 @@
-//! The seed paper's initial-guess procedure (section IV.C), made concrete:
+//! Start points of the local fits: a model's own initial-guess procedure (named in its
+//! registry entry, e.g. the KHD procedure of the seed paper's section IV.C in
+//! [`crate::model::khd_guess`]), or the centre of the box for a model without one.
 //!
-//! 1. **C** from the rupture strain: ω = Cε exactly, so C = ω_f / mean(ε_f).
-//! 2. **A, B, H\*, h** together: at the minimum creep rate H ≈ H*, Φ ≈ 0, ω ≈ 0, so
-//!    ε̇_min(σ) = A·sinh(S·σ) with S = B(1 − H*). For a trial (H*, h) the pair (A, S) comes
-//!    from a least-squares fit of ln ε̇_min against ln sinh(Sσ) (a one-dimensional search in S,
-//!    A in closed form) and B = S/(1 − H*); (H*, h) are then fitted to the primary part of
-//!    every curve (the points before 30 % of life) with the full model.
-//! 3. **Kc** by a one-dimensional fit of eq. 8 (w = 1) with all the others held.
-//!
-//! Measured minimum creep rates come from the ruptures file where given, else from the curve
-//! (see [`crate::data::estimate_min_rate`]). Every value is finally put inside its bounds.
+//! With constants that follow temperature laws, the guess is made per temperature (the
+//! model's procedure on that temperature's curves, in a box that holds every value the law
+//! can reach there) and each law is then fitted to those per-temperature values
+//! ([`crate::model::law`], e.g. ln c on 1/T for an Arrhenius law).
 
-use crate::config::LifetimeTerm;
+use serde::Serialize;
+
 use crate::data::Curve;
-use crate::lsq::{minimize, EvalFailure, LeastSquaresProblem, LmOptions};
-use crate::model::Model;
-use crate::objective::{
-    CreepProblem, JacobianMethod, Objective, ObjectiveSettings, ParamSpace, MAX_PARAMS,
-};
+use crate::model::law::Laws;
+use crate::model::{LawKind, Model, Scale, ZERO_CELSIUS_K};
+use crate::objective::ParamSpace;
 use crate::ode::OdeOptions;
 
-/// Fraction of the rupture life taken as the primary stage for fitting H* and h.
-pub const PRIMARY_FRACTION: f64 = 0.3;
+/// How a start point was made.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GuessProcedure {
+    /// The model's own procedure (its registry entry's).
+    Model,
+    /// The model has none: the centre of the box (in the optimiser's scaled coordinates).
+    BoxCentre,
+    /// The model's procedure per temperature, then each temperature law fitted to the
+    /// per-temperature values.
+    PerTemperature,
+}
 
-/// Index of each KHD constant in a parameter vector.
-const IA: usize = 0;
-const IB: usize = 1;
-const IHS: usize = 2;
-const IH: usize = 3;
-const IKC: usize = 4;
-const IC: usize = 5;
+/// A model's own initial-guess procedure: constants (model order) for `curves` of one
+/// temperature within `space`, with damage at rupture `omega_f` and integration options `ode`.
+pub type GuessFn = fn(
+    model: &dyn Model,
+    curves: &[Curve],
+    space: &ParamSpace,
+    omega_f: f64,
+    ode: &OdeOptions,
+) -> Guess;
 
-/// What the guess procedure found, step by step.
+/// What the guess procedure found.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Guess {
     /// The initial constants, inside the bounds, in the model's order.
     pub params: Vec<f64>,
-    /// Minimum creep rate used per curve, 1/h.
+    /// Minimum creep rate used per curve, 1/h (empty when the procedure uses none).
     pub min_rates: Vec<f64>,
-    /// S = B(1 − H*) from the minimum-rate regression, 1/MPa.
-    pub s: f64,
     /// Which constants had to be clamped to a bound.
     pub clamped: Vec<String>,
+    /// How the guess was made.
+    pub procedure: GuessProcedure,
+    /// With temperature laws: the guess at each temperature (°C, the model's constants
+    /// there), from which the laws were fitted.
+    pub per_temperature: Vec<(f64, Vec<f64>)>,
 }
 
-/// (A, S) minimising Σ (ln ε̇_i − ln A − ln sinh(S σ_i))² for given rates.
-pub fn fit_min_rates(stress: &[f64], rates: &[f64]) -> (f64, f64) {
-    let ln_rates: Vec<f64> = rates.iter().map(|r| r.ln()).collect();
-    let cost = |s: f64| -> (f64, f64) {
-        let lsh: Vec<f64> = stress.iter().map(|sig| ln_sinh(s * sig)).collect();
-        let ln_a = ln_rates.iter().zip(&lsh).map(|(l, q)| l - q).sum::<f64>() / rates.len() as f64;
-        let c = ln_rates
-            .iter()
-            .zip(&lsh)
-            .map(|(l, q)| (l - ln_a - q).powi(2))
-            .sum::<f64>();
-        (c, ln_a)
-    };
-    // Golden-section search on ln S over a wide bracket (S σ from 1e-3 to 100).
-    let smax = stress.iter().cloned().fold(0.0, f64::max).max(1e-12);
-    let (mut lo, mut hi) = ((1e-3 / smax).ln(), (100.0 / smax).ln());
-    let g = 0.5 * (5f64.sqrt() - 1.0);
-    let mut x1 = hi - g * (hi - lo);
-    let mut x2 = lo + g * (hi - lo);
-    let (mut f1, mut f2) = (cost(x1.exp()).0, cost(x2.exp()).0);
-    for _ in 0..200 {
-        if f1 < f2 {
-            hi = x2;
-            x2 = x1;
-            f2 = f1;
-            x1 = hi - g * (hi - lo);
-            f1 = cost(x1.exp()).0;
-        } else {
-            lo = x1;
-            x1 = x2;
-            f1 = f2;
-            x2 = lo + g * (hi - lo);
-            f2 = cost(x2.exp()).0;
-        }
-    }
-    let s = (0.5 * (lo + hi)).exp();
-    (cost(s).1.exp(), s)
-}
-
-/// ln sinh(x) without overflow for large x.
-fn ln_sinh(x: f64) -> f64 {
-    if x > 20.0 {
-        x - std::f64::consts::LN_2 + (-(-2.0 * x).exp()).ln_1p()
-    } else {
-        x.sinh().ln()
+/// The centre of the box (scaled coordinates 0.5): the start of a model without a guess
+/// procedure.
+pub fn box_centre(space: &ParamSpace) -> Guess {
+    let mut x = vec![0.0; space.len()];
+    space.from_unit(&vec![0.5; space.n_free()], &mut x);
+    Guess {
+        params: x,
+        min_rates: Vec::new(),
+        clamped: Vec::new(),
+        procedure: GuessProcedure::BoxCentre,
+        per_temperature: Vec::new(),
     }
 }
 
-/// (H*, h) → constants with A, B from the minimum-rate regression; residuals of the primary
-/// stage of every curve.
-struct PrimaryProblem<'a> {
-    objective: Objective<'a>,
-    space: ParamSpace,
-    base: Vec<f64>,
-    a: f64,
-    s: f64,
-}
-
-impl PrimaryProblem<'_> {
-    fn params(&self, u: &[f64]) -> [f64; MAX_PARAMS] {
-        let mut x = [0.0; MAX_PARAMS];
-        x[..self.base.len()].copy_from_slice(&self.base);
-        x[IHS] = self.space.from_unit_one(IHS, u[0]);
-        x[IH] = self.space.from_unit_one(IH, u[1]);
-        x[IA] = self.a;
-        x[IB] = self.s / (1.0 - x[IHS]);
-        x
-    }
-}
-
-impl LeastSquaresProblem for PrimaryProblem<'_> {
-    fn n_params(&self) -> usize {
-        2
-    }
-    fn n_residuals(&self) -> usize {
-        self.objective.n_residuals()
-    }
-    fn residuals(&self, u: &[f64], r: &mut [f64]) -> Result<(), EvalFailure> {
-        let x = self.params(u);
-        self.objective.residuals(&x[..self.base.len()], r)
-    }
-}
-
-/// Run the procedure for the KHD constants [A, B, H*, h, Kc, C] within `space`.
+/// The initial guess of `model` on `curves` within `space`: the model's own procedure if its
+/// registry entry has one, else the centre of the box; per temperature for a model with
+/// temperature laws ([`per_temperature`]).
 pub fn initial_guess(
     model: &dyn Model,
     curves: &[Curve],
@@ -135,170 +78,135 @@ pub fn initial_guess(
     omega_f: f64,
     ode: &OdeOptions,
 ) -> Guess {
-    let n = space.len();
-    let mid = |j: usize| space.from_unit_one(j, 0.5);
-    let mut x: Vec<f64> = (0..n).map(mid).collect();
+    model.initial_guess(curves, space, omega_f, ode)
+}
 
-    // 1. C from the mean rupture strain.
-    let mean_ef = curves.iter().map(|c| c.rupture_strain).sum::<f64>() / curves.len() as f64;
-    x[IC] = omega_f / mean_ef;
-
-    // 2. Minimum rates → (A, S); then (H*, h) on the primary stages.
-    let min_rates: Vec<f64> = curves
-        .iter()
-        .map(|c| c.min_rate_measured.unwrap_or(c.min_rate_estimated))
-        .collect();
-    let stress: Vec<f64> = curves.iter().map(|c| c.stress_mpa).collect();
-    let (a, s) = fit_min_rates(&stress, &min_rates);
-    x[IA] = a;
-    let primary: Vec<Curve> = curves
-        .iter()
-        .map(|c| {
-            let t_f = c
-                .rupture_time_h
-                .unwrap_or_else(|| *c.times_h.last().unwrap());
-            let keep = c
-                .times_h
-                .iter()
-                .take_while(|&&t| t <= PRIMARY_FRACTION * t_f)
-                .count()
-                .max(3)
-                .min(c.times_h.len());
-            Curve {
-                times_h: c.times_h[..keep].to_vec(),
-                strains: c.strains[..keep].to_vec(),
-                rupture_time_h: None,
-                ..c.clone()
+/// The guess of a model with temperature laws: `inner`'s own guess at each temperature of
+/// `curves` (on that temperature's curves, in a box that holds every value the laws can reach
+/// there: the image of the constant's bounds and its law parameter's bounds), then each law
+/// fitted to its constant's per-temperature values ([`LawKind::fit`]: e.g. ln c against
+/// 1/T − 1/T_ref for an Arrhenius law); a held law parameter keeps its value and only c_ref
+/// is fitted. Values outside their bounds are put on them (listed in `clamped`).
+pub fn per_temperature(
+    inner: &dyn Model,
+    laws: &Laws,
+    curves: &[Curve],
+    space: &ParamSpace,
+    omega_f: f64,
+    ode: &OdeOptions,
+) -> Guess {
+    let n = laws.n_inner();
+    let specs = inner.constants();
+    // Temperatures in ascending order (the curves are sorted by temperature).
+    let mut temps: Vec<f64> = Vec::new();
+    for c in curves {
+        if !temps
+            .iter()
+            .any(|t| t.to_bits() == c.temperature_c.to_bits())
+        {
+            temps.push(c.temperature_c);
+        }
+    }
+    let bounds = |j: usize| (space.lb[j], space.ub[j]);
+    let param_bounds = |p: usize| {
+        if space.free[p] {
+            (space.lb[p], space.ub[p])
+        } else {
+            (space.fixed[p], space.fixed[p])
+        }
+    };
+    let mut per_t: Vec<(f64, Vec<f64>)> = Vec::with_capacity(temps.len());
+    let mut min_rates = Vec::new();
+    let mut clamped: Vec<String> = Vec::new();
+    for &t in &temps {
+        let t_k = t + ZERO_CELSIUS_K;
+        let group: Vec<Curve> = curves
+            .iter()
+            .filter(|c| c.temperature_c.to_bits() == t.to_bits())
+            .cloned()
+            .collect();
+        let (mut lb, mut ub) = (Vec::with_capacity(n), Vec::with_capacity(n));
+        for j in 0..n {
+            let (lo, hi) = match laws.param[j] {
+                Some(p) => laws.kinds[j].range_at(bounds(j), param_bounds(p), t_k, laws.t_ref_k),
+                None => bounds(j),
+            };
+            lb.push(lo);
+            ub.push(hi);
+        }
+        let t_space = ParamSpace::new(lb, ub, space.scale[..n].to_vec());
+        let g = inner.initial_guess(&group, &t_space, omega_f, ode);
+        min_rates.extend(g.min_rates.iter().copied());
+        for c in g.clamped {
+            if !clamped.contains(&c) {
+                clamped.push(c);
+            }
+        }
+        per_t.push((t, g.params));
+    }
+    let t_k: Vec<f64> = temps.iter().map(|t| t + ZERO_CELSIUS_K).collect();
+    let mut x: Vec<f64> = (0..space.len())
+        .map(|j| {
+            if space.free[j] {
+                space.from_unit_one(j, 0.5)
+            } else {
+                space.fixed[j]
             }
         })
         .collect();
-    let mut best_u = [
-        space.to_unit_one(IHS, mid(IHS)),
-        space.to_unit_one(IH, mid(IH)),
-    ];
-    let prob = PrimaryProblem {
-        // The primary-stage fit has no lifetime term (w = 0); the run's ω_f and integrator.
-        objective: Objective::new(
-            model,
-            &primary,
-            vec![0.0; primary.len()],
-            ObjectiveSettings {
-                lifetime: LifetimeTerm::Late,
-                omega_f,
-                ode: *ode,
-            },
-        ),
-        space: space.clone(),
-        base: x.clone(),
-        a,
-        s,
-    };
-    // A few starts in H* guard against the primary fit stalling at a bound.
-    let mut best_f = f64::INFINITY;
-    for u0 in [0.2, 0.5, 0.8] {
-        let rep = minimize(
-            &prob,
-            &[u0, 0.5],
-            &[0.0, 0.0],
-            &[1.0, 1.0],
-            &LmOptions {
-                max_iterations: 60,
-                ..LmOptions::default()
-            },
-        );
-        if rep.objective < best_f {
-            best_f = rep.objective;
-            best_u = [rep.x[0], rep.x[1]];
+    let put = |j: usize, v: f64, x: &mut Vec<f64>, clamped: &mut Vec<String>, name: &str| {
+        let (lo, hi) = (space.lb[j], space.ub[j]);
+        let c = if v.is_finite() {
+            v.clamp(lo, hi)
+        } else {
+            space.from_unit_one(j, 0.5)
+        };
+        if c != v && !clamped.iter().any(|s| s == name) {
+            clamped.push(name.to_string());
         }
-    }
-    let xp = prob.params(&best_u);
-    x[IA] = xp[IA];
-    x[IB] = xp[IB];
-    x[IHS] = xp[IHS];
-    x[IH] = xp[IH];
-
-    // Clamp before the Kc fit so that it runs inside the box.
-    let mut clamped = Vec::new();
-    let names = model.constants();
-    let clamp = |x: &mut Vec<f64>, clamped: &mut Vec<String>| {
-        for j in 0..n {
-            let v = x[j].clamp(space.lb[j], space.ub[j]);
-            if v != x[j] || !x[j].is_finite() {
-                let name = names[j].name.to_string();
-                if !clamped.contains(&name) {
-                    clamped.push(name);
+        x[j] = c;
+    };
+    for j in 0..n {
+        let values: Vec<f64> = per_t.iter().map(|(_, p)| p[j]).collect();
+        let log = space.scale[j] == Scale::Log;
+        match laws.param[j] {
+            None => {
+                let (c, _) = LawKind::Constant
+                    .fit(&t_k, &values, laws.t_ref_k, Some(0.0), log)
+                    .unwrap_or((f64::NAN, 0.0));
+                put(j, c, &mut x, &mut clamped, specs[j].name);
+            }
+            Some(p) => {
+                let kind = laws.kinds[j];
+                let held = (!space.free[p]).then(|| space.fixed[p]);
+                // One temperature and a free parameter: the parameter from the centre of
+                // its box (it cannot be told from one temperature).
+                let fitted = kind
+                    .fit(&t_k, &values, laws.t_ref_k, held, log)
+                    .or_else(|| {
+                        kind.fit(
+                            &t_k[..1],
+                            &values[..1],
+                            laws.t_ref_k,
+                            Some(held.unwrap_or_else(|| space.from_unit_one(p, 0.5))),
+                            log,
+                        )
+                    });
+                let (c, q) = fitted.unwrap_or((f64::NAN, f64::NAN));
+                put(j, c, &mut x, &mut clamped, specs[j].name);
+                if space.free[p] {
+                    let name =
+                        crate::model::law::param_name(specs[j].name, kind).unwrap_or_default();
+                    put(p, q, &mut x, &mut clamped, &name);
                 }
-                x[j] = if x[j].is_finite() { v } else { mid(j) };
             }
         }
-    };
-    clamp(&mut x, &mut clamped);
-
-    // 3. Kc alone on eq. 8 with w = 1.
-    let mut kc_space = space.clone();
-    for j in 0..n {
-        if j != IKC {
-            kc_space.hold(j, x[j]);
-        }
     }
-    let problem = CreepProblem {
-        // The guess's own choice: Kc fitted to both sides of the lifetime error at w = 1.
-        objective: Objective::new(
-            model,
-            curves,
-            vec![1.0; curves.len()],
-            ObjectiveSettings {
-                lifetime: LifetimeTerm::Both,
-                omega_f,
-                ode: *ode,
-            },
-        ),
-        space: kc_space.clone(),
-        jacobian: JacobianMethod::default(),
-    };
-    let mut best = (f64::INFINITY, x[IKC]);
-    for u0 in [0.1, 0.5, 0.9] {
-        let rep = minimize(&problem, &[u0], &[0.0], &[1.0], &LmOptions::default());
-        if rep.objective < best.0 {
-            best = (rep.objective, kc_space.from_unit_one(IKC, rep.x[0]));
-        }
-    }
-    x[IKC] = best.1;
-    clamp(&mut x, &mut clamped);
     Guess {
         params: x,
         min_rates,
-        s,
         clamped,
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn min_rate_regression_recovers_sinh_law() {
-        let (a, s): (f64, f64) = (3e-10, 0.07);
-        let stress = [85.0, 100.0, 110.0, 130.0];
-        let rates: Vec<f64> = stress.iter().map(|sig| a * (s * sig).sinh()).collect();
-        let (a2, s2) = fit_min_rates(&stress, &rates);
-        assert!((a2 - a).abs() / a < 1e-6, "{a2}");
-        assert!((s2 - s).abs() / s < 1e-7, "{s2}");
-    }
-
-    #[test]
-    fn ln_sinh_is_accurate_for_large_arguments() {
-        for x in [0.5f64, 5.0, 19.9, 20.1, 50.0, 700.0] {
-            let exact = if x < 300.0 {
-                x.sinh().ln()
-            } else {
-                x - std::f64::consts::LN_2
-            };
-            assert!(
-                (ln_sinh(x) - exact).abs() < 1e-12 * exact.abs().max(1.0),
-                "{x}"
-            );
-        }
+        procedure: GuessProcedure::PerTemperature,
+        per_temperature: per_t,
     }
 }

@@ -31,12 +31,17 @@ use crate::objective::{CreepProblem, Evaluation, Objective, ObjectiveSettings, P
 pub struct MlOptions {
     /// Floor of the rupture-time scatter (ln scale).
     pub lifetime_sd_floor: f64,
+    /// Fit with white reading errors first, then with the AR(1) model from there (a fresh
+    /// start); `false` polishes with the AR(1) model directly (a start at an optimum already
+    /// found, which the white stage could only lead away from).
+    pub white_first: bool,
 }
 
 impl Default for MlOptions {
     fn default() -> Self {
         MlOptions {
             lifetime_sd_floor: crate::errmodel::DEFAULT_LIFETIME_SD_FLOOR,
+            white_first: true,
         }
     }
 }
@@ -103,6 +108,8 @@ pub struct LikelihoodProblem<'a> {
     lifetime_sd_floor: f64,
     /// Keep the error model fixed (no profiling): −2 ln L at a known error model.
     fixed: bool,
+    /// Profile the error model with every reading error white (φ = 0).
+    white: bool,
 }
 
 impl<'a> LikelihoodProblem<'a> {
@@ -113,6 +120,16 @@ impl<'a> LikelihoodProblem<'a> {
             noise: Mutex::new(noise),
             lifetime_sd_floor,
             fixed: false,
+            white: false,
+        }
+    }
+
+    /// The problem for `inner` starting from the white error model `noise`, profiled with
+    /// φ = 0 on every curve.
+    pub fn white(inner: CreepProblem<'a>, noise: ErrorModel, lifetime_sd_floor: f64) -> Self {
+        LikelihoodProblem {
+            white: true,
+            ..LikelihoodProblem::new(inner, noise, lifetime_sd_floor)
         }
     }
 
@@ -123,6 +140,7 @@ impl<'a> LikelihoodProblem<'a> {
             noise: Mutex::new(noise),
             lifetime_sd_floor: 0.0,
             fixed: true,
+            white: false,
         }
     }
 
@@ -233,7 +251,11 @@ impl LeastSquaresProblem for LikelihoodProblem<'_> {
                 .push(c.rupture_time_h.map(|_| r[off + n] * old.lifetime_sd));
             off += n + 1;
         }
-        let new = ErrorModel::estimate(&res, self.lifetime_sd_floor);
+        let new = if self.white {
+            ErrorModel::estimate_white(&res, self.lifetime_sd_floor)
+        } else {
+            ErrorModel::estimate(&res, self.lifetime_sd_floor)
+        };
         if new == old {
             return false;
         }
@@ -326,19 +348,55 @@ pub fn ml_fit(
         Ok(r) => r,
         Err(e) => return MlFit::failed(start, e.0, 0, 1),
     };
-    let noise = ErrorModel::estimate(&res, opts.lifetime_sd_floor);
+    let inner = || CreepProblem {
+        objective: raw_objective(model, curves, settings),
+        space: space.clone(),
+        jacobian: settings.jacobian,
+    };
+    let u0 = space.to_unit(start);
+    let (lo, hi) = (vec![0.0; u0.len()], vec![1.0; u0.len()]);
+    // Stage 1: white reading errors. A smooth misfit (a loading strain left out, a primary
+    // stage missed) is what an AR(1) model with φ near 1 explains as noise; from such a start
+    // the profiled likelihood cannot see it, and the LM stops where it began. With white
+    // errors it is misfit and the constants move to remove it.
+    let (u1, it1, ev1) = if opts.white_first {
+        let white = LikelihoodProblem::white(
+            inner(),
+            ErrorModel::estimate_white(&res, opts.lifetime_sd_floor),
+            opts.lifetime_sd_floor,
+        );
+        let lm1 = minimize(&white, &u0, &lo, &hi, &settings.lm);
+        if lm1.termination == Termination::SimulationFailure {
+            return MlFit::failed(
+                start,
+                lm1.failure.unwrap_or_default(),
+                lm1.iterations,
+                lm1.evaluations,
+            );
+        }
+        (lm1.x, lm1.iterations, lm1.evaluations)
+    } else {
+        (u0, 0, 0)
+    };
+    // Stage 2: the full error model, from stage 1's point.
+    let res1 = if opts.white_first {
+        let mut x1 = start.to_vec();
+        space.from_unit(&u1, &mut x1);
+        match residuals_at(model, curves, &x1, settings) {
+            Ok(r) => r,
+            Err(e) => return MlFit::failed(start, e.0, it1, ev1),
+        }
+    } else {
+        res
+    };
     let problem = LikelihoodProblem::new(
-        CreepProblem {
-            objective: raw_objective(model, curves, settings),
-            space: space.clone(),
-            jacobian: settings.jacobian,
-        },
-        noise,
+        inner(),
+        ErrorModel::estimate(&res1, opts.lifetime_sd_floor),
         opts.lifetime_sd_floor,
     );
-    let u0 = space.to_unit(start);
-    let k = u0.len();
-    let lm = minimize(&problem, &u0, &vec![0.0; k], &vec![1.0; k], &settings.lm);
+    let mut lm = minimize(&problem, &u1, &lo, &hi, &settings.lm);
+    lm.iterations += it1;
+    lm.evaluations += ev1;
     if lm.termination == Termination::SimulationFailure {
         return MlFit::failed(
             start,

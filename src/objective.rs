@@ -17,8 +17,8 @@ use nalgebra::DMatrix;
 
 use crate::config::LifetimeTerm;
 use crate::data::Curve;
-use crate::dual::{Dual, Scalar, SENS};
-use crate::lsq::{EvalFailure, LeastSquaresProblem};
+use crate::dual::{Dual, Scalar, SENS, SENS_WIDE};
+use crate::lsq::{EvalFailure, LeastSquaresProblem, NormalEquations};
 use crate::model::{Load, Model, Scale};
 use crate::ode::{OdeOptions, Outcome, SimResult};
 
@@ -26,8 +26,15 @@ use crate::ode::{OdeOptions, Outcome, SimResult};
 /// or last point): a prediction that has not ruptured by then is a failed simulation.
 pub const HORIZON_FACTOR: f64 = 1000.0;
 
-/// Largest number of constants a model may have (fixed-size parameter buffers).
-pub const MAX_PARAMS: usize = 16;
+/// Largest number of constants a model may have (fixed-size parameter buffers): the base
+/// model's six, the extensions' three and a temperature-law constant for each of them fit.
+pub const MAX_PARAMS: usize = 32;
+
+/// From this many residuals on, a [`CreepProblem`] with sensitivities hands the optimiser
+/// its normal equations, accumulated curve by curve as the integrator produces the
+/// predictions, instead of an m × k Jacobian (`lsq`'s large-problem mode). Below it the
+/// stored Jacobian's arithmetic is kept, so results on ordinary data stay bit for bit.
+pub const NORMAL_EQUATIONS_MIN_RESIDUALS: usize = 20_000;
 
 /// Bounds, scale and free/fixed status of every constant; maps to the unit box [0, 1]^k of
 /// the free constants, in which the optimiser works.
@@ -136,8 +143,9 @@ impl ParamSpace {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum JacobianMethod {
-    /// Forward sensitivities: one simulation per curve in dual numbers carries ∂r/∂u for up
-    /// to [`SENS`] free constants (finite differences beyond that).
+    /// Forward sensitivities: one simulation per curve in dual numbers carries ∂r/∂u: of up
+    /// to [`SENS`] free constants in the narrow dual numbers, of up to [`SENS_WIDE`] in the
+    /// wide ones, and of more in chunks of [`SENS_WIDE`] (one simulation per chunk).
     #[default]
     Sensitivity,
     /// Forward differences in the unit box, one extra simulation per free constant.
@@ -183,6 +191,19 @@ impl SimScalar for Dual<SENS> {
     }
 }
 
+impl SimScalar for Dual<SENS_WIDE> {
+    fn simulate(
+        model: &dyn Model,
+        params: &[Self],
+        load: &Load,
+        times: &[f64],
+        out: &mut [Self],
+        opts: &OdeOptions,
+    ) -> SimResult<Self> {
+        model.simulate_sens_wide(params, load, times, out, opts)
+    }
+}
+
 /// What eq. 8 needs besides the model, the curves and the weights; taken from the resolved
 /// configuration ([`crate::fit::FitSettings::objective`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -200,6 +221,8 @@ pub struct ObjectiveSettings {
 pub struct Objective<'a> {
     model: &'a dyn Model,
     curves: &'a [Curve],
+    /// Bin-averaged data ([`Objective::binned`]): a weight per point and the scatter term.
+    bins: Option<&'a Binned>,
     w: Vec<f64>,
     lifetime: LifetimeTerm,
     omega_f: f64,
@@ -257,6 +280,77 @@ impl Evaluation {
     }
 }
 
+/// Bin-averaged curves for the first stage of a multi-resolution fit ([`bin_curves`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Binned {
+    /// The curves, each point at the mean time and mean strain of its bin.
+    pub curves: Vec<Curve>,
+    /// Weight of each point: √(points in its bin).
+    pub weights: Vec<Vec<f64>>,
+    /// The full data's strain residual that no prediction can change: Σ over bins and their
+    /// points of ((δε − s·δt)/ε_f)², δ the deviation from the bin's mean, s the bin's
+    /// least-squares slope (measurement scatter about a straight line within each bin).
+    pub scatter: f64,
+}
+
+/// Bin-averaged curves: a curve of more than `max_points` points becomes bins of ⌈n /
+/// max_points⌉ consecutive points (the last one may hold fewer), each a point at the mean
+/// time and mean strain of its bin with the weight √count; shorter curves are kept as they
+/// are (weight 1). Eq. 8 of these ([`Objective::binned`]) is eq. 8 of the full data up to
+/// terms of the order of the prediction's curvature and of its slope's misfit within a bin
+/// (Σ(ε_pred − ε)² over a bin = count·(ε_pred(t̄) − ε̄)² + scatter + those terms), so its
+/// minimum lies close to the full data's, and with the scatter included its value is on the
+/// full data's scale (the LM's tolerances are relative).
+pub fn bin_curves(curves: &[Curve], max_points: usize) -> Binned {
+    let max_points = max_points.max(1);
+    let mut scatter = 0.0;
+    let (curves, weights) = curves
+        .iter()
+        .map(|c| {
+            let n = c.times_h.len();
+            if n <= max_points {
+                return (c.clone(), vec![1.0; n]);
+            }
+            let size = n.div_ceil(max_points);
+            let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+            let (mut times, mut strains, mut weights) = (Vec::new(), Vec::new(), Vec::new());
+            for (t, e) in c.times_h.chunks(size).zip(c.strains.chunks(size)) {
+                let (tm, em) = (mean(t), mean(e));
+                let (mut stt, mut ste, mut see) = (0.0, 0.0, 0.0);
+                for (ti, ei) in t.iter().zip(e) {
+                    let (dt, de) = (ti - tm, ei - em);
+                    stt += dt * dt;
+                    ste += dt * de;
+                    see += de * de;
+                }
+                let fitted = if stt > 0.0 { ste * ste / stt } else { 0.0 };
+                scatter += (see - fitted).max(0.0) / (c.rupture_strain * c.rupture_strain);
+                times.push(tm);
+                strains.push(em);
+                weights.push((t.len() as f64).sqrt());
+            }
+            // Field by field: `..c.clone()` would copy the long vectors only to drop them.
+            let binned = Curve {
+                temperature_c: c.temperature_c,
+                stress_mpa: c.stress_mpa,
+                specimen: c.specimen.clone(),
+                times_h: times,
+                strains,
+                rupture_time_h: c.rupture_time_h,
+                rupture_strain: c.rupture_strain,
+                min_rate_measured: c.min_rate_measured,
+                min_rate_estimated: c.min_rate_estimated,
+            };
+            (binned, weights)
+        })
+        .unzip();
+    Binned {
+        curves,
+        weights,
+        scatter,
+    }
+}
+
 /// Mean of absolute values, skipping NaN (NaN if none).
 pub fn mean_abs(v: &[f64]) -> f64 {
     let f: Vec<f64> = v
@@ -289,10 +383,34 @@ impl<'a> Objective<'a> {
         Objective {
             model,
             curves,
+            bins: None,
             w,
             lifetime: settings.lifetime,
             omega_f: settings.omega_f,
             ode: settings.ode,
+        }
+    }
+
+    /// Eq. 8 of bin-averaged curves ([`bin_curves`]): the strain residual of curve `i`,
+    /// point `k` multiplied by `bins.weights[i][k]`, and one more residual after all curves'
+    /// residuals, the constant √`bins.scatter`.
+    pub fn binned(
+        model: &'a dyn Model,
+        bins: &'a Binned,
+        w: Vec<f64>,
+        settings: ObjectiveSettings,
+    ) -> Self {
+        assert_eq!(
+            bins.weights.len(),
+            bins.curves.len(),
+            "one weight vector per curve"
+        );
+        for (wv, c) in bins.weights.iter().zip(&bins.curves) {
+            assert_eq!(wv.len(), c.times_h.len(), "one weight per measured point");
+        }
+        Objective {
+            bins: Some(bins),
+            ..Objective::new(model, &bins.curves, w, settings)
         }
     }
 
@@ -301,16 +419,18 @@ impl<'a> Objective<'a> {
         &self.w
     }
 
-    /// Number of residuals: every measured point plus one lifetime term per curve.
+    /// Number of residuals: every measured point plus one lifetime term per curve (plus the
+    /// scatter term of binned data).
     pub fn n_residuals(&self) -> usize {
-        self.curves.iter().map(|c| c.times_h.len() + 1).sum()
+        self.curves
+            .iter()
+            .map(|c| c.times_h.len() + 1)
+            .sum::<usize>()
+            + usize::from(self.bins.is_some())
     }
 
     fn load(&self, c: &Curve) -> Load {
-        Load {
-            stress_mpa: c.stress_mpa,
-            omega_f: self.omega_f,
-        }
+        Load::of_curve(c, self.omega_f)
     }
 
     fn ode_for(&self, c: &Curve) -> OdeOptions {
@@ -339,11 +459,27 @@ impl<'a> Objective<'a> {
             strain,
             &self.ode_for(c),
         );
+        self.conclude(i, &res, |k, s| strain[k] = s)
+    }
+
+    /// How simulation `res` of curve `i` ends for eq. 8: the post-rupture continuation
+    /// handed to `cont(k, strain)` for every measured time after the rupture, and (outcome,
+    /// rupture time, rupture strain, min rate), or the failure.
+    fn conclude<S: Scalar>(
+        &self,
+        i: usize,
+        res: &SimResult<S>,
+        mut cont: impl FnMut(usize, S),
+    ) -> Result<(Outcome, S, S, f64), EvalFailure> {
+        let c = &self.curves[i];
         let n = c.times_h.len();
         match res.outcome {
             Outcome::Ruptured => {
                 for k in res.n_out..n {
-                    strain[k] = res.strain_end + res.rate_end * (-res.t_end + c.times_h[k]);
+                    cont(
+                        k,
+                        res.strain_end + res.rate_end * (-res.t_end + c.times_h[k]),
+                    );
                 }
                 Ok((res.outcome, res.t_end, res.strain_end, res.min_rate))
             }
@@ -388,11 +524,68 @@ impl<'a> Objective<'a> {
             for k in 0..n {
                 r[off + k] = (r[off + k] - c.strains[k]) * inv;
             }
+            if let Some(b) = self.bins {
+                for (rk, wk) in r[off..off + n].iter_mut().zip(&b.weights[i]) {
+                    *rk = *rk * *wk;
+                }
+            }
             r[off + n] = match c.rupture_time_h {
                 Some(t_exp) => self.lifetime_error(t_r, t_exp) * self.w[i].sqrt(),
                 None => S::cst(0.0),
             };
             off += n + 1;
+        }
+        if let Some(b) = self.bins {
+            r[off] = S::cst(b.scatter.sqrt());
+        }
+        Ok(())
+    }
+
+    /// The residuals of [`Objective::residuals_in`] in dual numbers, handed to `sink(i0,
+    /// residuals)` in order and in chunks (residuals i0, i0 + 1, …) as the integrator
+    /// produces them: nothing as long as the data is stored. Same arithmetic as
+    /// `residuals_in`.
+    pub fn stream_residuals(
+        &self,
+        params: &[Dual<SENS>],
+        mut sink: impl FnMut(usize, &[Dual<SENS>]),
+    ) -> Result<(), EvalFailure> {
+        const CHUNK: usize = 256;
+        let mut buf = [Dual::<SENS>::cst(0.0); CHUNK];
+        let mut off = 0;
+        for (i, c) in self.curves.iter().enumerate() {
+            let n = c.times_h.len();
+            let inv = 1.0 / c.rupture_strain;
+            let pw = self.bins.map(|b| &b.weights[i][..]);
+            let mut points = |k0: usize, strains: &[Dual<SENS>]| {
+                for (j0, part) in (k0..).step_by(CHUNK).zip(strains.chunks(CHUNK)) {
+                    for (j, (s, rk)) in part.iter().zip(buf.iter_mut()).enumerate() {
+                        let k = j0 + j;
+                        *rk = (*s - c.strains[k]) * inv;
+                        if let Some(pw) = pw {
+                            *rk = *rk * pw[k];
+                        }
+                    }
+                    sink(off + j0, &buf[..part.len()]);
+                }
+            };
+            let res = self.model.simulate_sens_each(
+                params,
+                &self.load(c),
+                &c.times_h,
+                &mut points,
+                &self.ode_for(c),
+            );
+            let (_, t_r, _, _) = self.conclude(i, &res, |k, s| points(k, &[s]))?;
+            let life = match c.rupture_time_h {
+                Some(t_exp) => self.lifetime_error(t_r, t_exp) * self.w[i].sqrt(),
+                None => Dual::cst(0.0),
+            };
+            sink(off + n, &[life]);
+            off += n + 1;
+        }
+        if let Some(b) = self.bins {
+            sink(off, &[Dual::cst(b.scatter.sqrt())]);
         }
         Ok(())
     }
@@ -407,9 +600,17 @@ impl<'a> Objective<'a> {
             let mut strain = vec![f64::NAN; n];
             match self.predict(i, params, &mut strain) {
                 Ok((outcome, t_r, e_r, min_rate)) => {
-                    let s: f64 = (0..n)
-                        .map(|k| ((strain[k] - c.strains[k]) / c.rupture_strain).powi(2))
-                        .sum();
+                    let s: f64 = match self.bins {
+                        None => (0..n)
+                            .map(|k| ((strain[k] - c.strains[k]) / c.rupture_strain).powi(2))
+                            .sum(),
+                        Some(b) => (0..n)
+                            .map(|k| {
+                                ((strain[k] - c.strains[k]) / c.rupture_strain * b.weights[i][k])
+                                    .powi(2)
+                            })
+                            .sum(),
+                    };
                     norm += s;
                     objective += s;
                     if let Some(t_exp) = c.rupture_time_h {
@@ -444,9 +645,10 @@ impl<'a> Objective<'a> {
                 }
             }
         }
+        let scatter = self.bins.map_or(0.0, |b| b.scatter);
         Evaluation {
-            objective,
-            norm_residual: norm,
+            objective: objective + scatter,
+            norm_residual: norm + scatter,
             curves,
         }
     }
@@ -491,51 +693,202 @@ impl LeastSquaresProblem for CreepProblem<'_> {
     ) -> Option<Result<(), EvalFailure>> {
         self.sensitivities(u, Some(r), jac)
     }
+    fn prefers_normal_equations(&self) -> bool {
+        self.streams_normal_equations()
+            && self.objective.n_residuals() >= NORMAL_EQUATIONS_MIN_RESIDUALS
+    }
+    fn residuals_and_normal_equations(
+        &self,
+        u: &[f64],
+        r: &mut [f64],
+        ne: &mut NormalEquations,
+    ) -> Option<Result<(), EvalFailure>> {
+        let (xd, n_free) = self.dual_params(u)?;
+        let mut acc = NormalAccumulator::default();
+        let res = self
+            .objective
+            .stream_residuals(&xd[..self.space.len()], |i0, rs| {
+                for (ri, di) in r[i0..i0 + rs.len()].iter_mut().zip(rs) {
+                    *ri = di.v;
+                }
+                acc.add(rs);
+            });
+        Some(res.map(|()| acc.write(ne, n_free)))
+    }
+    fn geodesic_normal(
+        &self,
+        u: &[f64],
+        v: &[f64],
+        h: f64,
+        r: &[f64],
+        r_probe: &[f64],
+        jt_rvv: &mut [f64],
+    ) -> Option<Result<(), EvalFailure>> {
+        let (xd, n_free) = self.dual_params(u)?;
+        let mut vv = [0.0; SENS];
+        vv[..n_free].copy_from_slice(&v[..n_free]);
+        let mut sum = [0.0; SENS];
+        let res = self
+            .objective
+            .stream_residuals(&xd[..self.space.len()], |i0, rs| {
+                let mut part = [0.0; SENS];
+                for (i, ri) in (i0..).zip(rs) {
+                    let mut jv = 0.0;
+                    for k in 0..SENS {
+                        jv += ri.d[k] * vv[k];
+                    }
+                    let rvv = 2.0 / h * ((r_probe[i] - r[i]) / h - jv);
+                    for k in 0..SENS {
+                        part[k] += ri.d[k] * rvv;
+                    }
+                }
+                for k in 0..SENS {
+                    sum[k] += part[k];
+                }
+            });
+        jt_rvv[..n_free].copy_from_slice(&sum[..n_free]);
+        Some(res)
+    }
+}
+
+/// JᵀJ and Jᵀr of dual-number residuals, accumulated chunk by chunk: fixed 8 × 8 (the
+/// unused rows are zero) in local sums over a chunk (kept in registers) that are then added
+/// to the total, which also keeps the rounding of a million-term sum at that of a few
+/// hundred terms.
+#[derive(Default)]
+struct NormalAccumulator {
+    jtj: [[f64; SENS]; SENS],
+    jtr: [f64; SENS],
+}
+
+impl NormalAccumulator {
+    /// Add the residuals `rs` (values and gradients).
+    fn add(&mut self, rs: &[Dual<SENS>]) {
+        let mut jtj = [[0.0; SENS]; SENS];
+        let mut jtr = [0.0; SENS];
+        for ri in rs {
+            for a in 0..SENS {
+                jtr[a] += ri.d[a] * ri.v;
+                for b in 0..SENS {
+                    jtj[a][b] += ri.d[a] * ri.d[b];
+                }
+            }
+        }
+        for a in 0..SENS {
+            self.jtr[a] += jtr[a];
+            for b in 0..SENS {
+                self.jtj[a][b] += jtj[a][b];
+            }
+        }
+    }
+
+    /// The sums for the first `n` gradient components into `ne`.
+    fn write(self, ne: &mut NormalEquations, n: usize) {
+        ne.jtj = nalgebra::DMatrix::from_fn(n, n, |a, b| self.jtj[a][b]);
+        ne.jtr = nalgebra::DVector::from_fn(n, |a, _| self.jtr[a]);
+    }
 }
 
 impl CreepProblem<'_> {
-    /// The sensitivity Jacobian (dual numbers), and the residuals with it if `r` is given;
-    /// `None` when finite differences are asked for or there are more than [`SENS`] free
-    /// constants.
-    fn sensitivities(
-        &self,
-        u: &[f64],
-        r: Option<&mut [f64]>,
-        jac: &mut DMatrix<f64>,
-    ) -> Option<Result<(), EvalFailure>> {
-        let n_free = self.space.n_free();
-        if self.jacobian != JacobianMethod::Sensitivity || n_free > SENS {
-            return None;
-        }
+    /// Whether the optimiser may work on streamed normal equations: sensitivities asked
+    /// for and at most [`SENS`] free constants (one narrow dual pass gives every column of
+    /// JᵀJ; with more, the stored Jacobian of chunked wide passes is used).
+    fn streams_normal_equations(&self) -> bool {
+        self.jacobian == JacobianMethod::Sensitivity && self.space.n_free() <= SENS
+    }
+
+    /// The physical constants at unit-box point `u` as `Dual<K>` numbers, the free constants
+    /// `first..end` (in free-constant order) seeded with dx/du, the others constant.
+    fn seeded<const K: usize>(&self, u: &[f64], first: usize, end: usize) -> [Dual<K>; MAX_PARAMS] {
+        debug_assert!(end - first <= K);
         let n = self.space.len();
         let mut x = [0.0; MAX_PARAMS];
         self.space.from_unit(u, &mut x[..n]);
-        let mut xd = [Dual::<SENS>::cst(0.0); MAX_PARAMS];
+        let mut xd = [Dual::<K>::cst(0.0); MAX_PARAMS];
         let mut k = 0;
         for j in 0..n {
             xd[j] = if self.space.free[j] {
-                let d = Dual::var(x[j], k, self.space.dx_du(j, x[j]));
+                let d = if (first..end).contains(&k) {
+                    Dual::var(x[j], k - first, self.space.dx_du(j, x[j]))
+                } else {
+                    Dual::cst(x[j])
+                };
                 k += 1;
                 d
             } else {
                 Dual::cst(x[j])
             };
         }
-        // The dual residuals go to a buffer kept per thread: for a logged curve of a million
-        // points it is 72 MB, which a fresh allocation per Jacobian would page-fault in anew.
-        DUAL_RESIDUALS.with(|buf| {
-            let mut rd = buf.borrow_mut();
-            rd.clear();
-            rd.resize(self.objective.n_residuals(), Dual::<SENS>::cst(0.0));
-            if let Err(e) = self.objective.residuals_in(&xd[..n], &mut rd) {
+        xd
+    }
+
+    /// The constants as narrow dual numbers seeded for every free constant, and the number
+    /// of free ones, for the streamed normal equations; `None` where those are not used
+    /// ([`CreepProblem::streams_normal_equations`]).
+    fn dual_params(&self, u: &[f64]) -> Option<([Dual<SENS>; MAX_PARAMS], usize)> {
+        if !self.streams_normal_equations() {
+            return None;
+        }
+        let n_free = self.space.n_free();
+        Some((self.seeded::<SENS>(u, 0, n_free), n_free))
+    }
+
+    /// The sensitivity Jacobian (dual numbers), and the residuals with it if `r` is given;
+    /// `None` only when the configuration asks for finite differences. The width of the dual
+    /// numbers follows the number of free constants: [`SENS`] (the common case, as fast as
+    /// before there was a choice), [`SENS_WIDE`], or chunks of [`SENS_WIDE`] constants, one
+    /// simulation of every curve per chunk.
+    fn sensitivities(
+        &self,
+        u: &[f64],
+        mut r: Option<&mut [f64]>,
+        jac: &mut DMatrix<f64>,
+    ) -> Option<Result<(), EvalFailure>> {
+        if self.jacobian != JacobianMethod::Sensitivity {
+            return None;
+        }
+        let n_free = self.space.n_free();
+        if n_free <= SENS {
+            return Some(self.sensitivity_pass::<SENS>(u, 0, n_free, r, jac));
+        }
+        let mut first = 0;
+        while first < n_free {
+            let end = (first + SENS_WIDE).min(n_free);
+            if let Err(e) = self.sensitivity_pass::<SENS_WIDE>(u, first, end, r.take(), jac) {
                 return Some(Err(e));
             }
+            first = end;
+        }
+        Some(Ok(()))
+    }
+
+    /// One simulation of every curve in `Dual<K>` with the free constants `first..end`
+    /// seeded (in free-constant order): fills those columns of `jac`, and `r` if given.
+    fn sensitivity_pass<const K: usize>(
+        &self,
+        u: &[f64],
+        first: usize,
+        end: usize,
+        r: Option<&mut [f64]>,
+        jac: &mut DMatrix<f64>,
+    ) -> Result<(), EvalFailure>
+    where
+        Dual<K>: SimScalar + DualBuffer,
+    {
+        let n = self.space.len();
+        let xd = self.seeded::<K>(u, first, end);
+        // The dual residuals go to a buffer kept per thread: for a logged curve of a million
+        // points it is 72 MB, which a fresh allocation per Jacobian would page-fault in anew.
+        Dual::<K>::with_buffer(|rd| {
+            rd.clear();
+            rd.resize(self.objective.n_residuals(), Dual::<K>::cst(0.0));
+            self.objective.residuals_in(&xd[..n], rd)?;
             // One pass over the dual residuals (the column-by-column copy reads them k times).
             let m = rd.len();
             let js = jac.as_mut_slice();
             for (i, ri) in rd.iter().enumerate() {
-                for k in 0..n_free {
-                    js[k * m + i] = ri.d[k];
+                for c in first..end {
+                    js[c * m + i] = ri.d[c - first];
                 }
             }
             if let Some(r) = r {
@@ -543,13 +896,85 @@ impl CreepProblem<'_> {
                     *ri = di.re();
                 }
             }
-            Some(Ok(()))
+            Ok(())
         })
     }
 }
 
+/// Dual numbers with a reusable residual buffer per thread (one per width).
+pub trait DualBuffer: Sized {
+    /// Run `f` on this thread's buffer.
+    fn with_buffer<R>(f: impl FnOnce(&mut Vec<Self>) -> R) -> R;
+}
+
 thread_local! {
-    /// Reused buffer of [`CreepProblem::sensitivities`].
+    /// Reused buffer of [`CreepProblem::sensitivity_pass`], narrow width.
     static DUAL_RESIDUALS: std::cell::RefCell<Vec<Dual<SENS>>> =
         const { std::cell::RefCell::new(Vec::new()) };
+    /// Reused buffer of [`CreepProblem::sensitivity_pass`], wide width.
+    static DUAL_RESIDUALS_WIDE: std::cell::RefCell<Vec<Dual<SENS_WIDE>>> =
+        const { std::cell::RefCell::new(Vec::new()) };
+}
+
+impl DualBuffer for Dual<SENS> {
+    fn with_buffer<R>(f: impl FnOnce(&mut Vec<Self>) -> R) -> R {
+        DUAL_RESIDUALS.with(|b| f(&mut b.borrow_mut()))
+    }
+}
+
+impl DualBuffer for Dual<SENS_WIDE> {
+    fn with_buffer<R>(f: impl FnOnce(&mut Vec<Self>) -> R) -> R {
+        DUAL_RESIDUALS_WIDE.with(|b| f(&mut b.borrow_mut()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn curve(times: Vec<f64>, strains: Vec<f64>) -> Curve {
+        Curve {
+            temperature_c: 560.0,
+            stress_mpa: 100.0,
+            specimen: None,
+            times_h: times,
+            strains,
+            rupture_time_h: Some(10.0),
+            rupture_strain: 0.5,
+            min_rate_measured: None,
+            min_rate_estimated: 0.01,
+        }
+    }
+
+    #[test]
+    fn bins_average_consecutive_points_and_keep_the_scatter_about_their_lines() {
+        // 7 points, at most 3 a curve: bins of 3, 3 and 1 point.
+        let t = vec![0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0];
+        // On a line but for ±d at the middle point of the first bin and the ends of the
+        // second: the scatter about each bin's least-squares line.
+        let d = 0.01;
+        let e: Vec<f64> = t
+            .iter()
+            .enumerate()
+            .map(|(k, &t)| 0.1 * t + [0.0, d, 0.0, d, 0.0, d, 0.0][k])
+            .collect();
+        let short = curve(vec![0.0, 1.0, 2.0], vec![0.0, 0.1, 0.2]);
+        let b = bin_curves(&[curve(t, e.clone()), short.clone()], 3);
+        assert_eq!(b.curves[1], short);
+        assert_eq!(b.weights[1], vec![1.0; 3]);
+        let c = &b.curves[0];
+        assert_eq!(c.times_h, vec![1.0, 4.0, 6.0]);
+        let close = |a: f64, b: f64| (a - b).abs() < 1e-15;
+        assert!(close(c.strains[0], 0.1 + d / 3.0));
+        assert!(close(c.strains[1], 0.4 + 2.0 * d / 3.0));
+        assert!(close(c.strains[2], e[6]));
+        let s3 = 3f64.sqrt();
+        assert_eq!(b.weights[0], vec![s3, s3, 1.0]);
+        // A bump (0, d, 0) or a dip (d, 0, d) about a line: deviations (−1, 2, −1)·d/3 from
+        // the mean, none of them along the slope: 6·d²/9 each, over ε_f² = 0.25.
+        let want = 2.0 * (6.0 * d * d / 9.0) / 0.25;
+        assert!((b.scatter - want).abs() < 1e-15, "{} vs {want}", b.scatter);
+        assert_eq!(c.rupture_strain, 0.5);
+        assert_eq!(c.min_rate_estimated, 0.01);
+    }
 }

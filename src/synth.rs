@@ -366,10 +366,7 @@ fn generate_inner(
     // Simulate every curve densely to its rupture.
     let mut dense: Vec<(f64, Vec<f64>, Vec<f64>)> = Vec::new();
     for &s in &stresses {
-        let load = Load {
-            stress_mpa: s,
-            omega_f: 1.0 / 3.0,
-        };
+        let load = Load::new(s, family.temperature_c, 1.0 / 3.0);
         let r = model.simulate(&params, &load, &[], &mut [], &ode);
         if !(r.ruptured() && r.t_end > 1.0 && r.t_end < 1e7) {
             return Err(Error::Invalid(format!(
@@ -397,10 +394,7 @@ fn generate_inner(
     truth.strain_cut = strain_cut;
     for (i, &s) in stresses.iter().enumerate() {
         let (t_r, grid, e) = &dense[i];
-        let load = Load {
-            stress_mpa: s,
-            omega_f: 1.0 / 3.0,
-        };
+        let load = Load::new(s, family.temperature_c, 1.0 / 3.0);
         let last = t_r * (0.95 + 0.05 * rng.gen::<f64>());
         let upto = grid.partition_point(|t| *t <= last).max(2);
         let mut times = match sampling {

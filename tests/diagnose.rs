@@ -187,7 +187,9 @@ fn diagnosis_json_keeps_its_contract() {
         let p = c["p_value"].as_f64().unwrap();
         assert!(p > 0.0 && p <= 1.0, "{p}");
     }
-    assert!(d["gof"]["p_value"].as_f64().unwrap() > 0.0);
+    let gof = d["gof"].as_array().unwrap();
+    assert_eq!(gof.len(), 2);
+    assert!(gof.iter().all(|g| g["p_value"].as_f64().unwrap() > 0.0));
     assert!(out.join("report.md").exists());
     assert!(out.join("residuals_base.png").exists());
     // Identical for any thread count.

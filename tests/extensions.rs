@@ -23,6 +23,7 @@ fn tight() -> OdeOptions {
 fn load(sigma: f64) -> Load {
     Load {
         stress_mpa: sigma,
+        temperature_k: 560.0 + creepfit::model::ZERO_CELSIUS_K,
         omega_f: OMEGA_F,
     }
 }

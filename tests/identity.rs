@@ -36,6 +36,7 @@ fn candidates(v: &Value) -> Vec<Value> {
             let mut c = Vec::new();
             if n.is_u64() {
                 c.push(json!(n.as_u64().unwrap() + 1));
+                c.push(json!(n.as_u64().unwrap() + 60));
                 if n.as_u64().unwrap() > 1 {
                     c.push(json!(n.as_u64().unwrap() - 1));
                 }
@@ -58,6 +59,8 @@ fn candidates(v: &Value) -> Vec<Value> {
                 "sensitivity",
                 "config",
                 "guess",
+                "likelihood",
+                "eq8",
             ]
             .iter()
             .filter(|x| **x != s)
@@ -177,12 +180,13 @@ fn every_setting_changed_alone_makes_resume_and_merge_refuse() {
         );
         tested.push(name.clone());
     }
-    // Only the constants' names cannot change alone: the model fixes them (changing one is
-    // an invalid configuration, caught by validation, not a different sweep).
+    // Only the constants' names and temperature laws cannot change alone: the model fixes
+    // the names, and a law brings its parameter as a constant of its own (changing either
+    // alone is an invalid configuration, caught by validation, not a different sweep).
     assert!(
         fixed_by_model
             .iter()
-            .all(|n| n.starts_with("constants.") && n.ends_with(".name")),
+            .all(|n| n.starts_with("constants.") && (n.ends_with(".name") || n.ends_with(".law"))),
         "fields no valid change was found for: {fixed_by_model:?}"
     );
     for must in [
@@ -195,6 +199,11 @@ fn every_setting_changed_alone_makes_resume_and_merge_refuse() {
         "sweep.starts",
         "sweep.seed",
         "constants.A.lb",
+        "constants.A.held",
+        "T_ref",
+        "objective.kind",
+        "objective.lifetime_sd_floor",
+        "objective.max_points",
         "objective.w_grid",
         "objective.w_sets",
     ] {

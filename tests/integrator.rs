@@ -8,6 +8,7 @@ use creepfit::ode::{integrate, OdeOptions, Outcome};
 const P560: [f64; 6] = [3.0e-10, 0.13, 0.5, 5.05e4, 6.86e-6, 5.0];
 const LOAD: Load = Load {
     stress_mpa: 100.0,
+    temperature_k: 560.0 + creepfit::model::ZERO_CELSIUS_K,
     omega_f: 1.0 / 3.0,
 };
 
@@ -82,6 +83,7 @@ fn four_state_matches_one_state_reduction() {
     ] {
         let load = Load {
             stress_mpa: sigma,
+            temperature_k: 560.0 + creepfit::model::ZERO_CELSIUS_K,
             omega_f: 1.0 / 3.0,
         };
         let o = opts(1e-12);
@@ -165,6 +167,7 @@ fn rupture_time_matches_tight_reference_at_default_tolerance() {
     for sigma in [85.0, 100.0, 110.0] {
         let load = Load {
             stress_mpa: sigma,
+            temperature_k: 560.0 + creepfit::model::ZERO_CELSIUS_K,
             omega_f: 1.0 / 3.0,
         };
         let (tight, _) = run4(&P560, &load, &[], &opts(1e-13));
@@ -226,6 +229,7 @@ fn overshooting_trial_steps_are_rejected_not_nan() {
     for sigma in [85.0, 100.0, 110.0, 140.0] {
         let load = Load {
             stress_mpa: sigma,
+            temperature_k: 560.0 + creepfit::model::ZERO_CELSIUS_K,
             omega_f: 1.0 / 3.0,
         };
         let (res, _) = run4(&P560, &load, &[], &o);
@@ -236,6 +240,7 @@ fn overshooting_trial_steps_are_rejected_not_nan() {
     let harsh = [1e-9, 0.2, 0.4, 1e4, 3e-5, 3.0];
     let load = Load {
         stress_mpa: 160.0,
+        temperature_k: 560.0 + creepfit::model::ZERO_CELSIUS_K,
         omega_f: 1.0 / 3.0,
     };
     let (res, _) = run4(&harsh, &load, &[], &OdeOptions::default());

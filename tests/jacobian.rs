@@ -129,6 +129,7 @@ fn fast_path_matches_four_state_path() {
             for c in &data.curves {
                 let load = creepfit::model::Load {
                     stress_mpa: c.stress_mpa,
+                    temperature_k: c.temperature_c + creepfit::model::ZERO_CELSIUS_K,
                     omega_f: cfg.objective.omega_f,
                 };
                 let o = OdeOptions {

@@ -1,7 +1,7 @@
 //! Recovery: curves simulated from known constants, fitted from a start elsewhere in the
 //! box, give the constants back (exactly without noise; stably with noise).
 
-use creepfit::config::LifetimeTerm;
+use creepfit::config::{LifetimeTerm, ObjectiveKind};
 use creepfit::data::{estimate_min_rate, Curve};
 use creepfit::fit::{local_fit, FitSettings};
 use creepfit::lsq::LmOptions;
@@ -48,6 +48,7 @@ fn synth(
         .map(|&s| {
             let load = Load {
                 stress_mpa: s,
+                temperature_k: 560.0 + creepfit::model::ZERO_CELSIUS_K,
                 omega_f: 1.0 / 3.0,
             };
             let mut dummy = [];
@@ -106,6 +107,8 @@ fn settings() -> FitSettings {
         omega_f: 1.0 / 3.0,
         lifetime: LifetimeTerm::Both,
         jacobian: JacobianMethod::default(),
+        kind: ObjectiveKind::Eq8,
+        lifetime_sd_floor: 0.01,
     }
 }
 

@@ -2,16 +2,17 @@
 //!
 //! 1. **Family of tests** at false-alarm level α, Holm's step-down: one likelihood-ratio test
 //!    per extension (H0: the base model suffices; p-value from the parametric bootstrap under
-//!    the fitted base model) and the goodness-of-fit test of the base model (H0: no misfit
-//!    shape common to the curves beyond the error model). Under the global null — the base
+//!    the fitted base model) and the goodness-of-fit tests of the base model (H0: no misfit
+//!    shape — common to the curves, or per curve — beyond the error model). Under the global null — the base
 //!    model and its error model are right — the chance of any rejection is at most α.
 //! 2. **Attribution** among the rejected extensions: the lowest AIC (−2 ln L + 2k) is the
 //!    candidate cause; a rejected extension whose AIC is within the bootstrap's spread of the
 //!    best (the 95 % quantile of |T*_best − T*_other| over the null replicates) cannot be told
 //!    apart from it and is listed as indistinguishable.
 //! 3. **Verdict**: no rejection → `adequate`; an extension rejected → `extension` if the
-//!    extended model passes its own goodness-of-fit test (bootstrap under the extended model,
-//!    level α), else `unexplained`; only the base goodness of fit rejected → `unexplained`.
+//!    extended model passes its own goodness-of-fit tests (bootstrap under the extended model,
+//!    Holm at level α over its tests), else `unexplained`; only a goodness-of-fit test of the
+//!    base rejected → `unexplained`.
 //!
 //! A p-value that could not be computed (NaN) counts as 1: a failure never counts as evidence.
 
@@ -56,7 +57,9 @@ pub fn holm(p: &[f64], alpha: f64) -> (Vec<bool>, Vec<f64>) {
         let factor = (m - rank) as f64;
         running = running.max((factor * clean[i]).min(1.0));
         adjusted[i] = running;
-        if !stop && clean[i] <= alpha / factor {
+        // A relative tolerance: with B bootstrap replicates the smallest p-value 1/(B + 1) may
+        // equal α/m exactly, which rounding must not turn into a non-rejection.
+        if !stop && clean[i] <= alpha / factor * (1.0 + 1e-9) {
             rejected[i] = true;
         } else {
             stop = true;
@@ -83,8 +86,8 @@ pub struct SelectInput {
     pub alpha: f64,
     /// The extensions tested.
     pub extensions: Vec<ExtensionEvidence>,
-    /// Bootstrap p-value of the base model's goodness-of-fit test.
-    pub base_gof_p: f64,
+    /// Bootstrap p-values of the base model's goodness-of-fit tests.
+    pub base_gof_p: Vec<f64>,
     /// `spread[j][k]`: 95 % quantile of |T*_j − T*_k| over the null bootstrap replicates.
     pub spread: Vec<Vec<f64>>,
 }
@@ -96,10 +99,10 @@ pub struct Selection {
     pub rejected: Vec<bool>,
     /// Per extension: Holm-adjusted p-value.
     pub adjusted: Vec<f64>,
-    /// The base goodness-of-fit test rejected.
+    /// A goodness-of-fit test of the base rejected.
     pub base_gof_rejected: bool,
-    /// Its Holm-adjusted p-value.
-    pub base_gof_adjusted: f64,
+    /// Their Holm-adjusted p-values.
+    pub base_gof_adjusted: Vec<f64>,
     /// Index of the rejected extension with the lowest AIC.
     pub best: Option<usize>,
     /// Rejected extensions within the bootstrap's spread of the best: (index, ΔAIC, spread).
@@ -109,7 +112,7 @@ pub struct Selection {
 /// Stage 1: Holm over the extension tests and the base goodness of fit, then attribution.
 pub fn select(inp: &SelectInput) -> Selection {
     let mut p: Vec<f64> = inp.extensions.iter().map(|e| e.p_value).collect();
-    p.push(inp.base_gof_p);
+    p.extend(&inp.base_gof_p);
     let (rej, adj) = holm(&p, inp.alpha);
     let k = inp.extensions.len();
     let rejected: Vec<bool> = (0..k)
@@ -139,21 +142,20 @@ pub fn select(inp: &SelectInput) -> Selection {
     Selection {
         rejected,
         adjusted: adj[..k].to_vec(),
-        base_gof_rejected: rej[k],
-        base_gof_adjusted: adj[k],
+        base_gof_rejected: rej[k..].iter().any(|r| *r),
+        base_gof_adjusted: adj[k..].to_vec(),
         best,
         indistinguishable,
     }
 }
 
-/// Stage 2: the verdict and the cause, given the bootstrap p-value of the best extension's
-/// own goodness-of-fit test (`None` when there is no best extension).
-pub fn verdict(sel: &Selection, cause_gof_p: Option<f64>, alpha: f64) -> (Verdict, Option<usize>) {
+/// Stage 2: the verdict and the cause, given the bootstrap p-values of the best extension's
+/// own goodness-of-fit tests (Holm at `alpha` over them; empty when there is no best
+/// extension).
+pub fn verdict(sel: &Selection, cause_gof_p: &[f64], alpha: f64) -> (Verdict, Option<usize>) {
     match sel.best {
         Some(b) => {
-            let p = cause_gof_p.unwrap_or(f64::NAN);
-            let p = if p.is_nan() { 1.0 } else { p };
-            if p <= alpha {
+            if holm(cause_gof_p, alpha).0.iter().any(|r| *r) {
                 (Verdict::Unexplained, None)
             } else {
                 (Verdict::Extension, Some(b))
@@ -219,6 +221,44 @@ mod tests {
             p_value: p,
             aic,
         }
+    }
+
+    #[test]
+    fn two_goodness_of_fit_tests_share_the_family() {
+        // 4 extensions + 2 goodness-of-fit tests: the first Holm threshold is α/6; with 119
+        // replicates the smallest p-value 1/120 equals it and must reject.
+        let p_min = 1.0 / 120.0;
+        let four = || {
+            vec![
+                ext("a", 0.5, 1.0),
+                ext("b", 0.5, 1.0),
+                ext("c", 0.5, 1.0),
+                ext("d", 0.5, 1.0),
+            ]
+        };
+        let sel = select(&SelectInput {
+            alpha: 0.05,
+            extensions: four(),
+            base_gof_p: vec![0.3, p_min],
+            spread: vec![vec![0.0; 4]; 4],
+        });
+        assert!(sel.base_gof_rejected);
+        assert_eq!(verdict(&sel, &[], 0.05).0, Verdict::Unexplained);
+        // The cause's own two tests: one rejecting at α/2 is enough.
+        let sel = select(&SelectInput {
+            alpha: 0.05,
+            extensions: vec![ext("a", p_min, -30.0), ext("b", 0.5, 1.0)],
+            base_gof_p: vec![0.3, 0.4],
+            spread: vec![vec![0.0; 2]; 2],
+        });
+        assert_eq!(
+            verdict(&sel, &[0.6, 0.02], 0.05),
+            (Verdict::Unexplained, None)
+        );
+        assert_eq!(
+            verdict(&sel, &[0.6, 0.03], 0.05),
+            (Verdict::Extension, Some(0))
+        );
     }
 
     #[test]
@@ -352,11 +392,15 @@ mod tests {
             let sel = select(&SelectInput {
                 alpha: 0.05,
                 extensions: e,
-                base_gof_p: gof,
+                base_gof_p: vec![gof],
                 spread: spread.clone(),
             });
-            let cg = if sel.best.is_some() { cgof } else { None };
-            let (v, c) = verdict(&sel, cg, 0.05);
+            let cg: Vec<f64> = if sel.best.is_some() {
+                cgof.into_iter().collect()
+            } else {
+                vec![]
+            };
+            let (v, c) = verdict(&sel, &cg, 0.05);
             assert_eq!(v, want_v, "row {i}");
             assert_eq!(c, want_c, "row {i}");
             let ind: Vec<usize> = sel.indistinguishable.iter().map(|t| t.0).collect();

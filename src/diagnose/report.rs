@@ -87,17 +87,26 @@ pub fn report_md(cfg: &RunConfig, d: &Diagnosis) -> String {
     for e in &d.evidence {
         s += &format!("- `{}`: {}\n", e.code, e.text);
     }
-    let g = &d.gof.gof;
-    s += &format!(
-        "\nCommon misfit shape (goodness-of-fit statistic G = {:.1} on {} columns, bootstrap p = {:.3}) \
-         at life fractions {}: {} % of ε_f; common log-lifetime bias {}.\n\n",
-        g.statistic,
-        g.dof,
-        d.gof.p_value,
-        KNOTS.iter().map(|k| format!("{k}")).collect::<Vec<_>>().join(", "),
-        list(&g.shape_pct, 2),
-        f(g.lifetime_bias, 3)
-    );
+    s += "\n";
+    for t in &d.gof {
+        let g = &t.gof;
+        s += &format!(
+            "Misfit shape, {} (goodness-of-fit statistic G = {:.1} on {} columns, bootstrap p = {:.3}) \
+             at life fractions {}: {} % of ε_f{}; log-lifetime bias {}.\n\n",
+            super::shape_name(g.shape),
+            g.statistic,
+            g.dof,
+            t.p_value,
+            KNOTS.iter().map(|k| format!("{k}")).collect::<Vec<_>>().join(", "),
+            list(&g.shape_pct, 2),
+            if g.shape == super::gof::Shape::PerCurve {
+                " (mean over the curves)"
+            } else {
+                ""
+            },
+            f(g.lifetime_bias, 3)
+        );
+    }
     s += &format!(
         "| stress MPa | {} bias % (z) | first point % | last point: t/t_f, meas / pred strain % | lifetime error % | reading error sd %, φ |\n|---|---|---|---|---|---|\n",
         STAGES.iter().map(|st| st.0).collect::<Vec<_>>().join(" / ")
@@ -202,20 +211,25 @@ pub fn report_md(cfg: &RunConfig, d: &Diagnosis) -> String {
     s += &format!(
         "\n## Method\n\nEvery model is fitted by maximum likelihood under an error model with an AR(1) \
          reading error per curve and a log-normal scatter of rupture times; each extension is tested \
-         against the base model by its likelihood ratio, and the base model's fit by a statistic for a \
-         misfit shape common to the curves; the null distributions come from {} parametric bootstrap \
+         against the base model by its likelihood ratio, and the base model's fit by two statistics for \
+         a misfit shape (common to the curves, and per curve) beyond the error model; the null \
+         distributions come from {} parametric bootstrap \
          replicates under the fitted base model, every replicate refitted by every model (warm starts \
          from the fitted optimum and up to {} distinct optima found on the data, plus {} random \
          start(s)). Holm's procedure keeps the chance of any false alarm at α = {}. A \
-         significant extension is the cause only if it passes its own goodness-of-fit test ({}).\n",
+         significant extension is the cause only if it passes its own goodness-of-fit tests ({}).\n",
         d.bootstrap.max,
         d.settings.replicate_basins,
         d.settings.replicate_starts,
         d.alpha,
         match d.verdict {
-            Verdict::Extension | Verdict::Unexplained if d.cause_gof.is_some() => format!(
-                "here p = {:.3}",
-                d.cause_gof.as_ref().map_or(f64::NAN, |g| g.p_value)
+            Verdict::Extension | Verdict::Unexplained if !d.cause_gof.is_empty() => format!(
+                "here p = {}",
+                d.cause_gof
+                    .iter()
+                    .map(|g| format!("{:.3}", g.p_value))
+                    .collect::<Vec<_>>()
+                    .join(" and ")
             ),
             _ => "not needed here".into(),
         }

@@ -12,6 +12,15 @@
 //! evaluation (dual numbers) is evaluated that way at every trial point, so an accepted step
 //! costs no separate Jacobian. The problem is the [`LeastSquaresProblem`] trait, in the spirit
 //! of the `levenberg-marquardt` crate.
+//!
+//! **Large problems** (a logged curve of a million points) need not store the m × n Jacobian:
+//! a problem that [prefers](LeastSquaresProblem::prefers_normal_equations) it hands the
+//! iteration its [`NormalEquations`] JᵀJ and Jᵀr, accumulated while the residuals are
+//! produced, and everything the iteration does is then done on n × n systems: the linear
+//! model's reduction for a step v is −(2·gᵀv + vᵀ·JᵀJ·v) instead of ‖r‖² − ‖r + J·v‖², and
+//! the geodesic correction's Jᵀ·r_vv is accumulated by the problem from the probe's
+//! residuals and the Jacobian produced once more at x
+//! ([`LeastSquaresProblem::geodesic_normal`]). The steps, tests and terminations are the same.
 
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
@@ -58,6 +67,66 @@ pub trait LeastSquaresProblem: Sync {
     /// iteration stays a descent method on it.
     fn reweight(&self, _x: &[f64], _r: &mut [f64], _jac: Option<&mut DMatrix<f64>>) -> bool {
         false
+    }
+    /// Whether [`minimize`] should work on the normal equations
+    /// ([`LeastSquaresProblem::residuals_and_normal_equations`]) instead of a stored m × n
+    /// Jacobian: for problems whose Jacobian would dominate memory and time. Such a problem
+    /// is never [reweighted](LeastSquaresProblem::reweight). Default `false`.
+    fn prefers_normal_equations(&self) -> bool {
+        false
+    }
+    /// r(x) and the normal equations JᵀJ, Jᵀr at x, accumulated while the residuals are
+    /// produced (no m × n Jacobian is stored). `None` (the default) means "not available".
+    fn residuals_and_normal_equations(
+        &self,
+        _x: &[f64],
+        _r: &mut [f64],
+        _ne: &mut NormalEquations,
+    ) -> Option<Result<(), EvalFailure>> {
+        None
+    }
+    /// For the geodesic acceleration on the normal equations: J(x)ᵀ·r_vv along the step `v`,
+    /// with r_vv = 2/h·((r_probe − r)/h − J(x)·v) from the residuals `r` at x and `r_probe`
+    /// at x + h·v (the stored path's formula), written into `jt_rvv`; J(x) is produced anew
+    /// (one more evaluation at x) and not stored. `None` (the default): no acceleration.
+    fn geodesic_normal(
+        &self,
+        _x: &[f64],
+        _v: &[f64],
+        _h: f64,
+        _r: &[f64],
+        _r_probe: &[f64],
+        _jt_rvv: &mut [f64],
+    ) -> Option<Result<(), EvalFailure>> {
+        None
+    }
+}
+
+/// The normal equations of the linearised problem at a point: JᵀJ (n × n) and Jᵀr.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NormalEquations {
+    /// JᵀJ.
+    pub jtj: DMatrix<f64>,
+    /// Jᵀr, the gradient of ½‖r‖².
+    pub jtr: DVector<f64>,
+}
+
+impl NormalEquations {
+    /// Zeros for `n` parameters.
+    pub fn zeros(n: usize) -> Self {
+        NormalEquations {
+            jtj: DMatrix::zeros(n, n),
+            jtr: DVector::zeros(n),
+        }
+    }
+    /// From a stored Jacobian `jac` (m × n) and residuals `r`: the products the iteration
+    /// forms on the stored path.
+    pub fn from_jacobian(jac: &DMatrix<f64>, r: &[f64]) -> Self {
+        let rv = DVector::from_column_slice(r);
+        NormalEquations {
+            jtj: jac.tr_mul(jac),
+            jtr: jac.tr_mul(&rv),
+        }
     }
 }
 
@@ -160,6 +229,9 @@ pub struct LmReport {
     pub termination: Termination,
     /// Message of the evaluation failure, if any.
     pub failure: Option<String>,
+    /// Damping of the last step tried, relative to the largest diagonal of JᵀJ (NaN if no
+    /// step was tried): where a continued iteration ([`LmOptions::lambda0`]) picks up.
+    pub lambda: f64,
 }
 
 fn sumsq(r: &[f64]) -> f64 {
@@ -279,15 +351,34 @@ fn model_objective(jac: &DMatrix<f64>, r: &[f64], v: &DVector<f64>) -> f64 {
     (0..r.len()).map(|i| (r[i] + jv[i]).powi(2)).sum()
 }
 
+/// The linear model of the residuals at the current point: a stored Jacobian, or only its
+/// normal equations (large problems).
+enum Linear<'a> {
+    /// J itself (m × n) with the residuals r.
+    Stored(&'a DMatrix<f64>, &'a [f64]),
+    /// JᵀJ and Jᵀr alone.
+    Normal(&'a DMatrix<f64>, &'a DVector<f64>),
+}
+
+impl Linear<'_> {
+    /// Reduction of ‖r‖² = `f` that the linear model predicts for the displacement v:
+    /// f − ‖r + J·v‖² from a stored J, −(2·gᵀv + vᵀ·JᵀJ·v) from the normal equations.
+    fn reduction(&self, f: f64, v: &DVector<f64>) -> f64 {
+        match self {
+            Linear::Stored(jac, r) => f - model_objective(jac, r, v),
+            Linear::Normal(jtj, g) => -(2.0 * g.dot(v) + v.dot(&(*jtj * v))),
+        }
+    }
+}
+
 /// Reduction of ‖r‖² that the undamped (Gauss–Newton) linear model predicts for its step on
 /// the variables `held`, projected onto the box: what the iteration could still gain. ∞ if
 /// the model cannot be solved.
 #[allow(clippy::too_many_arguments)]
 fn gauss_newton_gain(
-    jac: &DMatrix<f64>,
+    lin: &Linear,
     jtj: &DMatrix<f64>,
     g: &DVector<f64>,
-    r: &[f64],
     f: f64,
     x: &[f64],
     lb: &[f64],
@@ -296,7 +387,7 @@ fn gauss_newton_gain(
     diag_max: f64,
 ) -> f64 {
     match solve_held(jtj, g, held, |_| DIAG_FLOOR * diag_max) {
-        Some((_, step)) => f - model_objective(jac, r, &projected(x, &step, 1.0, held, lb, ub)),
+        Some((_, step)) => lin.reduction(f, &projected(x, &step, 1.0, held, lb, ub)),
         None => f64::INFINITY,
     }
 }
@@ -319,6 +410,8 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
     let mut x: Vec<f64> = (0..n).map(|j| x0[j].clamp(lb[j], ub[j])).collect();
     let mut r = vec![0.0; m];
     let mut evaluations = 1;
+    // Relative damping of the last step tried, for the report.
+    let last_lambda = std::cell::Cell::new(f64::NAN);
     let fail = |x: Vec<f64>, it, ev, e: EvalFailure, f: f64, r: Vec<f64>| LmReport {
         x,
         objective: f,
@@ -327,25 +420,38 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
         evaluations: ev,
         termination: Termination::SimulationFailure,
         failure: Some(e.0),
+        lambda: last_lambda.get(),
     };
-    let mut jac = DMatrix::<f64>::zeros(m, n);
-    let mut jac_trial = DMatrix::<f64>::zeros(m, n);
+    // Normal-equations mode: JᵀJ and Jᵀr of every evaluation, no m × n Jacobian.
+    let mut ne = NormalEquations::zeros(n);
+    let mut ne_trial = NormalEquations::zeros(n);
+    let normal = problem.prefers_normal_equations()
+        && match problem.residuals_and_normal_equations(&x, &mut r, &mut ne) {
+            Some(Ok(())) => true,
+            Some(Err(e)) => return fail(x, 0, evaluations, e, f64::NAN, r),
+            None => false,
+        };
+    let stored_rows = if normal { 0 } else { m };
+    let mut jac = DMatrix::<f64>::zeros(stored_rows, n);
+    let mut jac_trial = DMatrix::<f64>::zeros(stored_rows, n);
     // Whether `jac` holds the Jacobian at `x` already (from a fused evaluation).
-    let mut jac_fresh = match problem.residuals_and_jacobian(&x, &mut r, &mut jac) {
-        Some(Ok(())) => true,
-        Some(Err(e)) => return fail(x, 0, evaluations, e, f64::NAN, r),
-        None => {
-            if let Err(e) = problem.residuals(&x, &mut r) {
-                return fail(x, 0, evaluations, e, f64::NAN, r);
+    let mut jac_fresh = normal
+        || match problem.residuals_and_jacobian(&x, &mut r, &mut jac) {
+            Some(Ok(())) => true,
+            Some(Err(e)) => return fail(x, 0, evaluations, e, f64::NAN, r),
+            None => {
+                if let Err(e) = problem.residuals(&x, &mut r) {
+                    return fail(x, 0, evaluations, e, f64::NAN, r);
+                }
+                false
             }
-            false
-        }
-    };
+        };
     let mut f = sumsq(&r);
     let mut r_trial = vec![0.0; m];
     let mut x_trial = vec![0.0; n];
     let mut x_probe = vec![0.0; n];
-    let mut r_probe = vec![0.0; m];
+    let mut r_probe = vec![0.0; if opts.geodesic.is_some() { m } else { 0 }];
+    let mut jt_rvv = vec![0.0; n];
     let mut lambda = -1.0_f64;
     let mut nu = 2.0_f64;
     let done = |x, f, r, it, ev, t| LmReport {
@@ -356,10 +462,11 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
         evaluations: ev,
         termination: t,
         failure: None,
+        lambda: last_lambda.get(),
     };
 
     for iter in 1..=opts.max_iterations {
-        if problem.reweight(&x, &mut r, jac_fresh.then_some(&mut jac)) {
+        if !normal && problem.reweight(&x, &mut r, jac_fresh.then_some(&mut jac)) {
             f = sumsq(&r);
         }
         let jac_result = if jac_fresh {
@@ -382,9 +489,18 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
         if let Err(e) = jac_result {
             return fail(x, iter, evaluations, e, f, r);
         }
-        let rv = DVector::from_column_slice(&r);
-        let g = jac.tr_mul(&rv); // ∇(½‖r‖²)
-        let jtj = jac.tr_mul(&jac);
+        // ∇(½‖r‖²) and JᵀJ.
+        let (g, jtj) = if normal {
+            (ne.jtr.clone(), ne.jtj.clone())
+        } else {
+            let rv = DVector::from_column_slice(&r);
+            (jac.tr_mul(&rv), jac.tr_mul(&jac))
+        };
+        let lin = if normal {
+            Linear::Normal(&jtj, &g)
+        } else {
+            Linear::Stored(&jac, &r)
+        };
 
         // Active set and projected gradient.
         let at_lb = |j: usize| x[j] <= lb[j];
@@ -407,6 +523,7 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
         }
         // Inner loop: increase damping until a step reduces the objective.
         loop {
+            last_lambda.set(lambda / diag_max);
             // Solve on the free set; a free variable at a bound whose step points outward
             // would be cut to zero by the projection, leaving a step that is not a descent
             // step of the remaining variables: hold it and solve again.
@@ -461,10 +578,10 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
             if v_norm <= opts.xtol * (x_norm + opts.xtol) {
                 return done(x, f, r, iter, evaluations, Termination::ConvergedStep);
             }
-            let mut predicted = f - model_objective(&jac, &r, &v);
+            let mut predicted = lin.reduction(f, &v);
             if cut < 1.0 {
                 let vc = projected(&x, &step, cut, &held, lb, ub);
-                let pc = f - model_objective(&jac, &r, &vc);
+                let pc = lin.reduction(f, &vc);
                 if pc > predicted {
                     predicted = pc;
                     v = vc;
@@ -491,20 +608,39 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
                     x_probe[j] = x[j] + hh * v[j];
                 }
                 evaluations += 1;
-                let accel = match problem.residuals(&x_probe, &mut r_probe) {
-                    Ok(()) => {
+                let probed = if normal {
+                    problem.residuals(&x_probe, &mut r_probe).is_ok() && {
+                        let geo = problem.geodesic_normal(
+                            &x,
+                            v.as_slice(),
+                            hh,
+                            &r,
+                            &r_probe,
+                            &mut jt_rvv,
+                        );
+                        if geo.is_some() {
+                            evaluations += 1;
+                        }
+                        matches!(geo, Some(Ok(())))
+                    }
+                } else {
+                    let ok = problem.residuals(&x_probe, &mut r_probe).is_ok();
+                    if ok {
                         let jv = &jac * &v;
                         let rvv = DVector::from_iterator(
                             m,
                             (0..m).map(|i| 2.0 / hh * ((r_probe[i] - r[i]) / hh - jv[i])),
                         );
-                        let jt_rvv = jac.tr_mul(&rvv);
-                        let b =
-                            DVector::from_iterator(held.len(), held.iter().map(|&jp| -jt_rvv[jp]));
-                        let a = ch.solve(&b);
-                        (2.0 * a.norm() <= alpha * v.norm()).then_some(a)
+                        jt_rvv.copy_from_slice(jac.tr_mul(&rvv).as_slice());
                     }
-                    Err(_) => None,
+                    ok
+                };
+                let accel = if probed {
+                    let b = DVector::from_iterator(held.len(), held.iter().map(|&jp| -jt_rvv[jp]));
+                    let a = ch.solve(&b);
+                    (2.0 * a.norm() <= alpha * v.norm()).then_some(a)
+                } else {
+                    None
                 };
                 // A large correction means v leaves the region where the second-order
                 // expansion holds, or that r_vv is noise (integration error over h²·‖v‖²
@@ -520,11 +656,16 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
                 .sum::<f64>()
                 .sqrt();
             evaluations += 1;
-            let (trial_ok, trial_jac) =
+            let (trial_ok, trial_jac) = if normal {
+                let res =
+                    problem.residuals_and_normal_equations(&x_trial, &mut r_trial, &mut ne_trial);
+                (matches!(res, Some(Ok(()))), true)
+            } else {
                 match problem.residuals_and_jacobian(&x_trial, &mut r_trial, &mut jac_trial) {
                     Some(res) => (res.is_ok(), true),
                     None => (problem.residuals(&x_trial, &mut r_trial).is_ok(), false),
-                };
+                }
+            };
             let f_trial = if trial_ok {
                 sumsq(&r_trial)
             } else {
@@ -543,12 +684,14 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
                 && negligible(actual)
                 && negligible(predicted)
                 && negligible(gauss_newton_gain(
-                    &jac, &jtj, &g, &r, f, &x, lb, ub, &held, diag_max,
+                    &lin, &jtj, &g, f, &x, lb, ub, &held, diag_max,
                 ));
             if trial_ok && f_trial.is_finite() && actual > 0.0 && rho > 1e-4 {
                 std::mem::swap(&mut x, &mut x_trial);
                 std::mem::swap(&mut r, &mut r_trial);
-                if trial_jac {
+                if normal {
+                    std::mem::swap(&mut ne, &mut ne_trial);
+                } else if trial_jac {
                     std::mem::swap(&mut jac, &mut jac_trial);
                 }
                 jac_fresh = trial_jac;

@@ -153,6 +153,19 @@ pub fn khd_rate_coarsened<S: Scalar>(
     Some(p.a * arg.sinh())
 }
 
+/// The KHD model's output columns: the hardening variable H, the coarsening damage Φ and
+/// the cavitation damage ω.
+pub const OUTPUTS: [&str; 3] = ["H", "Phi", "omega"];
+
+/// H, Φ, ω of the one-state forms at time `t` (h) and creep strain `eps`: H from the
+/// hardening strain `g` (ε, or ln(1+ε) at constant load), Φ = 1 − (1 + Kc t)^(−1/3),
+/// ω = `c_eff`·ε.
+pub fn outputs(p: &KhdPrepared<f64>, t: f64, eps: f64, g: f64, c_eff: f64, out: &mut Vec<f64>) {
+    out.push(p.hstar * (1.0 - (-(p.h_over_sigma * g * p.inv_hstar)).exp()));
+    out.push(1.0 - 1.0 / coarsening_factor(p, t));
+    out.push(c_eff * eps);
+}
+
 /// The paper's four-state model, state y = [ε, H, Φ, ω].
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Khd;
@@ -197,6 +210,12 @@ impl CreepModel<4> for Khd {
     }
     fn state_names(&self) -> [&'static str; 4] {
         ["strain", "H", "Phi", "omega"]
+    }
+    fn output_names(&self) -> &'static [&'static str] {
+        &OUTPUTS
+    }
+    fn outputs(&self, _p: &KhdPrepared<f64>, _t: f64, y: &[f64; 4], out: &mut Vec<f64>) {
+        out.extend_from_slice(&y[1..]);
     }
 }
 
@@ -258,5 +277,11 @@ impl CreepModel<1> for KhdReduced {
     }
     fn state_names(&self) -> [&'static str; 1] {
         ["strain"]
+    }
+    fn output_names(&self) -> &'static [&'static str] {
+        &OUTPUTS
+    }
+    fn outputs(&self, p: &KhdPrepared<f64>, t: f64, y: &[f64; 1], out: &mut Vec<f64>) {
+        outputs(p, t, y[0], y[0], p.c, out);
     }
 }

@@ -8,12 +8,18 @@
 
 pub mod ext;
 mod khd;
+pub mod khd_guess;
+pub mod law;
 
 pub use ext::KhdExtended;
 pub use khd::{Khd, KhdReduced};
+pub use law::{with_laws, LawKind, WithLaws};
 
-use crate::dual::{Dual, Scalar, SENS};
+use crate::data::Curve;
+use crate::dual::{Dual, Scalar, SENS, SENS_WIDE};
 use crate::error::{Error, Result};
+use crate::guess::{Guess, GuessFn};
+use crate::objective::ParamSpace;
 use crate::ode::{self, OdeOptions, SimResult};
 
 /// How a constant is mapped to the optimiser's unit box.
@@ -46,13 +52,40 @@ pub struct ConstantSpec {
     pub doc: &'static str,
 }
 
-/// The loading of one test: nominal stress and the damage at rupture.
+/// 0 °C in K: files give temperatures in °C, [`Load`] and the temperature laws work in K.
+pub const ZERO_CELSIUS_K: f64 = 273.15;
+
+/// The conditions of one test: nominal stress, temperature and the damage at rupture.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Load {
     /// Nominal (initial) stress, MPa.
     pub stress_mpa: f64,
+    /// Test temperature, K (the temperature laws of the constants read it; a model without
+    /// laws ignores it).
+    pub temperature_k: f64,
     /// Damage at rupture ω_f (the paper: 1/3).
     pub omega_f: f64,
+}
+
+impl Load {
+    /// The load at `stress_mpa` (MPa) and `temperature_c` (°C, as in the files).
+    pub fn new(stress_mpa: f64, temperature_c: f64, omega_f: f64) -> Load {
+        Load {
+            stress_mpa,
+            temperature_k: temperature_c + ZERO_CELSIUS_K,
+            omega_f,
+        }
+    }
+
+    /// The load of a measured curve: its stress and temperature.
+    pub fn of_curve(c: &crate::data::Curve, omega_f: f64) -> Load {
+        Load::new(c.stress_mpa, c.temperature_c, omega_f)
+    }
+
+    /// The temperature in °C.
+    pub fn temperature_c(&self) -> f64 {
+        self.temperature_k - ZERO_CELSIUS_K
+    }
 }
 
 /// A constitutive model with an `N`-component state, integrated by [`crate::ode`].
@@ -101,8 +134,16 @@ pub trait CreepModel<const N: usize>: Send + Sync {
     fn strain<S: Scalar>(&self, p: &Self::Prepared<S>, y: &[S; N]) -> S;
     /// Strain rate (1/h) from the state and its derivative.
     fn strain_rate<S: Scalar>(&self, p: &Self::Prepared<S>, y: &[S; N], dy: &[S; N]) -> S;
-    /// Names of the state components, for trajectory output.
+    /// Names of the state components.
     fn state_names(&self) -> [&'static str; N];
+    /// Names of the quantities the model reports beside the strain (its output columns in
+    /// `simulate`'s and `predict`'s `curves.csv`, e.g. H, Φ, ω for KHD); none by default.
+    fn output_names(&self) -> &'static [&'static str] {
+        &[]
+    }
+    /// The values of [`CreepModel::output_names`] at time `t` (h) and state `y`, appended to
+    /// `out`.
+    fn outputs(&self, _p: &Self::Prepared<f64>, _t: f64, _y: &[f64; N], _out: &mut Vec<f64>) {}
 }
 
 /// Object-safe face of a model: what fits, reports and commands need.
@@ -134,7 +175,36 @@ pub trait Model: Send + Sync {
         strain_out: &mut [Dual<SENS>],
         opts: &OdeOptions,
     ) -> SimResult<Dual<SENS>>;
-    /// Integrate and return the full state at each of `times` up to rupture (for reports).
+    /// [`Model::simulate_sens`] with the wide dual numbers, for more than [`SENS`] free
+    /// constants.
+    fn simulate_sens_wide(
+        &self,
+        params: &[Dual<SENS_WIDE>],
+        load: &Load,
+        times: &[f64],
+        strain_out: &mut [Dual<SENS_WIDE>],
+        opts: &OdeOptions,
+    ) -> SimResult<Dual<SENS_WIDE>>;
+    /// [`Model::simulate_sens`] handing the predicted strains to `each(k0, strains)` in
+    /// order, in chunks (strains k0, k0 + 1, …), as the integrator produces them instead of
+    /// storing them all, so that a streaming consumer (the normal equations of a fit to a
+    /// logged curve of a million points) needs no dual-number buffer as long as the curve.
+    /// The default goes through such a buffer.
+    fn simulate_sens_each(
+        &self,
+        params: &[Dual<SENS>],
+        load: &Load,
+        times: &[f64],
+        each: &mut dyn FnMut(usize, &[Dual<SENS>]),
+        opts: &OdeOptions,
+    ) -> SimResult<Dual<SENS>> {
+        let mut buf = vec![Dual::cst(0.0); times.len()];
+        let res = self.simulate_sens(params, load, times, &mut buf, opts);
+        each(0, &buf[..res.n_out]);
+        res
+    }
+    /// Integrate and return, at each of `times` up to rupture, the time, the strain and the
+    /// model's outputs ([`Model::output_names`]), for reports.
     fn trajectory(
         &self,
         params: &[f64],
@@ -142,8 +212,36 @@ pub trait Model: Send + Sync {
         times: &[f64],
         opts: &OdeOptions,
     ) -> (SimResult, Vec<(f64, f64, Vec<f64>)>);
-    /// Names of the state components reported by [`Model::trajectory`].
-    fn state_names(&self) -> Vec<&'static str>;
+    /// Names of the quantities [`Model::trajectory`] reports beside the strain: the model's
+    /// output columns (H, Phi, omega for KHD).
+    fn output_names(&self) -> Vec<&'static str>;
+    /// The model's own initial-guess procedure (from its registry entry), if it has one.
+    fn guess_procedure(&self) -> Option<GuessFn>;
+    /// Start constants for `curves` within `space`: the model's procedure, else the centre
+    /// of the box (a model with temperature laws makes the guess per temperature).
+    fn initial_guess(
+        &self,
+        curves: &[Curve],
+        space: &ParamSpace,
+        omega_f: f64,
+        ode: &OdeOptions,
+    ) -> Guess {
+        match self.guess_procedure() {
+            Some(g) => g(self.as_dyn(), curves, space, omega_f, ode),
+            None => crate::guess::box_centre(space),
+        }
+    }
+    /// The constants of the underlying model at `temperature_c` (°C) from a parameter
+    /// vector: the parameters themselves for a model without temperature laws.
+    fn constants_at(&self, params: &[f64], _temperature_c: f64) -> Vec<f64> {
+        params.to_vec()
+    }
+    /// The constants of the underlying model (without the laws' parameters).
+    fn inner_constants(&self) -> &[ConstantSpec] {
+        self.constants()
+    }
+    /// This model as a trait object.
+    fn as_dyn(&self) -> &dyn Model;
 }
 
 /// Adapts any [`CreepModel`] to the object-safe [`Model`]; the integration stays
@@ -152,16 +250,41 @@ pub struct Integrated<M, const N: usize> {
     name: String,
     model: M,
     constants: Vec<ConstantSpec>,
+    guess: Option<GuessFn>,
 }
 
 impl<M, const N: usize> Integrated<M, N> {
-    /// Wrap `model` under a registry `name` with its `constants`.
+    /// Wrap `model` under a registry `name` with its `constants` (no guess procedure).
     pub fn new(name: impl Into<String>, model: M, constants: Vec<ConstantSpec>) -> Self {
         Integrated {
             name: name.into(),
             model,
             constants,
+            guess: None,
         }
+    }
+
+    /// The same with the initial-guess procedure `guess`.
+    pub fn with_guess(mut self, guess: Option<GuessFn>) -> Self {
+        self.guess = guess;
+        self
+    }
+}
+
+impl<M: CreepModel<N>, const N: usize> Integrated<M, N> {
+    /// Integrate in any number type, writing the strain at `times` into `strain_out`.
+    fn run<S: Scalar>(
+        &self,
+        params: &[S],
+        load: &Load,
+        times: &[f64],
+        strain_out: &mut [S],
+        opts: &OdeOptions,
+    ) -> SimResult<S> {
+        let p = self.model.prepare(params, load);
+        ode::integrate(&self.model, &p, times, opts, |k, _t, y| {
+            strain_out[k] = self.model.strain(&p, y)
+        })
     }
 }
 
@@ -180,10 +303,7 @@ impl<M: CreepModel<N>, const N: usize> Model for Integrated<M, N> {
         strain_out: &mut [f64],
         opts: &OdeOptions,
     ) -> SimResult {
-        let p = self.model.prepare(params, load);
-        ode::integrate(&self.model, &p, times, opts, |k, _t, y| {
-            strain_out[k] = self.model.strain(&p, y)
-        })
+        self.run(params, load, times, strain_out, opts)
     }
     fn simulate_sens(
         &self,
@@ -193,10 +313,41 @@ impl<M: CreepModel<N>, const N: usize> Model for Integrated<M, N> {
         strain_out: &mut [Dual<SENS>],
         opts: &OdeOptions,
     ) -> SimResult<Dual<SENS>> {
+        self.run(params, load, times, strain_out, opts)
+    }
+    fn simulate_sens_wide(
+        &self,
+        params: &[Dual<SENS_WIDE>],
+        load: &Load,
+        times: &[f64],
+        strain_out: &mut [Dual<SENS_WIDE>],
+        opts: &OdeOptions,
+    ) -> SimResult<Dual<SENS_WIDE>> {
+        self.run(params, load, times, strain_out, opts)
+    }
+    fn simulate_sens_each(
+        &self,
+        params: &[Dual<SENS>],
+        load: &Load,
+        times: &[f64],
+        each: &mut dyn FnMut(usize, &[Dual<SENS>]),
+        opts: &OdeOptions,
+    ) -> SimResult<Dual<SENS>> {
+        // Chunks on the stack: the consumer's loop runs over a chunk, not one call a point.
+        const CHUNK: usize = 256;
         let p = self.model.prepare(params, load);
-        ode::integrate(&self.model, &p, times, opts, |k, _t, y| {
-            strain_out[k] = self.model.strain(&p, y)
-        })
+        let mut buf = [Dual::cst(0.0); CHUNK];
+        let (mut start, mut len) = (0, 0);
+        let res = ode::integrate(&self.model, &p, times, opts, |k, _t, y| {
+            if len == CHUNK {
+                each(start, &buf);
+                (start, len) = (k, 0);
+            }
+            buf[len] = self.model.strain(&p, y);
+            len += 1;
+        });
+        each(start, &buf[..len]);
+        res
     }
     fn trajectory(
         &self,
@@ -208,12 +359,20 @@ impl<M: CreepModel<N>, const N: usize> Model for Integrated<M, N> {
         let p = self.model.prepare(params, load);
         let mut out = Vec::with_capacity(times.len());
         let res = ode::integrate(&self.model, &p, times, opts, |_k, t, y| {
-            out.push((t, self.model.strain(&p, y), y.to_vec()))
+            let mut v = Vec::with_capacity(self.model.output_names().len());
+            self.model.outputs(&p, t, y, &mut v);
+            out.push((t, self.model.strain(&p, y), v))
         });
         (res, out)
     }
-    fn state_names(&self) -> Vec<&'static str> {
-        self.model.state_names().to_vec()
+    fn output_names(&self) -> Vec<&'static str> {
+        self.model.output_names().to_vec()
+    }
+    fn guess_procedure(&self) -> Option<GuessFn> {
+        self.guess
+    }
+    fn as_dyn(&self) -> &dyn Model {
+        self
     }
 }
 
@@ -253,6 +412,28 @@ impl Model for FastPath {
         self.fast
             .simulate_sens(params, load, times, strain_out, opts)
     }
+    fn simulate_sens_wide(
+        &self,
+        params: &[Dual<SENS_WIDE>],
+        load: &Load,
+        times: &[f64],
+        strain_out: &mut [Dual<SENS_WIDE>],
+        opts: &OdeOptions,
+    ) -> SimResult<Dual<SENS_WIDE>> {
+        self.fast
+            .simulate_sens_wide(params, load, times, strain_out, opts)
+    }
+    fn simulate_sens_each(
+        &self,
+        params: &[Dual<SENS>],
+        load: &Load,
+        times: &[f64],
+        each: &mut dyn FnMut(usize, &[Dual<SENS>]),
+        opts: &OdeOptions,
+    ) -> SimResult<Dual<SENS>> {
+        self.fast
+            .simulate_sens_each(params, load, times, each, opts)
+    }
     fn trajectory(
         &self,
         params: &[f64],
@@ -262,57 +443,146 @@ impl Model for FastPath {
     ) -> (SimResult, Vec<(f64, f64, Vec<f64>)>) {
         self.full.trajectory(params, load, times, opts)
     }
-    fn state_names(&self) -> Vec<&'static str> {
-        self.full.state_names()
+    fn output_names(&self) -> Vec<&'static str> {
+        self.full.output_names()
+    }
+    fn guess_procedure(&self) -> Option<GuessFn> {
+        self.fast.guess_procedure()
+    }
+    fn as_dyn(&self) -> &dyn Model {
+        self
     }
 }
 
-/// Names of the registered models.
-pub const MODEL_NAMES: &[&str] = &["khd", "khd4", "khd1"];
+/// How a registry entry builds its model with the given extensions.
+pub type BuildFn = fn(&ModelEntry, &[String]) -> Result<Box<dyn Model>>;
 
-/// Pick a model by its registry name.
+/// One entry of the model registry: everything that is particular to a model — how it is
+/// built (with the catalogued extensions, where they apply) and its initial-guess procedure.
+/// Its output columns come with the model itself ([`Model::output_names`]). Adding a model
+/// is its files plus one entry in [`REGISTRY`].
+pub struct ModelEntry {
+    /// Registry name, as in configurations.
+    pub name: &'static str,
+    /// One line on what it is.
+    pub doc: &'static str,
+    /// The model with the given extensions (an error if it takes none and some are given).
+    pub build: BuildFn,
+    /// Its initial-guess procedure, if it has one (else fits start from the configuration or
+    /// the centre of the box).
+    pub guess: Option<GuessFn>,
+}
+
+/// The registered models.
 ///
 /// `khd` is the paper's model (eqs. 1–4), simulated through its exact one-state reduction
 /// (DESIGN.md §1) and reported with its four states; `khd4` integrates the four states
 /// (eqs. 1–4 as written); `khd1` is the one-state reduction alone. All three give the same
 /// predictions (tested to 1e-9): the reduction is faster and, unlike the four-state form,
 /// its sensitivity equations are not stiff (H relaxing to its saturation H* makes the
-/// four-state sensitivities stiff when h/σ is large).
-pub fn registry(name: &str) -> Result<Box<dyn Model>> {
-    let khd4 = || Box::new(Integrated::new("khd4", Khd, khd::constants()));
-    let khd1 = || Box::new(Integrated::new("khd1", KhdReduced, khd::constants()));
-    match name {
-        "khd" => Ok(Box::new(FastPath {
-            name: "khd",
-            fast: khd1(),
-            full: khd4(),
-        })),
-        "khd4" => Ok(khd4()),
-        "khd1" => Ok(khd1()),
-        _ => Err(Error::UnknownModel(
-            name.to_string(),
-            MODEL_NAMES.join(", "),
-        )),
+/// four-state sensitivities stiff when h/σ is large). Extensions (DESIGN.md §6) compose with
+/// `khd` and `khd1` as the one-state reduction with the extensions' terms
+/// ([`ext::KhdExtended`]), named e.g. `khd+constant_load`.
+pub const REGISTRY: &[ModelEntry] = &[
+    ModelEntry {
+        name: "khd",
+        doc: "the paper's KHD model, fitted through its exact one-state reduction",
+        build: build_khd,
+        guess: Some(khd_guess::initial_guess),
+    },
+    ModelEntry {
+        name: "khd4",
+        doc: "the KHD model integrated in its four states",
+        build: build_khd4,
+        guess: Some(khd_guess::initial_guess),
+    },
+    ModelEntry {
+        name: "khd1",
+        doc: "the KHD model's one-state reduction alone",
+        build: build_khd,
+        guess: Some(khd_guess::initial_guess),
+    },
+];
+
+/// Names of the registered models.
+pub const MODEL_NAMES: &[&str] = &["khd", "khd4", "khd1"];
+
+fn no_extensions(e: &ModelEntry, extensions: &[String]) -> Result<()> {
+    if extensions.is_empty() {
+        Ok(())
+    } else {
+        Err(Error::UnknownModel(
+            format!("{} with extensions", e.name),
+            "khd, khd1 (extensions apply to the KHD model)".into(),
+        ))
     }
 }
 
-/// The model of a configuration: `name` from the registry, plus the catalogued `extensions`
-/// (DESIGN.md §6) composed with it. Extensions apply to the KHD model (`khd`, `khd1`): the
-/// composition is the one-state reduction with the extensions' terms
-/// ([`ext::KhdExtended`]), named e.g. `khd+constant_load`.
-pub fn build(name: &str, extensions: &[String]) -> Result<Box<dyn Model>> {
+fn build_khd4(e: &ModelEntry, extensions: &[String]) -> Result<Box<dyn Model>> {
+    no_extensions(e, extensions)?;
+    Ok(Box::new(
+        Integrated::new("khd4", Khd, khd::constants()).with_guess(e.guess),
+    ))
+}
+
+fn build_khd(e: &ModelEntry, extensions: &[String]) -> Result<Box<dyn Model>> {
+    let khd1 = || Integrated::new("khd1", KhdReduced, khd::constants()).with_guess(e.guess);
     if extensions.is_empty() {
-        return registry(name);
-    }
-    if !matches!(name, "khd" | "khd1") {
-        return Err(Error::UnknownModel(
-            format!("{name} with extensions"),
-            "khd, khd1 (extensions apply to the KHD model)".into(),
-        ));
+        return Ok(match e.name {
+            "khd" => Box::new(FastPath {
+                name: "khd",
+                fast: Box::new(khd1()),
+                full: Box::new(Integrated::new("khd4", Khd, khd::constants()).with_guess(e.guess)),
+            }),
+            _ => Box::new(khd1()),
+        });
     }
     let (m, constants) = KhdExtended::new(extensions).map_err(|bad| {
         Error::UnknownModel(format!("extension {bad}"), ext::CATALOGUE.join(", "))
     })?;
     let full = format!("khd+{}", extensions.join("+"));
-    Ok(Box::new(Integrated::new(full, m, constants)))
+    Ok(Box::new(
+        Integrated::new(full, m, constants).with_guess(e.guess),
+    ))
+}
+
+/// The registry entry of model `name`.
+pub fn entry(name: &str) -> Result<&'static ModelEntry> {
+    REGISTRY
+        .iter()
+        .find(|e| e.name == name)
+        .ok_or_else(|| Error::UnknownModel(name.to_string(), MODEL_NAMES.join(", ")))
+}
+
+/// Pick a model by its registry name (without extensions).
+pub fn registry(name: &str) -> Result<Box<dyn Model>> {
+    build(name, &[])
+}
+
+/// The model of a configuration: `name` from the registry, plus the catalogued `extensions`
+/// (DESIGN.md §6) composed with it.
+pub fn build(name: &str, extensions: &[String]) -> Result<Box<dyn Model>> {
+    let e = entry(name)?;
+    (e.build)(e, extensions)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn registry_names_and_entries_agree() {
+        let names: Vec<&str> = REGISTRY.iter().map(|e| e.name).collect();
+        assert_eq!(names, MODEL_NAMES);
+        for e in REGISTRY {
+            let m = build(e.name, &[]).unwrap();
+            assert_eq!(m.name(), e.name);
+            assert!(m.guess_procedure().is_some());
+            assert_eq!(m.output_names(), ["H", "Phi", "omega"]);
+        }
+        let m = build("khd", &["stress_ductility".to_string()]).unwrap();
+        assert_eq!(m.output_names(), ["H", "Phi", "omega"]);
+        assert!(build("khd4", &["stress_ductility".to_string()]).is_err());
+        assert!(build("nope", &[]).is_err());
+    }
 }

@@ -764,6 +764,123 @@ fn parameters(
     })
 }
 
+/// One group of an [`plot_xy`] chart: a line and markers in one colour, one legend entry.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct XyGroup {
+    /// Legend label.
+    pub label: String,
+    /// Drawn as a line (in the given order).
+    pub line: Vec<(f64, f64)>,
+    /// Drawn as markers.
+    pub points: Vec<(f64, f64)>,
+    /// Dashed line (e.g. a baseline) instead of a solid one.
+    pub dashed: bool,
+    /// Palette index of the colour (groups of one temperature share one); `None`: black.
+    pub color: Option<usize>,
+    /// Triangles instead of circles as markers (e.g. asked conditions beside measurements).
+    pub triangles: bool,
+}
+
+/// Axes of an [`plot_xy`] chart.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct XyAxes<'a> {
+    pub x_label: &'a str,
+    pub y_label: &'a str,
+    pub x_scale: AxisScale,
+    pub y_scale: AxisScale,
+}
+
+/// Lines and markers over linear or log axes (a log axis draws log10 of the values and
+/// labels its ticks with the values; non-positive values are left out of it), in the colour
+/// each group names; the axes cover every plottable value, padded by 5 %. For the stress–rupture
+/// and Larson–Miller diagrams of `predict` and the parity plot of `holdout`. Groups with
+/// neither line nor points only add their legend entry (a note); an empty label adds none.
+pub fn plot_xy(path: &Path, title: &str, axes: XyAxes<'_>, groups: &[XyGroup]) -> Result<()> {
+    xy(path, title, axes, groups).map(|_| ())
+}
+
+fn xy(path: &Path, title: &str, axes: XyAxes<'_>, groups: &[XyGroup]) -> Result<Drawn> {
+    let to = |v: f64, scale: AxisScale| match scale {
+        AxisScale::Linear => v,
+        AxisScale::Log if v > 0.0 => v.log10(),
+        AxisScale::Log => f64::NAN,
+    };
+    let tr = |pts: &[(f64, f64)]| -> Vec<(f64, f64)> {
+        pts.iter()
+            .map(|&(x, y)| (to(x, axes.x_scale), to(y, axes.y_scale)))
+            .collect()
+    };
+    type Points = Vec<(f64, f64)>;
+    let groups_t: Vec<(Points, Points)> = groups
+        .iter()
+        .map(|g| (tr(&g.line), tr(&g.points)))
+        .collect();
+    let all = || groups_t.iter().flat_map(|(l, p)| l.iter().chain(p.iter()));
+    let x_range = padded(data_range(all().map(|p| p.0)).unwrap_or((0.0, 1.0)), 0.05);
+    let y_range = padded(data_range(all().map(|p| p.1)).unwrap_or((0.0, 1.0)), 0.05);
+    let has_data = all().any(|&p| plottable(p));
+    let ticks = |(lo, hi): (f64, f64), scale: AxisScale| match scale {
+        AxisScale::Linear => Ticks::auto((lo, hi), AxisScale::Linear),
+        AxisScale::Log => {
+            let pairs = axis_ticks(10f64.powf(lo), 10f64.powf(hi), AxisScale::Log, MAX_TICKS);
+            Ticks::of(pairs.into_iter().map(|(v, l)| (v.log10(), l)).collect())
+        }
+    };
+    let (xt, yt) = (ticks(x_range, axes.x_scale), ticks(y_range, axes.y_scale));
+    let desc = |label: &str, scale: AxisScale| match scale {
+        AxisScale::Linear => label.to_string(),
+        AxisScale::Log => format!("{label} (log scale)"),
+    };
+    render(path, title, |area, drawn| {
+        let mut chart = linear_chart(area, (x_range, &xt), (y_range, &yt))?;
+        configure_mesh(
+            &mut chart,
+            &desc(axes.x_label, axes.x_scale),
+            &desc(axes.y_label, axes.y_scale),
+            &xt,
+            &yt,
+            drawn,
+        )?;
+        let mut keys = Vec::new();
+        for (g, (line, points)) in groups.iter().zip(&groups_t) {
+            let color = g.color.map_or(BLACK, |i| PALETTE[i % PALETTE.len()]);
+            let style = color.stroke_width(2);
+            for piece in clip_polyline(line, x_range, y_range) {
+                if g.dashed {
+                    chart.draw_series(DashedLineSeries::new(piece, 10, 6, style))?;
+                } else {
+                    chart.draw_series(std::iter::once(PathElement::new(piece, style)))?;
+                }
+            }
+            if g.triangles {
+                chart.draw_series(
+                    inside(points, x_range, y_range)
+                        .map(|p| TriangleMarker::new(p, 8, color.filled())),
+                )?;
+            } else {
+                chart.draw_series(
+                    inside(points, x_range, y_range).map(|p| Circle::new(p, 5, color.filled())),
+                )?;
+            }
+            let glyph = match (line.is_empty(), points.is_empty()) {
+                (false, false) => Glyph::LineMarker(style, color, 5),
+                (false, true) => Glyph::Line(style),
+                (true, false) if g.triangles => Glyph::Triangle(color),
+                (true, false) => Glyph::Marker(color, 5),
+                (true, true) => Glyph::Note,
+            };
+            if !g.label.is_empty() {
+                keys.push(key(g.label.clone(), glyph));
+            }
+        }
+        if !has_data {
+            no_data(&mut chart, (mid(x_range), mid(y_range)))?;
+        }
+        drawn.plot_px = pixel_rect(chart.plotting_area());
+        Ok(keys)
+    })
+}
+
 // ---------------------------------------------------------------------------------------------
 // Drawing infrastructure
 

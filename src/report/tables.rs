@@ -72,14 +72,21 @@ pub fn jnum(v: f64) -> Value {
     }
 }
 
-/// `constants.csv`: name,value,unit,lb,ub
+/// Name of the row of `constants.csv` that holds the reference temperature of the
+/// temperature laws (°C): constants about one reference temperature mean other values about
+/// another, so `predict` and `simulate` check it against the configuration's.
+pub const T_REF_ROW: &str = "T_ref";
+
+/// `constants.csv`: name,value,unit,lb,ub; with temperature laws a last row `T_ref` (°C,
+/// lb = ub = value), the reference temperature the constants are about.
 pub fn write_constants(
     path: &Path,
     model: &dyn Model,
     space: &ParamSpace,
     params: &[f64],
+    t_ref_c: Option<f64>,
 ) -> Result<()> {
-    let rows: Vec<Vec<String>> = model
+    let mut rows: Vec<Vec<String>> = model
         .constants()
         .iter()
         .enumerate()
@@ -93,11 +100,21 @@ pub fn write_constants(
             ]
         })
         .collect();
+    if let Some(t) = t_ref_c {
+        rows.push(vec![
+            T_REF_ROW.to_string(),
+            num(t),
+            "°C".to_string(),
+            num(t),
+            num(t),
+        ]);
+    }
     write_csv(path, &["name", "value", "unit", "lb", "ub"], &rows)
 }
 
 /// Read a `constants.csv` (columns `name,value`, any order, extra columns ignored) into the
-/// model's order; every model constant must be present. Errors name the file's physical line.
+/// model's order; every model constant must be present. A `T_ref` row is skipped here
+/// ([`crate::predict::check_t_ref`] checks it). Errors name the file's physical line.
 pub fn read_constants(path: &Path, model: &dyn Model) -> Result<Vec<f64>> {
     let (bytes, progress) = crate::data::read_file(path)?;
     let mut table = crate::data::Table::open(path, &bytes, &["name", "value"], progress)?;
@@ -107,6 +124,9 @@ pub fn read_constants(path: &Path, model: &dyn Model) -> Result<Vec<f64>> {
     let mut rec = csv::StringRecord::new();
     while let Some(line) = table.next_row(&mut rec)? {
         let name = rec.get(ci).unwrap_or("").trim();
+        if name == T_REF_ROW && !model.constants().iter().any(|c| c.name == T_REF_ROW) {
+            continue;
+        }
         let text = rec.get(cv).unwrap_or("").trim();
         let v: f64 = text.parse().map_err(|_| {
             Error::data(
@@ -350,6 +370,34 @@ pub fn error_table(rows: &[ErrorRow], min_rate_measured: bool) -> String {
     s
 }
 
+/// The error model of creep data ([`crate::errmodel`]) estimated from the residuals of `fit`'s
+/// chosen constants: per curve the marginal sd (% strain) and AR(1) correlation of the
+/// residuals — reading error plus whatever misfit the model leaves (φ near 1: mostly misfit) —, the scatter of rupture times (% on the log scale), and −2 ln L. `null` if the
+/// chosen constants cannot be evaluated.
+pub fn error_model_json(cfg: &RunConfig, run: &FitRun, curves: &[Curve]) -> Value {
+    let best = &run.fits[run.best];
+    let Ok(res) =
+        crate::likelihood::residuals_at(run.model.as_ref(), curves, &best.params, &run.settings)
+    else {
+        return Value::Null;
+    };
+    let m = crate::errmodel::ErrorModel::estimate(&res, cfg.diagnose.lifetime_sd_floor);
+    json!({
+        "curves": curves.iter().zip(&m.strain).zip(&res.strain).map(|((c, p), e)| json!({
+            "temperature_C": c.temperature_c,
+            "stress_MPa": c.stress_mpa,
+            "specimen": c.specimen,
+            "points": e.len(),
+            "residual_sd_pct": jnum(100.0 * p.marginal_sd()),
+            "ar1_phi": jnum(p.phi),
+        })).collect::<Vec<_>>(),
+        "lifetime_sd_pct": jnum(100.0 * m.lifetime_sd),
+        "lifetime_sd_floor_pct": jnum(100.0 * cfg.diagnose.lifetime_sd_floor),
+        "neg2_log_likelihood": jnum(m.neg2ll(&res)),
+        "effective_observations": jnum(m.effective_n(&res)),
+    })
+}
+
 /// `summary.json` of a fit of the configuration `cfg`.
 pub fn fit_summary(cfg: &RunConfig, run: &FitRun, curves: &[Curve]) -> Value {
     let best = &run.fits[run.best];
@@ -388,9 +436,10 @@ pub fn fit_summary(cfg: &RunConfig, run: &FitRun, curves: &[Curve]) -> Value {
             })
         })
         .collect();
-    json!({
+    let mut summary = json!({
         "model": run.model.name(),
         "extensions": cfg.extensions,
+        "error_model": error_model_json(cfg, run, curves),
         "run_id": crate::identity::hash_value(&crate::identity::identity(cfg)),
         "data_hash": cfg.data_hash,
         "objective": jnum(best.eval.objective),
@@ -418,5 +467,39 @@ pub fn fit_summary(cfg: &RunConfig, run: &FitRun, curves: &[Curve]) -> Value {
         },
         "ode": {"rtol": run.settings.ode.rtol, "atol": run.settings.ode.atol},
         "candidates": candidates,
-    })
+    });
+    // A joint calibration across temperatures (or the likelihood objective) says so, with
+    // the errors and the model's constants at each temperature.
+    if cfg.has_laws() || cfg.objective.kind != crate::config::ObjectiveKind::Eq8 {
+        let inner: Vec<&str> = run.model.inner_constants().iter().map(|c| c.name).collect();
+        let at = |t: f64| -> Value {
+            let v = run.model.constants_at(&best.params, t);
+            Value::Object(
+                inner
+                    .iter()
+                    .zip(v)
+                    .map(|(n, x)| (n.to_string(), jnum(x)))
+                    .collect(),
+            )
+        };
+        let per_t: Vec<Value> = crate::fit::errors_per_temperature(best, curves)
+            .into_iter()
+            .map(|e| {
+                let mut v = json!(e);
+                v["constants"] = at(e.temperature_c);
+                v
+            })
+            .collect();
+        summary["objective_kind"] = json!(cfg.objective.kind);
+        summary["T_ref_C"] = json!(cfg.t_ref);
+        summary["per_temperature"] = json!(per_t);
+        summary["initial_guess"]["procedure"] = json!(run.guess.procedure);
+        summary["initial_guess"]["per_temperature"] = json!(run
+            .guess
+            .per_temperature
+            .iter()
+            .map(|(t, p)| json!({"temperature_C": t, "constants": inner.iter().zip(p).map(|(n, x)| (n.to_string(), jnum(*x))).collect::<serde_json::Map<_, _>>()}))
+            .collect::<Vec<_>>());
+    }
+    summary
 }

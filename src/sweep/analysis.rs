@@ -201,9 +201,15 @@ pub fn analyse(header: &Header, solutions: &[Solution]) -> Analysis {
     let mut pinned = Vec::new();
     if n_ok > 0 {
         let best = &ranked[0];
+        // Within NEAR_BEST of |best| (the likelihood objective, −2 ln L, can be negative).
+        let limit = if best.objective >= 0.0 {
+            best.objective * (1.0 + NEAR_BEST)
+        } else {
+            best.objective * (1.0 - NEAR_BEST)
+        };
         let near: Vec<&Solution> = ranked[..n_ok]
             .iter()
-            .filter(|s| s.objective <= best.objective * (1.0 + NEAR_BEST))
+            .filter(|s| s.objective <= limit)
             .collect();
         near_best = near.len();
         for j in 0..k {

@@ -39,7 +39,6 @@ use crate::data::Dataset;
 use crate::error::{Error, Result};
 use crate::fit::{local_fit, param_space, FitSettings};
 use crate::guess::initial_guess;
-use crate::model::build;
 use crate::objective::mean_abs;
 use crate::output::{lock_folder, FolderLock};
 
@@ -128,7 +127,7 @@ pub fn plan(cfg: &RunConfig, data: &Dataset) -> Result<Plan> {
     if starts == 0 {
         return Err(Error::Invalid("--starts must be at least 1".into()));
     }
-    let model = build(&cfg.model, &cfg.extensions)?;
+    let model = cfg.build_model()?;
     let space = param_space(cfg);
     let settings = FitSettings::from_config(cfg);
     let ws = cfg.objective.weight_vectors(data.curves.len(), &cfg.path)?;
@@ -200,7 +199,7 @@ pub fn run_sweep(cfg: &RunConfig, data: &Dataset) -> Result<(Plan, SweepRun)> {
     STOP.store(false, Ordering::SeqCst);
     let out = cfg.out_dir("sweep");
     let plan = plan(cfg, data)?;
-    let model = build(&cfg.model, &cfg.extensions)?;
+    let model = cfg.build_model()?;
     let space = param_space(cfg);
     let settings = FitSettings::from_config(cfg);
     let (shard_i, shard_n) = cfg.run.shard.unwrap_or((1, 1));

@@ -32,7 +32,7 @@ use super::report::{context, core};
 use super::{normal_quantile, Thresholds};
 use crate::config::{ProfileConfig, RunConfig};
 use crate::error::{Error, Result};
-use crate::model::{build, Load};
+use crate::model::Load;
 use crate::ode::OdeOptions;
 use crate::synth::{generate, write_set};
 
@@ -203,15 +203,16 @@ fn measure(dir: &Path, seed: u64, s: &CoverageSettings, out: &mut SetCoverage) -
     out.points = t.times_h.iter().map(|v| v.len()).sum();
     let cfg = RunConfig::load(&folder.join("config.toml"))?;
     let data = cfg.load_data()?;
-    let model = build(&cfg.model, &cfg.extensions)?;
+    let model = cfg.build_model()?;
     let ctx = context(&cfg, model.as_ref(), &data);
 
     // The untested load and its true rupture time.
     let lowest = t.stresses.iter().copied().fold(f64::INFINITY, f64::min);
-    let load = Load {
-        stress_mpa: (s.stress_factor * lowest).round(),
-        omega_f: cfg.objective.omega_f,
-    };
+    let load = Load::new(
+        (s.stress_factor * lowest).round(),
+        t.temperature_c,
+        cfg.objective.omega_f,
+    );
     let tight = OdeOptions {
         rtol: 1e-11,
         atol: 1e-15,

@@ -9,7 +9,7 @@
 //!
 //! Everything works on the **profile −2 ln L**: the constants not held are re-fitted and the
 //! error model (AR(1) reading error per curve, rupture-time scatter) is re-estimated at every
-//! profile point ([`crate::likelihood::ml_fit`]), so a profile is the likelihood maximised
+//! profile point ([`constrained::ml_fit_scaled`]), so a profile is the likelihood maximised
 //! over everything else. Bounds are those of the configuration and are never loosened: a
 //! profile that reaches a bound before crossing its threshold is reported open at that bound.
 
@@ -31,7 +31,7 @@ use crate::data::Curve;
 use crate::errmodel::{ErrorModel, Residuals};
 use crate::error::{Error, Result};
 use crate::fit::FitSettings;
-use crate::likelihood::{ml_fit, raw_objective, LikelihoodProblem, MlFit, MlOptions};
+use crate::likelihood::{raw_objective, LikelihoodProblem, MlFit, MlOptions};
 use crate::lsq::{LeastSquaresProblem, LmOptions};
 use crate::model::Model;
 use crate::objective::{CreepProblem, Evaluation, ParamSpace};
@@ -89,9 +89,6 @@ impl<'a> Context<'a> {
     /// for the optimiser ([`constrained::ml_fit_scaled`]).
     pub fn fit(&self, space: &ParamSpace, start: &[f64], warm: bool) -> MlFit {
         let s = if warm { &self.warm } else { &self.settings };
-        if std::env::var("CREEPFIT_UNSCALED").is_ok() {
-            return ml_fit(self.model, self.curves, space, start, s, &self.ml);
-        }
         constrained::ml_fit_scaled(self, space, start, s)
     }
 

@@ -682,7 +682,10 @@ fn quantity_side(
                 width = width.min((c - g_hat).abs() / d.sqrt());
             }
         }
-        if env.iter().any(|&(_, d)| (d - th.t95).abs() <= 0.05 * th.t95) {
+        if env
+            .iter()
+            .any(|&(_, d)| (d - th.t95).abs() <= 0.05 * th.t95)
+        {
             return Side {
                 points,
                 end: SideEnd::Crossed,
@@ -691,8 +694,7 @@ fn quantity_side(
         let &(fc, fd) = env.last().expect("a point was kept");
         let asked = (target - g_hat) * dir - far_before;
         let got = (fc - g_hat) * dir - far_before;
-        if fd < th.t95 && asked > 0.0 && got < 0.01 * asked && fd - delta_before < 0.01 * th.t95
-        {
+        if fd < th.t95 && asked > 0.0 && got < 0.01 * asked && fd - delta_before < 0.01 * th.t95 {
             return Side {
                 points,
                 end: SideEnd::Unreachable,

@@ -20,7 +20,7 @@ use crate::error::{Error, Result};
 use crate::fit::{param_space, FitSettings};
 use crate::guess::initial_guess;
 use crate::likelihood::MlOptions;
-use crate::model::{build, Load, Scale};
+use crate::model::{Load, Scale};
 use crate::report::plot::{plot_profile, ProfilePlot};
 use crate::report::tables::{jnum, num, write_csv, write_text};
 
@@ -90,6 +90,9 @@ pub fn context<'a>(
         FitSettings::from_config(cfg),
         MlOptions {
             lifetime_sd_floor: cfg.profile.lifetime_sd_floor,
+            // Not read here: the profile's fits are scaled AR(1) fits from their starts
+            // ([`super::constrained::ml_fit_scaled`]), as before the two-stage `ml_fit`.
+            white_first: false,
         },
     )
 }
@@ -102,15 +105,7 @@ pub fn loads(cfg: &RunConfig, data: &Dataset, pc: &ProfileConfig) -> Vec<(f64, L
         .unwrap_or(f64::NAN);
     pc.predict_stress_mpa
         .iter()
-        .map(|&s| {
-            (
-                t,
-                Load {
-                    stress_mpa: s,
-                    omega_f: cfg.objective.omega_f,
-                },
-            )
-        })
+        .map(|&s| (t, Load::new(s, t, cfg.objective.omega_f)))
         .collect()
 }
 
@@ -255,7 +250,7 @@ pub fn run(
     pc: &ProfileConfig,
 ) -> Result<ProfileRun> {
     let t0 = Instant::now();
-    let model = build(&cfg.model, &cfg.extensions)?;
+    let model = cfg.build_model()?;
     let ctx = context(cfg, model.as_ref(), data);
     let loads = loads(cfg, data, pc);
     let only: Vec<Load> = loads.iter().map(|l| l.1).collect();
@@ -671,7 +666,7 @@ pub fn report_md(cfg: &RunConfig, run: &ProfileRun) -> String {
 
 /// Run `creepfit profile` on a configuration: compute, write, print the report.
 pub fn profile_command(cfg: &RunConfig, data: &Dataset, constants: Option<&Path>) -> Result<()> {
-    let model = build(&cfg.model, &cfg.extensions)?;
+    let model = cfg.build_model()?;
     let given = match constants {
         Some(p) => Some(crate::report::tables::read_constants(p, model.as_ref())?),
         None => None,

@@ -202,4 +202,16 @@ impl CreepModel<1> for KhdExtended {
     fn state_names(&self) -> [&'static str; 1] {
         ["creep_strain"]
     }
+    fn output_names(&self) -> &'static [&'static str] {
+        &khd::OUTPUTS
+    }
+    fn outputs(&self, p: &ExtPrepared<f64>, t: f64, y: &[f64; 1], out: &mut Vec<f64>) {
+        let eps = y[0];
+        let g = if self.constant_load {
+            constant_load::hardening_strain(eps)
+        } else {
+            eps
+        };
+        khd::outputs(&p.base, t, eps, g, p.c_eff, out);
+    }
 }

@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# Leave-one-temperature-out study: for every configuration given, `creepfit holdout` at each
+# temperature of HOLDOUT_TEMPS (default "850 900"), and one table of the mean |log10 error|
+# of the held-out rupture times, creepfit beside the Larson–Miller baseline fitted to the same
+# training data.
+#
+#   scripts/holdout_study.sh [--starts N] CONFIG...
+#
+# Outputs: results/holdout-study/<config stem>/<T>C/ (holdout.csv, summary.json, plots).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+starts=()
+if [[ "${1:-}" == "--starts" ]]; then starts=(--starts "$2"); shift 2; fi
+temps=${HOLDOUT_TEMPS:-"850 900"}
+cargo build --release --quiet
+bin=target/release/creepfit
+printf "%-28s %6s %6s %12s %12s %10s %8s\n" config T tests creepfit LMP curve_rms wall_s
+for cfg in "$@"; do
+  stem=$(basename "$cfg" .toml)
+  for t in $temps; do
+    out=results/holdout-study/$stem/${t}C
+    mkdir -p "$out"
+    "$bin" holdout "$cfg" --temperature "$t" "${starts[@]}" --out "$out" >"$out/run.log" 2>&1 \
+      || { echo "$stem $t: failed, see $out/run.log"; continue; }
+    python3 - "$out/summary.json" "$stem" "$t" <<'PY'
+import json, sys
+s = json.load(open(sys.argv[1]))
+print(f"{sys.argv[2]:<28} {sys.argv[3]:>6} {s['tests']:>6} {s['model_mean_abs_log10_err']:>12.3f} "
+      f"{s['lmp_mean_abs_log10_err']:>12.3f} {s['mean_curve_rms_pct']:>10.2f} {s['wall_s']:>8.1f}")
+PY
+  done
+done

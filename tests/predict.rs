@@ -1,0 +1,347 @@
+//! `creepfit predict` and `creepfit holdout` through the binary: the contract columns in the
+//! order asked, predictions at tested conditions equal to `simulate`, the reference
+//! temperature of the constants checked, bad conditions refused in one line, and a hold-out
+//! temperature predicted from synthetic curves of known constants.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use creepfit::data::estimate_min_rate;
+use creepfit::model::{build, with_laws, LawKind, Load};
+use creepfit::ode::OdeOptions;
+use tempfile::TempDir;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn creepfit(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_creepfit"))
+        .args(args)
+        .current_dir(root())
+        .output()
+        .expect("binary runs")
+}
+
+fn ok(args: &[&str]) -> String {
+    let o = creepfit(args);
+    assert!(
+        o.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn csv(path: &Path) -> Vec<Vec<String>> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect()
+}
+
+/// The joint seed calibration fitted once into `dir`: its constants.csv.
+fn joint_constants(dir: &Path) -> PathBuf {
+    let out = dir.join("fit");
+    ok(&[
+        "fit",
+        "configs/cmv-joint.toml",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    out.join("constants.csv")
+}
+
+#[test]
+fn predict_at_tested_conditions_equals_simulate_and_keeps_the_contract() {
+    let tmp = TempDir::new().unwrap();
+    let constants = joint_constants(tmp.path());
+    let text = std::fs::read_to_string(&constants).unwrap();
+    assert!(
+        text.lines().last().unwrap().starts_with("T_ref,575,"),
+        "{text}"
+    );
+    let c = constants.to_str().unwrap();
+    let sim = tmp.path().join("sim");
+    ok(&[
+        "simulate",
+        "configs/cmv-joint.toml",
+        "--constants",
+        c,
+        "--out",
+        sim.to_str().unwrap(),
+    ]);
+    // Every tested condition, in an order of our own (not the data's).
+    let at = "590:120,560:85,590:100,560:110,590:110,560:100";
+    let pred = tmp.path().join("pred");
+    let stdout = ok(&[
+        "predict",
+        "configs/cmv-joint.toml",
+        "--constants",
+        c,
+        "--at",
+        at,
+        "--out",
+        pred.to_str().unwrap(),
+    ]);
+    assert!(stdout.contains("Larson–Miller baseline: C = "), "{stdout}");
+    let p = csv(&pred.join("predictions.csv"));
+    assert_eq!(
+        p[0],
+        [
+            "temperature_C",
+            "stress_MPa",
+            "rupture_time_h",
+            "rupture_strain_pct",
+            "min_rate_pct_per_h"
+        ]
+    );
+    let asked: Vec<(String, String)> = at
+        .split(',')
+        .map(|s| {
+            let (t, s) = s.split_once(':').unwrap();
+            (t.to_string(), s.to_string())
+        })
+        .collect();
+    assert_eq!(p.len(), asked.len() + 1);
+    let s = csv(&sim.join("ruptures.csv"));
+    for (row, (t, sig)) in p[1..].iter().zip(&asked) {
+        assert_eq!((&row[0], &row[1]), (t, sig), "rows in the order asked");
+        let same = s
+            .iter()
+            .find(|r| &r[0] == t && &r[1] == sig)
+            .expect("simulate has the tested condition");
+        // Rupture time, rupture strain and minimum rate: the same numbers, to the last digit.
+        assert_eq!(&row[2..5], &same[2..5], "{t} °C {sig} MPa");
+    }
+    // The predicted curves are simulate's at the times both hold.
+    let pc = csv(&pred.join("curves.csv"));
+    let sc = csv(&sim.join("curves.csv"));
+    assert_eq!(pc[0], sc[0]);
+    assert_eq!(
+        pc[0],
+        [
+            "temperature_C",
+            "stress_MPa",
+            "time_h",
+            "strain_pct",
+            "H",
+            "Phi",
+            "omega"
+        ]
+    );
+    let index: std::collections::HashMap<(&str, &str, &str), &Vec<String>> = sc[1..]
+        .iter()
+        .map(|r| ((r[0].as_str(), r[1].as_str(), r[2].as_str()), r))
+        .collect();
+    let mut common = 0;
+    for r in &pc[1..] {
+        if let Some(o) = index.get(&(r[0].as_str(), r[1].as_str(), r[2].as_str())) {
+            assert_eq!(r, *o);
+            common += 1;
+        }
+    }
+    assert!(common >= 6 * 150, "only {common} common rows");
+    for f in [
+        "larson_miller.csv",
+        "summary.json",
+        "curves.png",
+        "stress_rupture.png",
+        "larson_miller.png",
+    ] {
+        assert!(pred.join(f).exists(), "{f}");
+    }
+
+    // Untested conditions: a row each, the Larson–Miller prediction beside.
+    let pred2 = tmp.path().join("pred2");
+    ok(&[
+        "predict",
+        "configs/cmv-joint.toml",
+        "--constants",
+        c,
+        "--at",
+        "575:100,560:70",
+        "--out",
+        pred2.to_str().unwrap(),
+    ]);
+    let p = csv(&pred2.join("predictions.csv"));
+    let l = csv(&pred2.join("larson_miller.csv"));
+    assert_eq!(p.len(), 3);
+    assert_eq!(
+        l[0],
+        [
+            "temperature_C",
+            "stress_MPa",
+            "rupture_time_h",
+            "larson_miller_parameter_K"
+        ]
+    );
+    for (a, b) in p[1..].iter().zip(&l[1..]) {
+        assert_eq!(a[..2], b[..2]);
+        let (m, lm): (f64, f64) = (a[2].parse().unwrap(), b[2].parse().unwrap());
+        assert!(m > 0.0 && lm > 0.0);
+    }
+
+    // Constants about another reference temperature are refused, naming T_ref.
+    let other = tmp.path().join("other.csv");
+    std::fs::write(&other, text.replace("T_ref,575,", "T_ref,560,")).unwrap();
+    let o = creepfit(&[
+        "predict",
+        "configs/cmv-joint.toml",
+        "--constants",
+        other.to_str().unwrap(),
+        "--at",
+        "575:100",
+        "--out",
+        tmp.path().join("x").to_str().unwrap(),
+    ]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        e.contains("T_ref") && e.contains("560") && e.contains("575"),
+        "{e}"
+    );
+    assert_eq!(e.trim().lines().count(), 1, "{e}");
+}
+
+#[test]
+fn bad_conditions_are_one_line_errors() {
+    let tmp = TempDir::new().unwrap();
+    let c = tmp.path().join("c.csv");
+    std::fs::write(&c, "name,value\n").unwrap();
+    for (at, want) in [
+        ("575-100", "expected T:stress"),
+        ("575:abc", "cannot parse the stress"),
+        ("575:-3", "stress must be positive"),
+        ("-300:100", "above absolute zero"),
+    ] {
+        let o = creepfit(&[
+            "predict",
+            "configs/cmv-joint.toml",
+            "--constants",
+            c.to_str().unwrap(),
+            "--at",
+            at,
+        ]);
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success());
+        assert!(e.contains("--at") && e.contains(want), "{at}: {e}");
+        assert_eq!(e.trim().lines().count(), 1, "{e}");
+    }
+}
+
+/// Curves at three temperatures made by the model with Arrhenius A and Kc: leaving 575 °C
+/// out, the fit on 560 and 590 °C predicts its rupture times (to the integration accuracy;
+/// the constants are recovered) and the files say so.
+#[test]
+fn holdout_predicts_a_temperature_left_out() {
+    let tmp = TempDir::new().unwrap();
+    use LawKind::*;
+    let truth = [1.2e-9, 0.12, 0.55, 6e4, 1.5e-5, 5.0, 350.0, 250.0];
+    let model = with_laws(
+        build("khd", &[]).unwrap(),
+        &[Arrhenius, Constant, Constant, Constant, Arrhenius, Constant],
+        575.0,
+    );
+    let ode = OdeOptions {
+        rtol: 1e-12,
+        atol: 1e-15,
+        ..OdeOptions::default()
+    };
+    let mut curves = String::from("temperature_C,stress_MPa,time_h,strain_pct\n");
+    let mut ruptures = String::from("temperature_C,stress_MPa,rupture_time_h\n");
+    for (t, s) in [
+        (560.0, 85.0),
+        (560.0, 100.0),
+        (560.0, 110.0),
+        (575.0, 80.0),
+        (575.0, 95.0),
+        (590.0, 75.0),
+        (590.0, 90.0),
+        (590.0, 100.0),
+    ] {
+        let load = Load::new(s, t, 1.0 / 3.0);
+        let r = model.simulate(&truth, &load, &[], &mut [], &ode);
+        let times: Vec<f64> = (0..30).map(|k| r.t_end * k as f64 / 30.0).collect();
+        let mut e = vec![0.0; times.len()];
+        model.simulate(&truth, &load, &times, &mut e, &ode);
+        assert!(estimate_min_rate(&times, &e, r.t_end) > 0.0);
+        for (ti, ei) in times.iter().zip(&e) {
+            curves += &format!("{t},{s},{ti},{}\n", 100.0 * ei);
+        }
+        ruptures += &format!("{t},{s},{}\n", r.t_end);
+    }
+    std::fs::write(tmp.path().join("c.csv"), curves).unwrap();
+    std::fs::write(tmp.path().join("r.csv"), ruptures).unwrap();
+    let cfg = tmp.path().join("h.toml");
+    std::fs::write(
+        &cfg,
+        r#"name = "h"
+curves = "c.csv"
+ruptures = "r.csv"
+T_ref = 575
+[constants]
+A     = { lb = 1e-11, ub = 1e-7, scale = "log", start = 1.1e-9, law = "arrhenius", Q = { lb = 100, ub = 600, start = 330 } }
+B     = { lb = 0.05,  ub = 0.3, start = 0.125 }
+Hstar = { lb = 0.2,   ub = 0.9, start = 0.56 }
+h     = { lb = 1e3,   ub = 1e6, scale = "log", start = 5.5e4 }
+Kc    = { lb = 1e-7,  ub = 1e-3, scale = "log", start = 1.6e-5, law = "arrhenius", Q = { lb = 100, ub = 600, start = 270 } }
+C     = { lb = 1.5,   ub = 10, start = 4.9 }
+[objective]
+w_grid = [1.0]
+lifetime_term = "both"
+[sweep]
+starts = 2
+"#,
+    )
+    .unwrap();
+    let out = tmp.path().join("ho");
+    let stdout = ok(&[
+        "holdout",
+        cfg.to_str().unwrap(),
+        "--temperature",
+        "575",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(stdout.contains("mean |log10 error|"), "{stdout}");
+    let h = csv(&out.join("holdout.csv"));
+    assert_eq!(
+        h[0],
+        [
+            "temperature_C",
+            "stress_MPa",
+            "rupture_time_h",
+            "model_rupture_time_h",
+            "lmp_rupture_time_h",
+            "model_log10_err",
+            "lmp_log10_err",
+            "curve_rms_pct"
+        ]
+    );
+    assert_eq!(h.len(), 3);
+    for r in &h[1..] {
+        let err: f64 = r[5].parse().unwrap();
+        assert!(err.abs() < 1e-3, "held-out log10 error {err}");
+    }
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(s["tests"], 2);
+    assert!(s["model_mean_abs_log10_err"].as_f64().unwrap() < 1e-3);
+    assert!(s["lmp_mean_abs_log10_err"].as_f64().is_some());
+    for f in ["constants.csv", "curves.png", "parity.png"] {
+        assert!(out.join(f).exists(), "{f}");
+    }
+    // Leaving out a temperature that leaves one to fit is refused.
+    let o = creepfit(&[
+        "holdout",
+        "configs/cmv-joint.toml",
+        "--temperature",
+        "590",
+        "--out",
+        tmp.path().join("x").to_str().unwrap(),
+    ]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && e.contains("two or more"), "{e}");
+}
