@@ -104,6 +104,22 @@ pub enum Command {
         #[arg(long)]
         threads: Option<usize>,
     },
+    /// How sure the constants and predictions are: profile likelihoods, intervals,
+    /// identifiability, well-determined combinations, prediction intervals.
+    Profile {
+        /// Run configuration (TOML).
+        config: PathBuf,
+        /// constants.csv (name,value,…) to start the maximum-likelihood fit from (default: a
+        /// multistart).
+        #[arg(long)]
+        constants: Option<PathBuf>,
+        /// Output folder (default results/<name>/profile/).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Worker threads (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+    },
     /// Generate synthetic data sets with known hidden effects (input formats + truth.json).
     Synth {
         /// Output folder: one sub-folder per set.
@@ -339,6 +355,25 @@ pub fn run(cli: Cli) -> Result<()> {
                 ..Overrides::default()
             };
             diagnose_cmd(&config, &cli)
+        }
+        Command::Profile {
+            config,
+            constants,
+            out,
+            threads,
+        } => {
+            let cli = Overrides {
+                run: RunOptions {
+                    out,
+                    threads,
+                    ..RunOptions::default()
+                },
+                ..Overrides::default()
+            };
+            let (cfg, data) = load(&config, &cli)?;
+            with_threads(cfg.run.threads, || {
+                crate::uncertainty::report::profile_command(&cfg, &data, constants.as_deref())
+            })
         }
         Command::Synth {
             out,

@@ -34,8 +34,10 @@ pub const EXTENSION_NAMES: &[&str] = model::ext::CATALOGUE;
 /// name (`name`, only a label and the default output folder), where the data files are
 /// (`curves`, `ruptures`: their loaded content is in `data_hash` instead), and how and where
 /// the run is carried out (`run`: output folder, threads, shard, progress bar, test stop).
+/// `diagnose`, `predict` and `profile` are left out too: they keep no journal, and their
+/// settings change no fit or sweep result.
 pub const IDENTITY_EXCLUDED: &[&str] = &[
-    "path", "name", "curves", "ruptures", "run", "diagnose", "predict",
+    "path", "name", "curves", "ruptures", "run", "diagnose", "predict", "profile",
 ];
 
 /// Which side of the lifetime error enters the objective (eq. 8).
@@ -433,6 +435,82 @@ struct RawPredict {
     lmp_degree: Option<usize>,
 }
 
+/// `[profile]`: the profile likelihoods, intervals and prediction intervals of
+/// `creepfit profile` (README, "How sure").
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ProfileConfig {
+    /// Latin-hypercube starts of the maximum-likelihood multistart (besides the configured
+    /// start and the initial guess). Default 16.
+    pub starts: usize,
+    /// Seed of the starts and of the bootstraps. Default 1.
+    pub seed: u64,
+    /// Floor of the rupture-time scatter, ln scale. Default 0.01.
+    pub lifetime_sd_floor: f64,
+    /// Parametric-bootstrap replicates that calibrate the likelihood-ratio thresholds
+    /// (0: plain χ² thresholds). Default 20.
+    pub calibrate: usize,
+    /// Untested stresses (MPa, at the data's temperature) to give prediction intervals at.
+    /// Default none.
+    #[serde(rename = "predict_stress_MPa")]
+    pub predict_stress_mpa: Vec<f64>,
+    /// Times of the band around each predicted curve (evenly spaced fractions of the
+    /// predicted life). Default 9.
+    pub band_points: usize,
+}
+
+impl Default for ProfileConfig {
+    fn default() -> Self {
+        ProfileConfig {
+            starts: 16,
+            seed: 1,
+            lifetime_sd_floor: crate::errmodel::DEFAULT_LIFETIME_SD_FLOOR,
+            calibrate: 20,
+            predict_stress_mpa: Vec::new(),
+            band_points: 9,
+        }
+    }
+}
+
+impl ProfileConfig {
+    /// Check the values; `Err` names the field.
+    pub fn validate(&self) -> std::result::Result<(), Invalid> {
+        let bad = |field: &str, what: String| Err(invalid(format!("profile.{field}"), what));
+        if !(self.lifetime_sd_floor > 0.0 && self.lifetime_sd_floor.is_finite()) {
+            return bad(
+                "lifetime_sd_floor",
+                format!("must be positive (got {})", self.lifetime_sd_floor),
+            );
+        }
+        if self.calibrate > 0 && self.calibrate < 10 {
+            return bad(
+                "calibrate",
+                format!(
+                    "0 (no calibration) or at least 10 replicates (got {})",
+                    self.calibrate
+                ),
+            );
+        }
+        if let Some(s) = self
+            .predict_stress_mpa
+            .iter()
+            .find(|s| !(s.is_finite() && **s > 0.0))
+        {
+            return bad(
+                "predict_stress_MPa",
+                format!("stresses must be positive and finite (got {s})"),
+            );
+        }
+        if self.band_points > 50 {
+            return bad(
+                "band_points",
+                format!("at most 50 (got {})", self.band_points),
+            );
+        }
+        Ok(())
+    }
+}
+
 /// How and where a run is carried out: nothing here changes a result, so the run identity
 /// leaves it out ([`IDENTITY_EXCLUDED`]).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
@@ -530,6 +608,10 @@ pub struct RunConfig {
     /// `[predict]`, with `--at` applied. Not part of the run identity (it changes no fit).
     #[serde(default)]
     pub predict: PredictConfig,
+    /// `[profile]`. Not part of the run identity: no journal is kept for `profile`, and these
+    /// settings change no fit or sweep.
+    #[serde(default)]
+    pub profile: ProfileConfig,
     /// Where and how the run is carried out (not part of the identity).
     pub run: RunOptions,
     /// Notes for the user found while resolving (e.g. an extension constant that took its
@@ -566,6 +648,8 @@ struct RawConfig {
     diagnose: DiagnoseConfig,
     #[serde(default)]
     predict: RawPredict,
+    #[serde(default)]
+    profile: ProfileConfig,
 }
 
 fn default_model() -> String {
@@ -966,6 +1050,7 @@ impl RunConfig {
                 },
                 lmp_degree: raw.predict.lmp_degree.unwrap_or(crate::lmp::DEFAULT_DEGREE),
             },
+            profile: raw.profile,
             run: cli.run.clone(),
             warnings,
         })
@@ -1050,6 +1135,7 @@ impl RunConfig {
                 format!("must be at most 4 (got {})", self.predict.lmp_degree),
             ));
         }
+        self.profile.validate()?;
         validate_run(&self.run)
     }
 

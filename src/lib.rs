@@ -31,5 +31,6 @@ pub mod predict;
 pub mod report;
 pub mod sweep;
 pub mod synth;
+pub mod uncertainty;
 
 pub use error::{Error, Result};

@@ -1432,6 +1432,124 @@ fn clip_polyline(points: &[(f64, f64)], x: (f64, f64), y: (f64, f64)) -> Vec<Vec
     pieces
 }
 
+/// One constant's profile likelihood for [`plot_profile`], in the coordinate it is shown in
+/// (the value, or log10 of it for a log-scale constant; the caller's `x_label` says which).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ProfilePlot {
+    /// X axis description, e.g. `log10 A (A in 1/h)`.
+    pub x_label: String,
+    /// (x, Δ(−2 ln L)) of the profile points that were fitted, any order.
+    pub points: Vec<(f64, f64)>,
+    /// x of points whose fit failed from every start.
+    pub failed: Vec<f64>,
+    /// x of the estimate (Δ = 0).
+    pub estimate: f64,
+    /// x of the lower and upper bounds.
+    pub bounds: (f64, f64),
+    /// Thresholds drawn as horizontal lines, with their labels (e.g. "95 %: 3.84").
+    pub thresholds: Vec<(String, f64)>,
+}
+
+/// A profile likelihood: Δ(−2 ln L) against the constant, the estimate, the thresholds of the
+/// intervals (dashed horizontal lines) and the bounds (dotted vertical lines, where inside
+/// the axis range); failed points as red triangles on the x axis. The y axis shows 0 to
+/// 1.3 × the highest threshold (higher points are clipped).
+pub fn plot_profile(path: &Path, title: &str, p: &ProfilePlot) -> Result<()> {
+    profile_chart(path, title, p).map(|_| ())
+}
+
+fn profile_chart(path: &Path, title: &str, p: &ProfilePlot) -> Result<Drawn> {
+    let t_max = p
+        .thresholds
+        .iter()
+        .map(|t| t.1)
+        .filter(|v| v.is_finite())
+        .fold(1.0, f64::max);
+    let xs = p
+        .points
+        .iter()
+        .map(|q| q.0)
+        .chain(p.failed.iter().copied())
+        .chain(std::iter::once(p.estimate));
+    let x_range = padded(data_range(xs).unwrap_or((0.0, 1.0)), 0.04);
+    let y_top = 1.3 * t_max;
+    let y_range = (-0.04 * y_top, y_top);
+    let (xt, yt) = (
+        Ticks::auto(x_range, AxisScale::Linear),
+        Ticks::auto(y_range, AxisScale::Linear),
+    );
+    let mut pts: Vec<(f64, f64)> = p.points.iter().copied().filter(|&q| plottable(q)).collect();
+    pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+    render(path, title, |area, drawn| {
+        let mut chart = linear_chart(area, (x_range, &xt), (y_range, &yt))?;
+        configure_mesh(&mut chart, &p.x_label, "Δ(−2 ln L)", &xt, &yt, drawn)?;
+        let mut keys = Vec::new();
+        for (i, (label, t)) in p.thresholds.iter().enumerate() {
+            let color = PALETTE[(i + 1) % PALETTE.len()];
+            chart.draw_series(DashedLineSeries::new(
+                vec![(x_range.0, *t), (x_range.1, *t)],
+                10,
+                6,
+                color.stroke_width(2),
+            ))?;
+            keys.push(key(label.clone(), Glyph::Line(color.stroke_width(2))));
+        }
+        let mut bound_shown = false;
+        for b in [p.bounds.0, p.bounds.1] {
+            if b.is_finite() && b >= x_range.0 && b <= x_range.1 {
+                chart.draw_series(DashedLineSeries::new(
+                    vec![(b, y_range.0), (b, y_range.1)],
+                    3,
+                    4,
+                    BLACK.mix(0.7).stroke_width(2),
+                ))?;
+                bound_shown = true;
+            }
+        }
+        if bound_shown {
+            keys.push(key("bound", Glyph::Line(BLACK.mix(0.7).stroke_width(2))));
+        }
+        let color = PALETTE[0];
+        chart.draw_series(
+            clip_polyline(&pts, x_range, y_range)
+                .into_iter()
+                .map(|piece| PathElement::new(piece, color.stroke_width(2))),
+        )?;
+        chart.draw_series(
+            inside(&pts, x_range, y_range).map(|q| Circle::new(q, 4, color.filled())),
+        )?;
+        keys.push(key(
+            "profile (others re-fitted)",
+            Glyph::LineMarker(color.stroke_width(2), color, 4),
+        ));
+        if plottable_value(p.estimate) {
+            chart.draw_series(std::iter::once(Circle::new(
+                (p.estimate, 0.0),
+                7,
+                PALETTE[3].filled(),
+            )))?;
+            keys.push(key("estimate", Glyph::Marker(PALETTE[3], 6)));
+        }
+        if !p.failed.is_empty() {
+            chart.draw_series(
+                p.failed
+                    .iter()
+                    .filter(|x| plottable_value(**x))
+                    .map(|&x| TriangleMarker::new((x, 0.0), 7, PALETTE[3].filled())),
+            )?;
+            keys.push(key(
+                format!("{} failed fit(s)", p.failed.len()),
+                Glyph::Triangle(PALETTE[3]),
+            ));
+        }
+        if pts.is_empty() {
+            no_data(&mut chart, (mid(x_range), mid(y_range)))?;
+        }
+        drawn.plot_px = pixel_rect(chart.plotting_area());
+        Ok(keys)
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1571,6 +1689,46 @@ mod tests {
         let path = dir.path().join("parameters.png");
         plot_parameters(&path, "Best 10 solutions within bounds", &names, &solutions).unwrap();
         assert_png(&path);
+    }
+
+    #[test]
+    fn profile_png_and_degenerate_profiles() {
+        let dir = TempDir::new().unwrap();
+        let good = ProfilePlot {
+            x_label: "log10 A (A in 1/h)".into(),
+            points: (0..12)
+                .map(|i| (-10.0 + 0.1 * i as f64, (0.3 * i as f64 - 1.5).powi(2)))
+                .collect(),
+            failed: vec![],
+            estimate: -9.5,
+            bounds: (-10.0, -9.0),
+            thresholds: vec![("68 %".into(), 1.0), ("95 %".into(), 3.84)],
+        };
+        let path = dir.path().join("profile_A.png");
+        plot_profile(&path, "A", &good).unwrap();
+        assert_png(&path);
+        for (k, bad) in [
+            ProfilePlot::default(),
+            ProfilePlot {
+                points: vec![(f64::NAN, 1.0), (1.0, f64::INFINITY)],
+                estimate: f64::NAN,
+                failed: vec![f64::NAN, 2.0],
+                bounds: (f64::NEG_INFINITY, f64::NAN),
+                ..good.clone()
+            },
+            ProfilePlot {
+                points: vec![(3.0, 0.0); 5],
+                estimate: 3.0,
+                ..good.clone()
+            },
+        ]
+        .iter()
+        .enumerate()
+        {
+            let path = dir.path().join(format!("bad{k}.png"));
+            plot_profile(&path, "degenerate", bad).unwrap();
+            assert_png(&path);
+        }
     }
 
     #[test]
@@ -1900,6 +2058,27 @@ mod tests {
             (
                 "waterfall",
                 waterfall(&p("water"), "t", &[1e-3, 2e-3, 5e-1, f64::NAN]).unwrap(),
+            ),
+            (
+                "profile",
+                profile_chart(
+                    &p("prof"),
+                    "t",
+                    &ProfilePlot {
+                        x_label: "B (1/MPa)".into(),
+                        points: (0..9)
+                            .map(|i| {
+                                let x = 0.15 + 0.01 * i as f64;
+                                (x, ((x - 0.19) / 0.02).powi(2))
+                            })
+                            .collect(),
+                        failed: vec![0.24],
+                        estimate: 0.19,
+                        bounds: (0.1, 0.23),
+                        thresholds: vec![("68 %".into(), 1.0), ("95 %".into(), 3.84)],
+                    },
+                )
+                .unwrap(),
             ),
             (
                 "parameters",

@@ -1,0 +1,576 @@
+//! Measured coverage: on synthetic data sets with known truth ([`crate::synth`], no hidden
+//! effect: the model is right, the reading error correlated or white, the curves end before
+//! rupture, the rupture times scattered by 1 %), how often the nominal 68 % and 95 % intervals
+//! contain the true constants and the true rupture time at an untested stress
+//! ([`CoverageSettings::stress_factor`] × the lowest tested stress), and how often the 95 %
+//! prediction interval contains a new test's life drawn with the generator's scatter.
+//!
+//! Every set records the intervals of the shipped method (profile likelihood with calibrated
+//! thresholds) and of the alternatives measured against it: plain χ² thresholds on the same
+//! profiles, the Wald (Fisher information) interval, and — when asked for — the percentile
+//! interval of a parametric bootstrap of the prediction. Sets run in parallel; each finished
+//! set is appended (flushed) to `coverage.jsonl`, so an interrupted run resumes where it
+//! stopped and never loses a finished set.
+
+use std::collections::BTreeMap;
+use std::fs::OpenOptions;
+use std::io::Write;
+use std::path::Path;
+use std::sync::Mutex;
+use std::time::Instant;
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use super::constrained::{Predicted, Quantity};
+use super::predict::{bootstrap_predictions, percentile95, specimen_scatter};
+use super::profile::{quantity_interval, reinterval, Class};
+use super::report::{context, core};
+use super::{normal_quantile, Thresholds};
+use crate::config::{ProfileConfig, RunConfig};
+use crate::error::{Error, Result};
+use crate::model::Load;
+use crate::ode::OdeOptions;
+use crate::synth::{generate, write_set};
+
+/// Settings of a coverage run.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct CoverageSettings {
+    /// Latin-hypercube starts of each set's multistart (besides the initial guess).
+    pub starts: usize,
+    /// Calibration replicates (0: χ² thresholds only).
+    pub calibrate: usize,
+    /// Bootstrap replicates of the prediction (0: not measured).
+    pub bootstrap: usize,
+    /// The untested stress as a fraction of the lowest tested one.
+    pub stress_factor: f64,
+}
+
+impl Default for CoverageSettings {
+    fn default() -> Self {
+        CoverageSettings {
+            starts: 16,
+            calibrate: 20,
+            bootstrap: 0,
+            stress_factor: 0.85,
+        }
+    }
+}
+
+/// A (lo, hi) interval.
+pub type Iv = (f64, f64);
+
+/// An f64 that JSON wrote as `null` (NaN, ±∞) reads back as NaN.
+fn de_f64<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
+}
+
+/// [`de_f64`] for an interval.
+fn de_iv<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Iv, D::Error> {
+    let (a, b) = <(Option<f64>, Option<f64>)>::deserialize(d)?;
+    Ok((a.unwrap_or(f64::NAN), b.unwrap_or(f64::NAN)))
+}
+
+fn covers(iv: Iv, truth: f64) -> bool {
+    iv.0 <= truth && truth <= iv.1
+}
+
+/// One constant of one set.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ConstantCoverage {
+    pub name: String,
+    #[serde(deserialize_with = "de_f64")]
+    pub truth: f64,
+    #[serde(deserialize_with = "de_f64")]
+    pub value: f64,
+    /// Class under the shipped (calibrated) thresholds, and under plain χ².
+    pub class: Class,
+    pub class_chi2: Class,
+    /// 95 % and 68 % intervals, calibrated thresholds.
+    #[serde(deserialize_with = "de_iv")]
+    pub cal95: Iv,
+    #[serde(deserialize_with = "de_iv")]
+    pub cal68: Iv,
+    /// The same with plain χ² thresholds.
+    #[serde(deserialize_with = "de_iv")]
+    pub chi95: Iv,
+    #[serde(deserialize_with = "de_iv")]
+    pub chi68: Iv,
+    /// Wald 95 % interval (unit box, clamped to the bounds).
+    #[serde(deserialize_with = "de_iv")]
+    pub wald95: Iv,
+}
+
+/// The rupture time at the untested stress in one set (h).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RuptureCoverage {
+    #[serde(deserialize_with = "de_f64")]
+    pub stress_mpa: f64,
+    #[serde(deserialize_with = "de_f64")]
+    pub truth_h: f64,
+    #[serde(deserialize_with = "de_f64")]
+    pub value_h: f64,
+    #[serde(deserialize_with = "de_iv")]
+    pub cal95: Iv,
+    #[serde(deserialize_with = "de_iv")]
+    pub cal68: Iv,
+    #[serde(deserialize_with = "de_iv")]
+    pub chi95: Iv,
+    #[serde(deserialize_with = "de_iv")]
+    pub chi68: Iv,
+    #[serde(deserialize_with = "de_iv")]
+    pub wald95: Iv,
+    /// Bootstrap percentile interval (NaN when not measured).
+    #[serde(deserialize_with = "de_iv")]
+    pub boot95: Iv,
+    /// 95 % prediction interval of a new test (calibrated), and the new test's life.
+    #[serde(deserialize_with = "de_iv")]
+    pub pred95: Iv,
+    #[serde(deserialize_with = "de_f64")]
+    pub new_test_h: f64,
+    /// Whether the calibrated interval is open on a side.
+    pub open: bool,
+}
+
+/// One set's result.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SetCoverage {
+    pub name: String,
+    pub seed: u64,
+    pub family: String,
+    pub sampling: String,
+    #[serde(deserialize_with = "de_f64")]
+    pub noise_phi: f64,
+    pub curves: usize,
+    pub points: usize,
+    /// Calibration factor and the mean LR statistic behind it.
+    #[serde(deserialize_with = "de_f64")]
+    pub factor: f64,
+    #[serde(deserialize_with = "de_f64")]
+    pub mean_t: f64,
+    pub constants: Vec<ConstantCoverage>,
+    pub rupture: Option<RuptureCoverage>,
+    /// Inner fits of the profiles.
+    pub fits: usize,
+    /// Times the profiles were redone from a better optimum found on them.
+    #[serde(default)]
+    pub restarts: usize,
+    #[serde(deserialize_with = "de_f64")]
+    pub wall_s: f64,
+    pub error: Option<String>,
+}
+
+/// Generate set `seed` (scenario `none`) into `dir/sets/set-<seed>/` and measure it.
+pub fn run_set(dir: &Path, seed: u64, s: &CoverageSettings) -> SetCoverage {
+    let t0 = Instant::now();
+    let name = format!("set-{seed}");
+    let mut out = SetCoverage {
+        name: name.clone(),
+        seed,
+        family: String::new(),
+        sampling: String::new(),
+        noise_phi: f64::NAN,
+        curves: 0,
+        points: 0,
+        factor: f64::NAN,
+        mean_t: f64::NAN,
+        constants: vec![],
+        rupture: None,
+        fits: 0,
+        restarts: 0,
+        wall_s: f64::NAN,
+        error: None,
+    };
+    if let Err(e) = measure(dir, seed, s, &mut out) {
+        out.error = Some(e.to_string());
+    }
+    out.wall_s = t0.elapsed().as_secs_f64();
+    out
+}
+
+fn measure(dir: &Path, seed: u64, s: &CoverageSettings, out: &mut SetCoverage) -> Result<()> {
+    let set = generate(&out.name, "none", seed)?;
+    let folder = dir.join("sets").join(&out.name);
+    write_set(&set, &folder)?;
+    let t = &set.truth;
+    out.family = t.family.clone();
+    out.sampling = format!("{:?}", t.sampling).to_lowercase();
+    out.noise_phi = t.noise_phi;
+    out.curves = t.stresses.len();
+    out.points = t.times_h.iter().map(|v| v.len()).sum();
+    let cfg = RunConfig::load(&folder.join("config.toml"))?;
+    let data = cfg.load_data()?;
+    let model = cfg.build_model()?;
+    let ctx = context(&cfg, model.as_ref(), &data);
+
+    // The untested load and its true rupture time.
+    let lowest = t.stresses.iter().copied().fold(f64::INFINITY, f64::min);
+    let load = Load::new(
+        (s.stress_factor * lowest).round(),
+        t.temperature_c,
+        cfg.objective.omega_f,
+    );
+    let tight = OdeOptions {
+        rtol: 1e-11,
+        atol: 1e-15,
+        t_end: 1e12,
+        ..OdeOptions::default()
+    };
+    let truth_run = model.simulate(&t.constants, &load, &[], &mut [], &tight);
+    let q = Quantity::Prediction {
+        load,
+        what: Predicted::LnRuptureTime,
+    };
+
+    // What `creepfit profile` does: multistart, calibration, profiles with restarts.
+    let pc = ProfileConfig {
+        starts: s.starts,
+        seed,
+        calibrate: s.calibrate,
+        predict_stress_mpa: vec![load.stress_mpa],
+        ..cfg.profile.clone()
+    };
+    let c = core(&ctx, &cfg, None, &pc, &[load])?;
+    let (reference, th, profiles) = (c.reference, c.thresholds, c.profiles);
+    out.factor = th.factor;
+    out.mean_t = c.calibration.as_ref().map_or(f64::NAN, |c| c.mean_t);
+    out.restarts = c.restarts;
+    let plain = Thresholds::chi2(1.0);
+
+    // Constants.
+    out.fits = profiles.iter().map(|p| p.fits()).sum();
+    let se = super::profile::wald_se(&ctx, &reference);
+    let names = ctx.names();
+    for p in &profiles {
+        let j = p.index;
+        let c = reinterval(&ctx, &reference, p, &plain);
+        let u = ctx.space.to_unit_one(j, reference.params[j]);
+        let w = 1.96 * se[j];
+        let wald95 = (
+            ctx.space.from_unit_one(j, (u - w).max(0.0)),
+            ctx.space.from_unit_one(j, (u + w).min(1.0)),
+        );
+        out.constants.push(ConstantCoverage {
+            name: names[j].to_string(),
+            truth: t.constants[j],
+            value: reference.params[j],
+            class: p.class,
+            class_chi2: c.class,
+            cal95: (p.interval.lo95, p.interval.hi95),
+            cal68: (p.interval.lo68, p.interval.hi68),
+            chi95: (c.interval.lo95, c.interval.hi95),
+            chi68: (c.interval.lo68, c.interval.hi68),
+            wald95,
+        });
+    }
+
+    // The rupture time at the untested stress.
+    if truth_run.ruptured() {
+        let qc = quantity_interval(&ctx, &reference, &q, &th);
+        let qp = if th.factor == 1.0 {
+            qc.clone()
+        } else {
+            quantity_interval(&ctx, &reference, &q, &plain)
+        };
+        if let (Some(qc), Some(qp)) = (qc, qp) {
+            out.fits += qc.fits() + qp.fits();
+            let e = |iv: Iv| (iv.0.exp(), iv.1.exp());
+            let ic = qc.interval;
+            let ip = qp.interval;
+            let wald = (ic.value - 1.96 * qc.wald_se, ic.value + 1.96 * qc.wald_se);
+            let boot = if s.bootstrap > 0 {
+                let b: Vec<f64> = bootstrap_predictions(&ctx, &reference, &load, s.bootstrap, seed)
+                    .iter()
+                    .map(|r| r[0])
+                    .collect();
+                percentile95(&b)
+            } else {
+                (f64::NAN, f64::NAN)
+            };
+            let scatter = specimen_scatter(&ctx, &reference)[0].0;
+            let z = normal_quantile(0.975);
+            let add = (z * scatter).powi(2);
+            let pred = (
+                ic.value - ((ic.value - ic.lo95).powi(2) + add).sqrt(),
+                ic.value + ((ic.hi95 - ic.value).powi(2) + add).sqrt(),
+            );
+            let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x6e65_7774);
+            let zt: f64 = StandardNormal.sample(&mut rng);
+            out.rupture = Some(RuptureCoverage {
+                stress_mpa: load.stress_mpa,
+                truth_h: truth_run.t_end,
+                value_h: ic.value.exp(),
+                cal95: e((ic.lo95, ic.hi95)),
+                cal68: e((ic.lo68, ic.hi68)),
+                chi95: e((ip.lo95, ip.hi95)),
+                chi68: e((ip.lo68, ip.hi68)),
+                wald95: e(wald),
+                boot95: e(boot),
+                pred95: e(pred),
+                new_test_h: truth_run.t_end * (t.lifetime_sd * zt).exp(),
+                open: ic.lo_open || ic.hi_open,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Results already in `dir/coverage.jsonl`, by seed.
+pub fn read_results(dir: &Path) -> Result<BTreeMap<u64, SetCoverage>> {
+    let p = dir.join("coverage.jsonl");
+    let text = match std::fs::read_to_string(&p) {
+        Ok(t) => t,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(BTreeMap::new()),
+        Err(e) => return Err(Error::io(&p, e)),
+    };
+    let lines: Vec<&str> = text.lines().collect();
+    let mut out = BTreeMap::new();
+    for (i, l) in lines.iter().enumerate() {
+        if l.trim().is_empty() {
+            continue;
+        }
+        match serde_json::from_str::<SetCoverage>(l) {
+            Ok(r) => {
+                out.insert(r.seed, r);
+            }
+            Err(_) if i + 1 == lines.len() => {} // torn last line: recomputed
+            Err(e) => {
+                return Err(Error::data(
+                    &p,
+                    i + 1,
+                    format!("not a coverage result: {e}"),
+                ))
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Measure sets `first_seed .. first_seed + n` into `dir`, skipping those already in
+/// `coverage.jsonl`; all results in seed order.
+pub fn run_coverage(
+    dir: &Path,
+    first_seed: u64,
+    n: usize,
+    s: &CoverageSettings,
+    progress: bool,
+) -> Result<Vec<SetCoverage>> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let done = read_results(dir)?;
+    let path = dir.join("coverage.jsonl");
+    if let Ok(bytes) = std::fs::read(&path) {
+        let keep = bytes.iter().rposition(|b| *b == b'\n').map_or(0, |p| p + 1);
+        if keep < bytes.len() {
+            std::fs::write(&path, &bytes[..keep]).map_err(|e| Error::io(&path, e))?;
+        }
+    }
+    let file = Mutex::new(
+        OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(&path)
+            .map_err(|e| Error::io(&path, e))?,
+    );
+    let todo: Vec<u64> = (0..n as u64)
+        .map(|i| first_seed + i)
+        .filter(|s| !done.contains_key(s))
+        .collect();
+    let fresh: Vec<SetCoverage> = todo
+        .par_iter()
+        .map(|&seed| {
+            let r = run_set(dir, seed, s);
+            let line = serde_json::to_string(&r).expect("plain values") + "\n";
+            {
+                let mut f = file.lock().expect("results lock");
+                f.write_all(line.as_bytes())
+                    .and_then(|_| f.flush())
+                    .map_err(|e| Error::io(&path, e))?;
+            }
+            if progress {
+                eprintln!(
+                    "{} {} {}: factor {:.2}, {:.1} s{}",
+                    r.name,
+                    r.family,
+                    r.sampling,
+                    r.factor,
+                    r.wall_s,
+                    r.error
+                        .as_deref()
+                        .map(|e| format!(" error: {e}"))
+                        .unwrap_or_default()
+                );
+            }
+            Ok(r)
+        })
+        .collect::<Result<_>>()?;
+    let mut all = done;
+    for r in fresh {
+        all.insert(r.seed, r);
+    }
+    Ok(all
+        .into_values()
+        .filter(|r| r.seed >= first_seed && r.seed < first_seed + n as u64)
+        .collect())
+}
+
+/// Covered count and total of one column.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct Count {
+    pub covered: usize,
+    pub n: usize,
+}
+
+impl Count {
+    fn add(&mut self, hit: bool) {
+        self.n += 1;
+        self.covered += usize::from(hit);
+    }
+    /// Covered fraction (NaN for none).
+    pub fn rate(&self) -> f64 {
+        if self.n == 0 {
+            f64::NAN
+        } else {
+            self.covered as f64 / self.n as f64
+        }
+    }
+}
+
+/// The coverage table of one quantity.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct Row {
+    pub quantity: String,
+    /// Sets where it is classified identifiable (calibrated), and all sets.
+    pub identifiable: usize,
+    pub sets: usize,
+    /// 95 % and 68 %, calibrated, over the identifiable sets.
+    pub cal95: Count,
+    pub cal68: Count,
+    /// 95 % and 68 %, plain χ², over the sets identifiable under χ².
+    pub chi95: Count,
+    pub chi68: Count,
+    /// 95 % calibrated over all sets (open sides at the bound).
+    pub cal95_all: Count,
+    /// Wald 95 % over the identifiable sets.
+    pub wald95: Count,
+    /// Bootstrap percentile 95 % (rupture time only).
+    pub boot95: Count,
+    /// Prediction interval of a new test (rupture time only).
+    pub pred95: Count,
+}
+
+/// The coverage table: one row per constant and one for the rupture time.
+pub fn table(results: &[SetCoverage]) -> Vec<Row> {
+    let mut rows: Vec<Row> = Vec::new();
+    let ok: Vec<&SetCoverage> = results.iter().filter(|r| r.error.is_none()).collect();
+    if let Some(first) = ok.iter().find(|r| !r.constants.is_empty()) {
+        for (j, c0) in first.constants.iter().enumerate() {
+            let mut row = Row {
+                quantity: c0.name.clone(),
+                ..Row::default()
+            };
+            for r in &ok {
+                let Some(c) = r.constants.get(j) else {
+                    continue;
+                };
+                row.sets += 1;
+                row.cal95_all.add(covers(c.cal95, c.truth));
+                if c.class == Class::Identifiable {
+                    row.identifiable += 1;
+                    row.cal95.add(covers(c.cal95, c.truth));
+                    row.cal68.add(covers(c.cal68, c.truth));
+                    row.wald95.add(covers(c.wald95, c.truth));
+                }
+                if c.class_chi2 == Class::Identifiable {
+                    row.chi95.add(covers(c.chi95, c.truth));
+                    row.chi68.add(covers(c.chi68, c.truth));
+                }
+            }
+            rows.push(row);
+        }
+    }
+    let mut row = Row {
+        quantity: "rupture time at the untested stress".into(),
+        ..Row::default()
+    };
+    for r in &ok {
+        let Some(rc) = &r.rupture else { continue };
+        row.sets += 1;
+        row.cal95_all.add(covers(rc.cal95, rc.truth_h));
+        if !rc.open {
+            row.identifiable += 1;
+            row.cal95.add(covers(rc.cal95, rc.truth_h));
+            row.cal68.add(covers(rc.cal68, rc.truth_h));
+            row.chi95.add(covers(rc.chi95, rc.truth_h));
+            row.chi68.add(covers(rc.chi68, rc.truth_h));
+            row.wald95.add(covers(rc.wald95, rc.truth_h));
+            if rc.boot95.0.is_finite() {
+                row.boot95.add(covers(rc.boot95, rc.truth_h));
+            }
+            row.pred95.add(covers(rc.pred95, rc.new_test_h));
+        }
+    }
+    rows.push(row);
+    rows
+}
+
+/// The table as Markdown.
+pub fn table_md(rows: &[Row]) -> String {
+    let pct = |c: &Count| {
+        if c.n == 0 {
+            "—".to_string()
+        } else {
+            format!("{:.1} % ({}/{})", 100.0 * c.rate(), c.covered, c.n)
+        }
+    };
+    let mut md = String::from(
+        "| quantity | identifiable / sets | 95 % (shipped) | 68 % (shipped) | 95 % plain χ² | 68 % plain χ² | 95 % Wald | 95 % all sets (open = bound) | 95 % bootstrap | 95 % new test |\n|---|---|---|---|---|---|---|---|---|---|\n",
+    );
+    for r in rows {
+        md += &format!(
+            "| {} | {}/{} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            r.quantity,
+            r.identifiable,
+            r.sets,
+            pct(&r.cal95),
+            pct(&r.cal68),
+            pct(&r.chi95),
+            pct(&r.chi68),
+            pct(&r.wald95),
+            pct(&r.cal95_all),
+            pct(&r.boot95),
+            pct(&r.pred95)
+        );
+    }
+    md
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_result_with_nan_round_trips_through_json() {
+        let r = RuptureCoverage {
+            stress_mpa: 80.0,
+            truth_h: 1.0,
+            value_h: 1.0,
+            cal95: (0.5, 2.0),
+            cal68: (0.8, 1.2),
+            chi95: (0.5, 2.0),
+            chi68: (0.8, 1.2),
+            wald95: (f64::NAN, f64::INFINITY),
+            boot95: (f64::NAN, f64::NAN),
+            pred95: (0.4, 2.5),
+            new_test_h: 1.1,
+            open: false,
+        };
+        let text = serde_json::to_string(&r).unwrap();
+        let back: RuptureCoverage = serde_json::from_str(&text).unwrap();
+        assert!(back.boot95.0.is_nan() && back.wald95.1.is_nan());
+        assert_eq!(back.cal95, r.cal95);
+        assert!(covers(back.cal95, 1.0) && !covers(back.boot95, 1.0));
+    }
+}

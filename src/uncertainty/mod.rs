@@ -1,0 +1,317 @@
+//! How sure the constants and the predictions are: profile likelihoods of the constants under
+//! the error model of [`crate::errmodel`], their 68 % and 95 % intervals and identifiability
+//! classes ([`profile`]), the combinations of constants the data determine ([`combos`]),
+//! confidence and prediction intervals of predicted rupture time, minimum creep rate and
+//! rupture strain at an untested load, with a band around the predicted curve ([`predict`]),
+//! the calibration of the likelihood-ratio thresholds by a parametric bootstrap
+//! ([`calibrate`]), and the measured coverage of all of it on synthetic data with known truth
+//! ([`coverage`]).
+//!
+//! Everything works on the **profile −2 ln L**: the constants not held are re-fitted and the
+//! error model (AR(1) reading error per curve, rupture-time scatter) is re-estimated at every
+//! profile point ([`constrained::ml_fit_scaled`]), so a profile is the likelihood maximised
+//! over everything else. Bounds are those of the configuration and are never loosened: a
+//! profile that reaches a bound before crossing its threshold is reported open at that bound.
+
+pub mod calibrate;
+pub mod combos;
+pub mod constrained;
+pub mod coverage;
+pub mod predict;
+pub mod profile;
+pub mod report;
+
+use nalgebra::DMatrix;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::data::Curve;
+use crate::errmodel::{ErrorModel, Residuals};
+use crate::error::{Error, Result};
+use crate::fit::FitSettings;
+use crate::likelihood::{raw_objective, LikelihoodProblem, MlFit, MlOptions};
+use crate::lsq::{LeastSquaresProblem, LmOptions};
+use crate::model::Model;
+use crate::objective::{CreepProblem, Evaluation, ParamSpace};
+
+/// What every computation of this module needs: the model, the data, the box, the numerical
+/// settings and the error model's options.
+pub struct Context<'a> {
+    /// The model.
+    pub model: &'a dyn Model,
+    /// The measured curves (ascending stress).
+    pub curves: &'a [Curve],
+    /// Bounds and scales of the constants (all free).
+    pub space: ParamSpace,
+    /// Settings of fits from far starts (the configuration's).
+    pub settings: FitSettings,
+    /// Settings of warm-started refits: geodesic acceleration off (next to an optimum it
+    /// costs twice per iteration and saves no iterations, measured by `diagnose`).
+    pub warm: FitSettings,
+    /// Error-model options (rupture-time scatter floor).
+    pub ml: MlOptions,
+}
+
+impl<'a> Context<'a> {
+    /// A context with the warm-start settings derived from `settings`.
+    pub fn new(
+        model: &'a dyn Model,
+        curves: &'a [Curve],
+        space: ParamSpace,
+        settings: FitSettings,
+        ml: MlOptions,
+    ) -> Self {
+        let warm = FitSettings {
+            lm: LmOptions {
+                geodesic: None,
+                ..settings.lm
+            },
+            ..settings
+        };
+        Context {
+            model,
+            curves,
+            space,
+            settings,
+            warm,
+            ml,
+        }
+    }
+
+    /// Names of the constants, model order.
+    pub fn names(&self) -> Vec<&'static str> {
+        self.model.constants().iter().map(|c| c.name).collect()
+    }
+
+    /// A maximum-likelihood fit from `start` in `space` (warm settings if `warm`), scaled
+    /// for the optimiser ([`constrained::ml_fit_scaled`]).
+    pub fn fit(&self, space: &ParamSpace, start: &[f64], warm: bool) -> MlFit {
+        let s = if warm { &self.warm } else { &self.settings };
+        constrained::ml_fit_scaled(self, space, start, s)
+    }
+
+    /// The longest measured life among the curves, h (rupture time or last measured time).
+    pub fn longest_life_h(&self) -> f64 {
+        self.curves.iter().map(|c| c.life_h()).fold(0.0, f64::max)
+    }
+}
+
+/// The maximum-likelihood optimum every profile is measured from.
+#[derive(Debug, Clone)]
+pub struct Reference {
+    /// Constants, model order.
+    pub params: Vec<f64>,
+    /// −2 ln L at the optimum.
+    pub neg2ll: f64,
+    /// The error model at the optimum.
+    pub noise: ErrorModel,
+    /// Raw residuals at the optimum.
+    pub residuals: Residuals,
+    /// Predictions at the optimum (eq. 8 at w = 1, both sides).
+    pub eval: Evaluation,
+    /// Other distinct local optima found (best first), within [`BASIN_WINDOW`] of the best:
+    /// the starts an inner fit is retried from.
+    pub basins: Vec<Vec<f64>>,
+    /// Fits run to find it, and how many of them failed.
+    pub fits: usize,
+    pub failed: usize,
+}
+
+/// Local optima more than this above the best (−2 ln L) are not kept as retry starts.
+pub const BASIN_WINDOW: f64 = 20.0;
+
+impl Reference {
+    /// The reference from one successful fit (no other basins known).
+    pub fn from_fit(f: MlFit) -> Option<Reference> {
+        if !f.ok() {
+            return None;
+        }
+        Some(Reference {
+            params: f.params,
+            neg2ll: f.neg2ll,
+            noise: f.noise,
+            residuals: f.residuals?,
+            eval: f.eval?,
+            basins: vec![],
+            fits: 1,
+            failed: 0,
+        })
+    }
+}
+
+/// Starts of the multistart: `given` (if any), then `lhs` Latin-hypercube points of the box
+/// drawn from `seed`.
+pub fn starts(ctx: &Context, given: &[Vec<f64>], lhs: usize, seed: u64) -> Vec<Vec<f64>> {
+    let mut out: Vec<Vec<f64>> = given.to_vec();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    for u in crate::sweep::latin_hypercube(lhs, ctx.space.len(), &mut rng) {
+        let mut x = vec![0.0; ctx.space.len()];
+        ctx.space.from_unit(&u, &mut x);
+        out.push(x);
+    }
+    out
+}
+
+/// Maximum-likelihood multistart: a fit from every start (in parallel, results in start
+/// order), the best as the reference, and the distinct other optima as retry starts.
+pub fn fit_reference(ctx: &Context, starts: &[Vec<f64>]) -> Result<Reference> {
+    let fits: Vec<MlFit> = starts
+        .par_iter()
+        .map(|s| ctx.fit(&ctx.space, s, false))
+        .collect();
+    reference_from(ctx, fits)
+}
+
+/// The reference from a set of fits (see [`fit_reference`]).
+pub fn reference_from(ctx: &Context, fits: Vec<MlFit>) -> Result<Reference> {
+    let n = fits.len();
+    let failed = fits.iter().filter(|f| !f.ok()).count();
+    let mut ok: Vec<MlFit> = fits.into_iter().filter(|f| f.ok()).collect();
+    ok.sort_by(|a, b| a.neg2ll.total_cmp(&b.neg2ll));
+    let Some(best) = ok.first().cloned() else {
+        return Err(Error::Numerical(format!(
+            "profile: no maximum-likelihood fit succeeded from any of {n} starts"
+        )));
+    };
+    let mut basins: Vec<Vec<f64>> = Vec::new();
+    let ub = ctx.space.to_unit(&best.params);
+    for f in ok.iter().skip(1) {
+        if f.neg2ll > best.neg2ll + BASIN_WINDOW || basins.len() >= 4 {
+            break;
+        }
+        let u = ctx.space.to_unit(&f.params);
+        let distinct = |v: &[f64]| u.iter().zip(v).any(|(a, b)| (a - b).abs() > 0.02);
+        if distinct(&ub) && basins.iter().all(|b| distinct(&ctx.space.to_unit(b))) {
+            basins.push(f.params.clone());
+        }
+    }
+    let mut r = Reference::from_fit(best).expect("ok fit");
+    r.basins = basins;
+    r.fits = n;
+    r.failed = failed;
+    Ok(r)
+}
+
+/// The Fisher information of the free constants in the unit box at `params` under the error
+/// model `noise`: JᵀJ of the whitened residuals (−2 ln L ≈ const + Σ r_w²), so that
+/// Δ(−2 ln L) ≈ δᵀ I δ for a step δ in unit coordinates. `None` if the Jacobian could not be
+/// evaluated.
+pub fn information(
+    ctx: &Context,
+    space: &ParamSpace,
+    params: &[f64],
+    noise: &ErrorModel,
+) -> Option<DMatrix<f64>> {
+    let problem = LikelihoodProblem::fixed(
+        CreepProblem {
+            objective: raw_objective(ctx.model, ctx.curves, &ctx.settings),
+            space: space.clone(),
+            jacobian: ctx.settings.jacobian,
+        },
+        noise.clone(),
+    );
+    let u = space.to_unit(params);
+    let (m, n) = (problem.n_residuals(), problem.n_params());
+    let mut r = vec![0.0; m];
+    let mut jac = DMatrix::<f64>::zeros(m, n);
+    match problem.residuals_and_jacobian(&u, &mut r, &mut jac) {
+        Some(Ok(())) => {}
+        Some(Err(_)) => return None,
+        None => {
+            problem.residuals(&u, &mut r).ok()?;
+            let (lb, ub) = (vec![0.0; n], vec![1.0; n]);
+            let mut ev = 0;
+            crate::lsq::fd_jacobian(&problem, &u, &r, &lb, &ub, 1e-6, &mut jac, &mut ev).ok()?;
+        }
+    }
+    let i = jac.tr_mul(&jac);
+    i.iter().all(|v| v.is_finite()).then_some(i)
+}
+
+/// A covariance from an information matrix: the pseudo-inverse (eigenvalues below 1e-12 of
+/// the largest count as zero information, i.e. infinite variance along their direction,
+/// reported as a variance of 1e12 there).
+pub fn covariance(info: &DMatrix<f64>) -> DMatrix<f64> {
+    let n = info.nrows();
+    let sym = (info + info.transpose()) * 0.5;
+    let eig = sym.symmetric_eigen();
+    let lmax = eig.eigenvalues.iter().cloned().fold(0.0, f64::max);
+    let mut c = DMatrix::<f64>::zeros(n, n);
+    for k in 0..n {
+        let l = eig.eigenvalues[k];
+        let inv = if l > 1e-12 * lmax && l > 0.0 {
+            1.0 / l
+        } else {
+            1e12
+        };
+        let v = eig.eigenvectors.column(k);
+        c += v * v.transpose() * inv;
+    }
+    c
+}
+
+/// The likelihood-ratio thresholds of Δ(−2 ln L) for the 68.27 % and 95 % intervals: χ²₁
+/// quantiles (1.0 and 3.841), times a calibration factor (1 when uncalibrated).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Thresholds {
+    /// Threshold of the 68.27 % interval.
+    pub t68: f64,
+    /// Threshold of the 95 % interval.
+    pub t95: f64,
+    /// The calibration factor applied to the χ²₁ quantiles.
+    pub factor: f64,
+}
+
+/// Coverage of the "68 %" interval: one standard deviation of a normal.
+pub const LEVEL_68: f64 = 0.682_689_492_137_085_9;
+
+impl Thresholds {
+    /// χ²₁ quantiles scaled by `factor`.
+    pub fn chi2(factor: f64) -> Thresholds {
+        Thresholds {
+            t68: factor * chi2_1(LEVEL_68),
+            t95: factor * chi2_1(0.95),
+            factor,
+        }
+    }
+}
+
+/// Quantile of χ² with one degree of freedom at probability `p`.
+pub fn chi2_1(p: f64) -> f64 {
+    use statrs::distribution::{ContinuousCDF, Normal};
+    let z = Normal::standard().inverse_cdf(0.5 + 0.5 * p);
+    z * z
+}
+
+/// Standard normal quantile.
+pub fn normal_quantile(p: f64) -> f64 {
+    use statrs::distribution::{ContinuousCDF, Normal};
+    Normal::standard().inverse_cdf(p)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn chi2_quantiles_are_the_textbook_values() {
+        assert!((chi2_1(0.95) - 3.841_458_820_694_124).abs() < 1e-9);
+        assert!((chi2_1(LEVEL_68) - 1.0).abs() < 1e-9);
+        let t = Thresholds::chi2(1.5);
+        assert!((t.t95 - 1.5 * 3.841_458_820_694_124).abs() < 1e-9);
+    }
+
+    #[test]
+    fn covariance_inverts_a_regular_matrix_and_caps_a_singular_one() {
+        let i = DMatrix::from_row_slice(2, 2, &[4.0, 1.0, 1.0, 3.0]);
+        let c = covariance(&i);
+        let id = &i * &c;
+        assert!((id[(0, 0)] - 1.0).abs() < 1e-12 && id[(0, 1)].abs() < 1e-12);
+        let s = DMatrix::from_row_slice(2, 2, &[1.0, 1.0, 1.0, 1.0]);
+        let c = covariance(&s);
+        // Along (1, −1) no information: a huge variance.
+        assert!(c[(0, 0)] > 1e10);
+    }
+}

@@ -1,0 +1,351 @@
+//! Intervals of predictions at an untested load: rupture time, minimum creep rate and rupture
+//! strain, and a band around the predicted curve.
+//!
+//! Two intervals are kept apart:
+//! - the **confidence interval** of the model's prediction — what the uncertainty of the
+//!   constants allows — by the prediction profile likelihood: the quantity g (ln t_r,
+//!   ln ε̇_min, ln ε_r, or the strain at a time) is held by
+//!   [`crate::uncertainty::constrained::constrained_fit`] and its likelihood-ratio interval
+//!   found by [`crate::uncertainty::profile::quantity_interval`];
+//! - the **prediction interval of a new test**, which adds the scatter between specimens:
+//!   on the log scale, each half-width is √(h_conf² + (z·s)²) with z the normal 97.5 %
+//!   quantile and s the specimen scatter — for the rupture time the error model's scatter of
+//!   ln t_f (the root mean square of the lifetime residuals, floored; or the pooled scatter
+//!   within groups of replicate tests at one load, where there are replicates and it is
+//!   larger), for the minimum rate and the rupture strain the root mean square of the log
+//!   residuals of the measured (or, where the ruptures file has none, estimated) values.
+//!
+//! The functions take the model, the fitted constants with their error model (a
+//! [`Reference`]) and a [`Load`]: a temperature carried by the load reaches the model through
+//! it, so they work unchanged for models with temperature laws. The parametric bootstrap
+//! ([`bootstrap_predictions`]) is the alternative measured against the profile in README
+//! ("How sure").
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use super::constrained::{Predicted, Quantity};
+use super::profile::{quantity_interval, QuantityInterval};
+use super::{normal_quantile, Context, Reference, Thresholds};
+use crate::diagnose::bootstrap::{replicate_data, replicate_rng};
+use crate::model::Load;
+
+/// Random stream of the prediction bootstrap.
+const PREDICTION_STREAM: u64 = 13;
+
+/// A quantity predicted at one load, with its intervals (physical units).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PredictedInterval {
+    /// `rupture_time_h`, `min_rate_pct_per_h` or `rupture_strain_pct`.
+    pub quantity: &'static str,
+    /// Prediction at the fitted constants.
+    pub value: f64,
+    /// Confidence interval of the model's prediction, 68 % and 95 %.
+    pub conf_lo68: f64,
+    pub conf_hi68: f64,
+    pub conf_lo95: f64,
+    pub conf_hi95: f64,
+    /// Whether the confidence interval is open (the box stops the profile) below / above.
+    pub conf_lo_open: bool,
+    pub conf_hi_open: bool,
+    /// 95 % prediction interval of a new test at this load.
+    pub pred_lo95: f64,
+    pub pred_hi95: f64,
+    /// Specimen scatter added (sd on the ln scale) and how many residuals it rests on.
+    pub scatter_sd: f64,
+    pub scatter_n: usize,
+    /// Wald standard error of ln g (for comparison).
+    pub wald_se_ln: f64,
+    /// Fits run for the confidence interval.
+    pub fits: usize,
+    /// Points of the profile search, for reports: (ln g, Δ).
+    pub profile: Vec<(f64, f64)>,
+}
+
+/// Which prediction and how to show it: (quantity name, predicted, scale to the physical
+/// unit: h, %/h, %).
+const QUANTITIES: [(&str, Predicted, f64); 3] = [
+    ("rupture_time_h", Predicted::LnRuptureTime, 1.0),
+    ("min_rate_pct_per_h", Predicted::LnMinRate, 100.0),
+    ("rupture_strain_pct", Predicted::LnRuptureStrain, 100.0),
+];
+
+/// The specimen scatter (sd of ln) of rupture time, minimum rate and rupture strain, with
+/// the number of residuals behind each (see the module docs).
+pub fn specimen_scatter(ctx: &Context, reference: &Reference) -> [(f64, usize); 3] {
+    let lifetimes: Vec<f64> = reference
+        .residuals
+        .lifetime
+        .iter()
+        .flatten()
+        .copied()
+        .collect();
+    let mut s_t = reference.noise.lifetime_sd;
+    // Replicates: pooled within-group scatter of ln t_f at one (temperature, stress).
+    let mut groups: Vec<((f64, f64), Vec<f64>)> = Vec::new();
+    for c in ctx.curves {
+        if let Some(t) = c.rupture_time_h {
+            let key = (c.temperature_c, c.stress_mpa);
+            match groups.iter_mut().find(|g| g.0 == key) {
+                Some(g) => g.1.push(t.ln()),
+                None => groups.push((key, vec![t.ln()])),
+            }
+        }
+    }
+    let (mut ss, mut dof) = (0.0, 0usize);
+    for (_, v) in groups.iter().filter(|g| g.1.len() > 1) {
+        let m = v.iter().sum::<f64>() / v.len() as f64;
+        ss += v.iter().map(|x| (x - m).powi(2)).sum::<f64>();
+        dof += v.len() - 1;
+    }
+    if dof > 0 {
+        s_t = s_t.max((ss / dof as f64).sqrt());
+    }
+    let rms = |v: &[f64]| {
+        if v.is_empty() {
+            f64::NAN
+        } else {
+            (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt()
+        }
+    };
+    let rates: Vec<f64> = ctx
+        .curves
+        .iter()
+        .zip(&reference.eval.curves)
+        .map(|(c, p)| (p.min_rate / c.min_rate()).ln())
+        .filter(|v| v.is_finite())
+        .collect();
+    let strains: Vec<f64> = ctx
+        .curves
+        .iter()
+        .zip(&reference.eval.curves)
+        .map(|(c, p)| (p.rupture_strain / c.rupture_strain).ln())
+        .filter(|v| v.is_finite())
+        .collect();
+    [
+        (s_t, lifetimes.len()),
+        (rms(&rates), rates.len()),
+        (rms(&strains), strains.len()),
+    ]
+}
+
+/// A prediction interval from a confidence interval on the ln scale: each half-width
+/// combined with z·s in quadrature.
+fn widen(g: f64, lo: f64, hi: f64, s: f64) -> (f64, f64) {
+    let z = normal_quantile(0.975);
+    let add = (z * s).powi(2);
+    (
+        g - ((g - lo).powi(2) + add).sqrt(),
+        g + ((hi - g).powi(2) + add).sqrt(),
+    )
+}
+
+/// Confidence and prediction intervals of rupture time, minimum rate and rupture strain at
+/// `load` (the three profile searches in parallel). A quantity that cannot be predicted (no
+/// rupture within the horizon at the fitted constants) is left out.
+pub fn prediction_intervals(
+    ctx: &Context,
+    reference: &Reference,
+    load: &Load,
+    th: &Thresholds,
+) -> Vec<PredictedInterval> {
+    let scatter = specimen_scatter(ctx, reference);
+    let qi: Vec<Option<QuantityInterval>> = QUANTITIES
+        .par_iter()
+        .map(|&(_, what, _)| {
+            let q = Quantity::Prediction { load: *load, what };
+            quantity_interval(ctx, reference, &q, th)
+        })
+        .collect();
+    QUANTITIES
+        .iter()
+        .zip(qi)
+        .zip(scatter)
+        .filter_map(|(((name, _, unit), qi), (s, n))| {
+            let qi = qi?;
+            let iv = qi.interval;
+            let (plo, phi) = widen(
+                iv.value,
+                iv.lo95,
+                iv.hi95,
+                if s.is_finite() { s } else { 0.0 },
+            );
+            let phys = |v: f64| unit * v.exp();
+            let mut profile: Vec<(f64, f64)> = qi
+                .lower
+                .points
+                .iter()
+                .chain(&qi.upper.points)
+                .filter(|p| p.delta.is_finite())
+                .map(|p| (p.coord, p.delta))
+                .chain(std::iter::once((iv.value, 0.0)))
+                .collect();
+            profile.sort_by(|a, b| a.0.total_cmp(&b.0));
+            Some(PredictedInterval {
+                quantity: name,
+                value: phys(iv.value),
+                conf_lo68: phys(iv.lo68),
+                conf_hi68: phys(iv.hi68),
+                conf_lo95: phys(iv.lo95),
+                conf_hi95: phys(iv.hi95),
+                conf_lo_open: iv.lo_open,
+                conf_hi_open: iv.hi_open,
+                pred_lo95: phys(plo),
+                pred_hi95: phys(phi),
+                scatter_sd: s,
+                scatter_n: n,
+                wald_se_ln: qi.wald_se,
+                fits: qi.fits(),
+                profile,
+            })
+        })
+        .collect()
+}
+
+/// The 95 % confidence interval of the rupture time alone at `load` (h): (value, lo, hi).
+pub fn rupture_time_interval(
+    ctx: &Context,
+    reference: &Reference,
+    load: &Load,
+    th: &Thresholds,
+) -> Option<(f64, f64, f64, usize)> {
+    let q = Quantity::Prediction {
+        load: *load,
+        what: Predicted::LnRuptureTime,
+    };
+    let qi = quantity_interval(ctx, reference, &q, th)?;
+    let iv = qi.interval;
+    Some((iv.value.exp(), iv.lo95.exp(), iv.hi95.exp(), qi.fits()))
+}
+
+/// One time of the band around a predicted curve.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct BandPoint {
+    /// Time, h.
+    pub time_h: f64,
+    /// Predicted strain, %.
+    pub strain_pct: f64,
+    /// 95 % confidence band of the model's strain at this time, %.
+    pub lo95_pct: f64,
+    pub hi95_pct: f64,
+}
+
+/// The 95 % confidence band of the predicted strain at `load` at the fractions `fractions` of
+/// the predicted rupture time (pointwise prediction profile likelihood, in parallel).
+pub fn prediction_band(
+    ctx: &Context,
+    reference: &Reference,
+    load: &Load,
+    fractions: &[f64],
+    th: &Thresholds,
+) -> Vec<BandPoint> {
+    let q = Quantity::Prediction {
+        load: *load,
+        what: Predicted::LnRuptureTime,
+    };
+    let Some(ln_t) = q.value(ctx, &reference.params) else {
+        return vec![];
+    };
+    let t_r = ln_t.exp();
+    fractions
+        .par_iter()
+        .filter_map(|&f| {
+            let t = f * t_r;
+            let q = Quantity::Prediction {
+                load: *load,
+                what: Predicted::StrainAt(t),
+            };
+            let qi = quantity_interval(ctx, reference, &q, th)?;
+            let iv = qi.interval;
+            Some(BandPoint {
+                time_h: t,
+                strain_pct: 100.0 * iv.value,
+                lo95_pct: 100.0 * iv.lo95,
+                hi95_pct: 100.0 * iv.hi95,
+            })
+        })
+        .collect()
+}
+
+/// Predictions of replicate data sets: ln of (rupture time, minimum rate, rupture strain) at
+/// `load` after refitting each of `b` replicates simulated under the reference and its error
+/// model (warm starts: the reference and its other optima). NaN where a refit or prediction
+/// failed. Replicate k uses its own random stream: the result does not depend on the thread
+/// count.
+pub fn bootstrap_predictions(
+    ctx: &Context,
+    reference: &Reference,
+    load: &Load,
+    b: usize,
+    seed: u64,
+) -> Vec<[f64; 3]> {
+    (0..b)
+        .into_par_iter()
+        .map(|k| {
+            let mut rng = replicate_rng(seed, PREDICTION_STREAM, k);
+            let data = replicate_data(ctx.curves, &reference.eval, &reference.noise, &mut rng);
+            let c = Context {
+                curves: &data,
+                space: ctx.space.clone(),
+                ..*ctx
+            };
+            let mut best: Option<crate::likelihood::MlFit> = None;
+            for s in std::iter::once(&reference.params).chain(&reference.basins) {
+                let f = c.fit(&c.space, s, true);
+                if f.ok() && best.as_ref().is_none_or(|b| f.neg2ll < b.neg2ll) {
+                    best = Some(f);
+                }
+            }
+            let Some(f) = best else {
+                return [f64::NAN; 3];
+            };
+            let mut out = [f64::NAN; 3];
+            for (k, (_, what, _)) in QUANTITIES.iter().enumerate() {
+                let q = Quantity::Prediction {
+                    load: *load,
+                    what: *what,
+                };
+                out[k] = q.value(&c, &f.params).unwrap_or(f64::NAN);
+            }
+            out
+        })
+        .collect()
+}
+
+/// The (2.5 %, 97.5 %) percentiles of the finite values of `v` (NaN if fewer than 10).
+pub fn percentile95(v: &[f64]) -> (f64, f64) {
+    let mut f: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
+    if f.len() < 10 {
+        return (f64::NAN, f64::NAN);
+    }
+    f.sort_by(|a, b| a.total_cmp(b));
+    let q = |p: f64| {
+        let x = p * (f.len() - 1) as f64;
+        let (i, w) = (x.floor() as usize, x - x.floor());
+        f[i] * (1.0 - w) + f[(i + 1).min(f.len() - 1)] * w
+    };
+    (q(0.025), q(0.975))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn prediction_interval_adds_the_scatter_in_quadrature() {
+        let z = normal_quantile(0.975);
+        let (lo, hi) = widen(0.0, -0.3, 0.4, 0.1);
+        assert!((lo + (0.09 + (0.1 * z).powi(2)).sqrt()).abs() < 1e-12);
+        assert!((hi - (0.16 + (0.1 * z).powi(2)).sqrt()).abs() < 1e-12);
+        // No scatter: the confidence interval itself.
+        assert_eq!(widen(1.0, 0.5, 2.0, 0.0), (0.5, 2.0));
+    }
+
+    #[test]
+    fn percentiles_interpolate() {
+        let v: Vec<f64> = (0..=100).map(|k| k as f64).collect();
+        let (lo, hi) = percentile95(&v);
+        assert!((lo - 2.5).abs() < 1e-12 && (hi - 97.5).abs() < 1e-12);
+        assert!(percentile95(&[1.0, f64::NAN]).0.is_nan());
+    }
+}

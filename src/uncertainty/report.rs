@@ -1,0 +1,688 @@
+//! `creepfit profile`: the whole computation on a configuration's data ([`run`]) and its
+//! outputs ([`write_outputs`]): `intervals.csv`, `profiles.csv`, `summary.json`, `report.md`
+//! and a `profile_<constant>.png` per constant.
+
+use std::path::Path;
+use std::time::Instant;
+
+use serde::Serialize;
+use serde_json::json;
+
+use super::calibrate::{bartlett, Calibration};
+use super::combos::{well_determined, Combination};
+use super::constrained::{Predicted, Quantity};
+use super::predict::{prediction_band, prediction_intervals, BandPoint, PredictedInterval};
+use super::profile::{profile_constants, wald_se, ConstantProfile};
+use super::{fit_reference, reference_from, starts, Context, Reference, Thresholds};
+use crate::config::{ProfileConfig, RunConfig};
+use crate::data::Dataset;
+use crate::error::{Error, Result};
+use crate::fit::{param_space, FitSettings};
+use crate::guess::initial_guess;
+use crate::likelihood::MlOptions;
+use crate::model::{Load, Scale};
+use crate::report::plot::{plot_profile, ProfilePlot};
+use crate::report::tables::{jnum, num, write_csv, write_text};
+
+/// How many times the profiles are redone from a better optimum found on a profile.
+pub const MAX_RESTARTS: usize = 3;
+
+/// Predictions at one untested load.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LoadPrediction {
+    /// Temperature (°C) and stress (MPa).
+    pub temperature_c: f64,
+    pub stress_mpa: f64,
+    /// Rupture time, minimum rate, rupture strain with their intervals.
+    pub quantities: Vec<PredictedInterval>,
+    /// The 95 % band of the predicted curve.
+    pub band: Vec<BandPoint>,
+}
+
+/// Wall times of the phases, s.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct Timings {
+    pub fit: f64,
+    pub calibration: f64,
+    pub profiles: f64,
+    pub combinations: f64,
+    /// Prediction phase: the intervals of rupture time, minimum rate and rupture strain (all
+    /// loads), and the bands.
+    pub predictions: f64,
+    pub prediction_intervals: f64,
+    pub bands: f64,
+    pub total: f64,
+}
+
+/// Everything `creepfit profile` computes.
+#[derive(Debug, Clone)]
+pub struct ProfileRun {
+    /// The maximum-likelihood optimum the profiles are measured from.
+    pub reference: Reference,
+    /// How the reference was found: `multistart` or `constants` (a local fit from given
+    /// constants), and −2 ln L at the given constants for the latter.
+    pub reference_from: String,
+    pub given_neg2ll: Option<f64>,
+    /// The thresholds used and the calibration behind them.
+    pub thresholds: Thresholds,
+    pub calibration: Option<Calibration>,
+    /// Profiles of every constant, model order.
+    pub profiles: Vec<ConstantProfile>,
+    /// Well-determined combinations.
+    pub combinations: Vec<Combination>,
+    /// Predictions at the configured untested stresses.
+    pub predictions: Vec<LoadPrediction>,
+    /// Times the profiles were redone from a better optimum found on them.
+    pub restarts: usize,
+    pub timings: Timings,
+}
+
+/// The context of a configuration and its data.
+pub fn context<'a>(
+    cfg: &RunConfig,
+    model: &'a dyn crate::model::Model,
+    data: &'a Dataset,
+) -> Context<'a> {
+    Context::new(
+        model,
+        &data.curves,
+        param_space(cfg),
+        FitSettings::from_config(cfg),
+        MlOptions {
+            lifetime_sd_floor: cfg.profile.lifetime_sd_floor,
+            // Not read here: the profile's fits are scaled AR(1) fits from their starts
+            // ([`super::constrained::ml_fit_scaled`]), as before the two-stage `ml_fit`.
+            white_first: false,
+        },
+    )
+}
+
+/// The untested loads of `pc` at the data's temperature.
+pub fn loads(cfg: &RunConfig, data: &Dataset, pc: &ProfileConfig) -> Vec<(f64, Load)> {
+    let t = cfg
+        .temperature_c
+        .or_else(|| data.curves.first().map(|c| c.temperature_c))
+        .unwrap_or(f64::NAN);
+    pc.predict_stress_mpa
+        .iter()
+        .map(|&s| (t, Load::new(s, t, cfg.objective.omega_f)))
+        .collect()
+}
+
+/// Constants that look identifiable by the Wald approximation (the estimate ± 1.96 Wald
+/// standard errors inside the box): the ones whose likelihood-ratio statistic calibrates the
+/// thresholds (a constant on a bound or in a flat direction has no χ²₁ statistic).
+pub fn calibration_constants(ctx: &Context, reference: &Reference) -> Vec<usize> {
+    let se = wald_se(ctx, reference);
+    (0..ctx.space.len())
+        .filter(|&j| {
+            let u = ctx.space.to_unit_one(j, reference.params[j]);
+            u - 1.96 * se[j] > 0.0 && u + 1.96 * se[j] < 1.0
+        })
+        .collect()
+}
+
+/// The reference, the thresholds and the profiles of every constant (see [`run`]).
+#[derive(Debug, Clone)]
+pub struct Core {
+    pub reference: Reference,
+    pub reference_from: String,
+    pub given_neg2ll: Option<f64>,
+    pub thresholds: Thresholds,
+    pub calibration: Option<Calibration>,
+    pub profiles: Vec<ConstantProfile>,
+    pub restarts: usize,
+    pub timings: Timings,
+}
+
+/// The reference (a multistart, or a local fit from `given`), the calibration of the
+/// thresholds (over the constants of [`calibration_constants`] and the rupture time at every
+/// load of `loads`), and the profiles of every constant, redone from a better optimum if one
+/// turns up on them (at most [`MAX_RESTARTS`] times).
+pub fn core(
+    ctx: &Context,
+    cfg: &RunConfig,
+    given: Option<&[f64]>,
+    pc: &ProfileConfig,
+    loads: &[Load],
+) -> Result<Core> {
+    let t0 = Instant::now();
+    let (mut reference, from, given_neg2ll) = match given {
+        Some(x) => {
+            let f = ctx.fit(&ctx.space, x, false);
+            let at_given = crate::likelihood::residuals_at(ctx.model, ctx.curves, x, &ctx.settings)
+                .ok()
+                .map(|r| {
+                    crate::errmodel::ErrorModel::estimate(&r, ctx.ml.lifetime_sd_floor).neg2ll(&r)
+                });
+            (
+                reference_from(ctx, vec![f])?,
+                "constants".to_string(),
+                at_given,
+            )
+        }
+        None => {
+            let guess = initial_guess(
+                ctx.model,
+                ctx.curves,
+                &ctx.space,
+                ctx.settings.omega_f,
+                &ctx.settings.ode,
+            );
+            let mut given: Vec<Vec<f64>> = vec![guess.params];
+            if let Some(s) = cfg.starts_all_given() {
+                given.insert(0, s);
+            }
+            let st = starts(ctx, &given, pc.starts, pc.seed);
+            (fit_reference(ctx, &st)?, "multistart".to_string(), None)
+        }
+    };
+    let mut timings = Timings {
+        fit: t0.elapsed().as_secs_f64(),
+        ..Timings::default()
+    };
+    let mut restarts = 0;
+    loop {
+        let t1 = Instant::now();
+        let (th, cal) = if pc.calibrate > 0 {
+            let cons = calibration_constants(ctx, &reference);
+            let qs: Vec<(String, Quantity)> = loads
+                .iter()
+                .map(|l| {
+                    (
+                        format!("rupture time at {} MPa", l.stress_mpa),
+                        Quantity::Prediction {
+                            load: *l,
+                            what: Predicted::LnRuptureTime,
+                        },
+                    )
+                })
+                .collect();
+            let cal = bartlett(ctx, &reference, &cons, &qs, pc.calibrate, pc.seed);
+            (Thresholds::chi2(cal.factor), Some(cal))
+        } else {
+            (Thresholds::chi2(1.0), None)
+        };
+        timings.calibration += t1.elapsed().as_secs_f64();
+        let t2 = Instant::now();
+        let all: Vec<usize> = (0..ctx.space.len()).collect();
+        let profiles = profile_constants(ctx, &reference, &all, &th);
+        timings.profiles += t2.elapsed().as_secs_f64();
+        let better = profiles
+            .iter()
+            .filter_map(|p| p.better())
+            .min_by(|a, b| a.delta.total_cmp(&b.delta))
+            .cloned();
+        match better {
+            Some(p) if restarts < MAX_RESTARTS => {
+                restarts += 1;
+                let fits = vec![
+                    ctx.fit(&ctx.space, &p.params, false),
+                    ctx.fit(&ctx.space, &p.params, true),
+                ];
+                let mut r = reference_from(ctx, fits)?;
+                r.basins = reference.basins.clone();
+                r.basins.insert(0, reference.params.clone());
+                reference = r;
+            }
+            _ => {
+                return Ok(Core {
+                    reference,
+                    reference_from: from,
+                    given_neg2ll,
+                    thresholds: th,
+                    calibration: cal,
+                    profiles,
+                    restarts,
+                    timings,
+                })
+            }
+        }
+    }
+}
+
+/// The whole computation: [`core`], the well-determined combinations and the predictions at
+/// the configured untested stresses.
+pub fn run(
+    cfg: &RunConfig,
+    data: &Dataset,
+    given: Option<&[f64]>,
+    pc: &ProfileConfig,
+) -> Result<ProfileRun> {
+    let t0 = Instant::now();
+    let model = cfg.build_model()?;
+    let ctx = context(cfg, model.as_ref(), data);
+    let loads = loads(cfg, data, pc);
+    let only: Vec<Load> = loads.iter().map(|l| l.1).collect();
+    let c = core(&ctx, cfg, given, pc, &only)?;
+    let (reference, thresholds, mut timings) = (c.reference, c.thresholds, c.timings);
+    let t3 = Instant::now();
+    let combinations = well_determined(&ctx, &reference, &c.profiles, &thresholds, 3);
+    timings.combinations = t3.elapsed().as_secs_f64();
+    let t4 = Instant::now();
+    let fractions: Vec<f64> = (1..=pc.band_points)
+        .map(|k| k as f64 / (pc.band_points + 1) as f64)
+        .collect();
+    let mut predictions = Vec::with_capacity(loads.len());
+    for (t, l) in &loads {
+        let ti = Instant::now();
+        let quantities = prediction_intervals(&ctx, &reference, l, &thresholds);
+        timings.prediction_intervals += ti.elapsed().as_secs_f64();
+        let tb = Instant::now();
+        let band = prediction_band(&ctx, &reference, l, &fractions, &thresholds);
+        timings.bands += tb.elapsed().as_secs_f64();
+        predictions.push(LoadPrediction {
+            temperature_c: *t,
+            stress_mpa: l.stress_mpa,
+            quantities,
+            band,
+        });
+    }
+    timings.predictions = t4.elapsed().as_secs_f64();
+    timings.total = t0.elapsed().as_secs_f64();
+    Ok(ProfileRun {
+        reference,
+        reference_from: c.reference_from,
+        given_neg2ll: c.given_neg2ll,
+        thresholds,
+        calibration: c.calibration,
+        profiles: c.profiles,
+        combinations,
+        predictions,
+        restarts: c.restarts,
+        timings,
+    })
+}
+
+/// The x coordinate a constant's profile is shown in: log10 of the value for a log-scale
+/// constant, else the value.
+fn shown(scale: Scale, v: f64) -> f64 {
+    match scale {
+        Scale::Log => v.log10(),
+        Scale::Linear => v,
+    }
+}
+
+/// `intervals.csv` rows: `name,value,lo68,hi68,lo95,hi95,class`.
+pub fn interval_rows(run: &ProfileRun) -> Vec<Vec<String>> {
+    run.profiles
+        .iter()
+        .map(|p| {
+            let i = &p.interval;
+            vec![
+                p.name.clone(),
+                num(i.value),
+                num(i.lo68),
+                num(i.hi68),
+                num(i.lo95),
+                num(i.hi95),
+                p.class.as_str().to_string(),
+            ]
+        })
+        .collect()
+}
+
+/// Write every output of `creepfit profile` into `out`; plots last. Returns the plots that
+/// could not be written.
+pub fn write_outputs(cfg: &RunConfig, run: &ProfileRun, out: &Path) -> Result<Vec<String>> {
+    let names: Vec<String> = cfg.constants.iter().map(|c| c.name.clone()).collect();
+    write_csv(
+        &out.join("intervals.csv"),
+        &["name", "value", "lo68", "hi68", "lo95", "hi95", "class"],
+        &interval_rows(run),
+    )?;
+    // profiles.csv: every profile point, the optimum included, with the other constants.
+    let mut header: Vec<&str> = vec![
+        "name",
+        "side",
+        "value",
+        "delta_neg2ll",
+        "status",
+        "fits",
+        "termination",
+    ];
+    header.extend(names.iter().map(|s| s.as_str()));
+    let mut rows = Vec::new();
+    for p in &run.profiles {
+        let mut opt = vec![
+            p.name.clone(),
+            "optimum".into(),
+            num(p.interval.value),
+            num(0.0),
+            "ok".into(),
+            "0".into(),
+            String::new(),
+        ];
+        opt.extend(run.reference.params.iter().map(|v| num(*v)));
+        rows.push(opt);
+        for (side, s) in [("lower", &p.lower), ("upper", &p.upper)] {
+            for q in &s.points {
+                let status = if !q.delta.is_finite() {
+                    "failed"
+                } else if q.retried {
+                    "retried"
+                } else {
+                    "ok"
+                };
+                let mut row = vec![
+                    p.name.clone(),
+                    side.into(),
+                    num(q.value),
+                    if q.delta.is_finite() {
+                        num(q.delta)
+                    } else {
+                        String::new()
+                    },
+                    status.into(),
+                    q.fits.to_string(),
+                    q.termination.as_str().into(),
+                ];
+                row.extend(q.params.iter().map(|v| num(*v)));
+                rows.push(row);
+            }
+        }
+    }
+    write_csv(&out.join("profiles.csv"), &header, &rows)?;
+    write_text(
+        &out.join("summary.json"),
+        &serde_json::to_string_pretty(&summary(cfg, run)).expect("JSON of plain values"),
+    )?;
+    write_text(&out.join("report.md"), &report_md(cfg, run))?;
+    let mut failures = Vec::new();
+    for (j, p) in run.profiles.iter().enumerate() {
+        let scale = cfg.constants[j].scale;
+        let unit = cfg.constants[j].unit;
+        let x = |v: f64| shown(scale, v);
+        let pts: Vec<(f64, f64)> = p
+            .lower
+            .points
+            .iter()
+            .chain(&p.upper.points)
+            .filter(|q| q.delta.is_finite())
+            .map(|q| (x(q.value), q.delta))
+            .chain(std::iter::once((x(p.interval.value), 0.0)))
+            .collect();
+        let failed: Vec<f64> = p
+            .lower
+            .points
+            .iter()
+            .chain(&p.upper.points)
+            .filter(|q| !q.delta.is_finite())
+            .map(|q| x(q.value))
+            .collect();
+        let th = run.thresholds;
+        let plot = ProfilePlot {
+            x_label: match scale {
+                Scale::Log => format!("log10 {} ({} in {unit})", p.name, p.name),
+                Scale::Linear => format!("{} ({unit})", p.name),
+            },
+            points: pts,
+            failed,
+            estimate: x(p.interval.value),
+            bounds: (x(p.lb), x(p.ub)),
+            thresholds: vec![
+                (format!("68 % threshold {:.2}", th.t68), th.t68),
+                (format!("95 % threshold {:.2}", th.t95), th.t95),
+            ],
+        };
+        let path = out.join(format!("profile_{}.png", p.name));
+        if let Err(e) = plot_profile(
+            &path,
+            &format!(
+                "{}: profile likelihood of {} ({})",
+                cfg.name,
+                p.name,
+                p.class.as_str()
+            ),
+            &plot,
+        ) {
+            failures.push(e.to_string());
+        }
+    }
+    Ok(failures)
+}
+
+/// `summary.json`.
+pub fn summary(cfg: &RunConfig, run: &ProfileRun) -> serde_json::Value {
+    let r = &run.reference;
+    let names: Vec<String> = cfg.constants.iter().map(|c| c.name.clone()).collect();
+    let constants: Vec<serde_json::Value> = run
+        .profiles
+        .iter()
+        .map(|p| {
+            json!({
+                "name": p.name,
+                "value": jnum(p.interval.value),
+                "lo68": jnum(p.interval.lo68),
+                "hi68": jnum(p.interval.hi68),
+                "lo95": jnum(p.interval.lo95),
+                "hi95": jnum(p.interval.hi95),
+                "class": p.class,
+                "open": p.open.iter().map(|o| json!({
+                    "side": o.side,
+                    "end": o.end,
+                    "limit": jnum(o.limit),
+                    "max_delta": jnum(o.max_delta),
+                })).collect::<Vec<_>>(),
+                "lb": jnum(p.lb),
+                "ub": jnum(p.ub),
+                "wald_se_unit": jnum(p.wald_se_unit),
+                "points": p.lower.points.len() + p.upper.points.len(),
+                "fits": p.fits(),
+                "failed_points": p.lower.failed_points() + p.upper.failed_points(),
+                "retried_points": p.lower.retried_points() + p.upper.retried_points(),
+                "lower_end": p.lower.end,
+                "upper_end": p.upper.end,
+            })
+        })
+        .collect();
+    json!({
+        "name": cfg.name,
+        "model": cfg.model_name(),
+        "data_hash": cfg.data_hash,
+        "reference": {
+            "from": run.reference_from,
+            "neg2ll": jnum(r.neg2ll),
+            "given_neg2ll": run.given_neg2ll.map(jnum),
+            "constants": names.iter().zip(&r.params).map(|(n, v)| json!({"name": n, "value": jnum(*v)})).collect::<Vec<_>>(),
+            "fits": r.fits,
+            "failed_fits": r.failed,
+            "other_optima": r.basins.len(),
+            "strain_sd_pct": r.noise.strain.iter().map(|p| jnum(100.0 * p.marginal_sd())).collect::<Vec<_>>(),
+            "phi": r.noise.strain.iter().map(|p| jnum(p.phi)).collect::<Vec<_>>(),
+            "lifetime_sd_pct": jnum(100.0 * r.noise.lifetime_sd),
+        },
+        "thresholds": {
+            "t68": jnum(run.thresholds.t68),
+            "t95": jnum(run.thresholds.t95),
+            "factor": jnum(run.thresholds.factor),
+            "chi2_t68": 1.0,
+            "chi2_t95": jnum(super::chi2_1(0.95)),
+        },
+        "calibration": run.calibration,
+        "restarts": run.restarts,
+        "constants": constants,
+        "combinations": run.combinations,
+        "predictions": run.predictions,
+        "timings_s": run.timings,
+        "settings": cfg.profile,
+    })
+}
+
+fn g(v: f64) -> String {
+    if !v.is_finite() {
+        return format!("{v}");
+    }
+    let a = v.abs();
+    if a != 0.0 && !(1e-3..1e5).contains(&a) {
+        format!("{v:.4e}")
+    } else {
+        format!("{v:.5}")
+    }
+}
+
+/// `report.md`.
+pub fn report_md(cfg: &RunConfig, run: &ProfileRun) -> String {
+    let th = run.thresholds;
+    let mut md = format!("# How sure: {}\n\n", cfg.name);
+    md += &format!(
+        "Maximum-likelihood optimum ({}) at −2 ln L = {:.3}; the error model re-estimated at every profile point (AR(1) reading error per curve; rupture-time scatter {:.2} %).\n\n",
+        if run.reference_from == "multistart" {
+            format!("multistart, {} fits", run.reference.fits)
+        } else {
+            "local fit from the given constants".to_string()
+        },
+        run.reference.neg2ll,
+        100.0 * run.reference.noise.lifetime_sd
+    );
+    md += &match &run.calibration {
+        Some(c) => format!(
+            "Thresholds of Δ(−2 ln L): {:.3} (68 %) and {:.3} (95 %): the χ²₁ quantiles × {:.3}, the mean likelihood-ratio statistic of {} parametric-bootstrap replicates ({} failed) at the fitted values (Bartlett correction; floored at 1).\n\n",
+            th.t68, th.t95, th.factor, c.replicates, c.failed
+        ),
+        None => format!(
+            "Thresholds of Δ(−2 ln L): the χ²₁ quantiles {:.3} (68 %) and {:.3} (95 %), not calibrated.\n\n",
+            th.t68, th.t95
+        ),
+    };
+    if run.restarts > 0 {
+        md += &format!(
+            "A profile found a lower −2 ln L than the first optimum: the profiles were redone {} time(s) from the better optimum.\n\n",
+            run.restarts
+        );
+    }
+    md += "## Constants\n\n| constant | value | 68 % | 95 % | class | open side(s) |\n|---|---|---|---|---|---|\n";
+    for p in &run.profiles {
+        let i = &p.interval;
+        let open: Vec<String> = p
+            .open
+            .iter()
+            .map(|o| {
+                format!(
+                    "{} ({}, {}; Δ ≤ {:.2})",
+                    o.side,
+                    match o.end {
+                        super::profile::SideEnd::Bound => "bound",
+                        super::profile::SideEnd::Failed => "fits failed",
+                        super::profile::SideEnd::PointLimit => "point limit",
+                        _ => "limit",
+                    },
+                    g(o.limit),
+                    o.max_delta
+                )
+            })
+            .collect();
+        md += &format!(
+            "| {} | {} | [{}, {}] | [{}, {}] | {} | {} |\n",
+            p.name,
+            g(i.value),
+            g(i.lo68),
+            g(i.hi68),
+            g(i.lo95),
+            g(i.hi95),
+            p.class.as_str(),
+            if open.is_empty() {
+                "—".to_string()
+            } else {
+                open.join("; ")
+            }
+        );
+    }
+    let failed: usize = run
+        .profiles
+        .iter()
+        .map(|p| p.lower.failed_points() + p.upper.failed_points())
+        .sum();
+    let retried: usize = run
+        .profiles
+        .iter()
+        .map(|p| p.lower.retried_points() + p.upper.retried_points())
+        .sum();
+    let fits: usize = run.profiles.iter().map(|p| p.fits()).sum();
+    md += &format!(
+        "\n{fits} inner fits; {retried} profile point(s) needed a retry from another start, {failed} failed from every start{}.\n\n",
+        if failed > 0 { " (listed in profiles.csv as `failed`)" } else { "" }
+    );
+    md += "## What the data determine\n\n";
+    if run.combinations.is_empty() {
+        md += "No combination of two or more constants is determined markedly better than the constants themselves.\n\n";
+    } else {
+        md += "| combination | value | 95 % | relative half-width | narrowest member alone |\n|---|---|---|---|---|\n";
+        for c in &run.combinations {
+            let i = &c.interval;
+            md += &format!(
+                "| {} | {} | [{}, {}] | ±{:.2} % | {} |\n",
+                c.expression,
+                g(i.value),
+                g(i.lo95),
+                g(i.hi95),
+                50.0 * (i.hi95 - i.lo95) / i.value,
+                if c.best_single_halfwidth.is_finite() {
+                    format!("±{:.1} %", 100.0 * c.best_single_halfwidth)
+                } else {
+                    "not identifiable".into()
+                }
+            );
+        }
+        md += "\n";
+    }
+    if !run.predictions.is_empty() {
+        md += "## Predictions at untested loads\n\nConfidence interval: the uncertainty of the model's prediction (the constants). Prediction interval: a new test, adding the scatter between specimens.\n\n| load | quantity | prediction | 95 % confidence | 95 % prediction (new test) | specimen scatter (sd of ln) |\n|---|---|---|---|---|---|\n";
+        for p in &run.predictions {
+            for q in &p.quantities {
+                md += &format!(
+                    "| {} °C, {} MPa | {} | {} | [{}, {}]{} | [{}, {}] | {:.3} ({} residuals) |\n",
+                    p.temperature_c,
+                    p.stress_mpa,
+                    q.quantity,
+                    g(q.value),
+                    g(q.conf_lo95),
+                    g(q.conf_hi95),
+                    if q.conf_lo_open || q.conf_hi_open {
+                        " (open: the box limits it)"
+                    } else {
+                        ""
+                    },
+                    g(q.pred_lo95),
+                    g(q.pred_hi95),
+                    q.scatter_sd,
+                    q.scatter_n
+                );
+            }
+        }
+        md += "\n";
+    }
+    md += &format!(
+        "Wall time {:.2} s (fit {:.2}, calibration {:.2}, profiles {:.2}, combinations {:.2}, predictions {:.2}).\n",
+        run.timings.total,
+        run.timings.fit,
+        run.timings.calibration,
+        run.timings.profiles,
+        run.timings.combinations,
+        run.timings.predictions
+    );
+    md
+}
+
+/// Run `creepfit profile` on a configuration: compute, write, print the report.
+pub fn profile_command(cfg: &RunConfig, data: &Dataset, constants: Option<&Path>) -> Result<()> {
+    let model = cfg.build_model()?;
+    let given = match constants {
+        Some(p) => Some(crate::report::tables::read_constants(p, model.as_ref())?),
+        None => None,
+    };
+    let out = cfg.out_dir("profile");
+    let _lock = crate::output::lock_folder(&out)?;
+    let run = run(cfg, data, given.as_deref(), &cfg.profile)?;
+    let failures = write_outputs(cfg, &run, &out)?;
+    print!("{}", report_md(cfg, &run));
+    println!("wrote {}", out.display());
+    if failures.is_empty() {
+        Ok(())
+    } else {
+        Err(Error::PlotsNotWritten {
+            out: out.to_path_buf(),
+            failures,
+        })
+    }
+}
