@@ -156,6 +156,48 @@ fn profile_writes_its_contract_on_the_seed_data() {
     assert!(md.contains("## Constants") && md.contains("## What the data determine"));
 }
 
+/// At 590 °C B trades with H* along the ridge B·(1−H*) ≈ 0.074: B's upper profile rises
+/// slowly (Δ ≈ 0.36 at B = 0.151). Continuation that restarted each point from the previous
+/// one alone could not take a step larger than 0.0125 of the box (a warm fit off the ridge
+/// converged to Δ ≈ 83), so the side used its 40 points and stopped at B = 0.151 as
+/// `point_limit` with equal 68 % and 95 % upper ends. With the tangent predictor it must
+/// reach the bound or cross the 95 % threshold, in fewer points than the limit.
+#[test]
+fn a_ridge_profile_follows_the_ridge_to_its_end() {
+    let dir = TempDir::new().unwrap();
+    let text = std::fs::read_to_string(root().join("configs/590C.toml"))
+        .unwrap()
+        .replace(
+            "../data/",
+            &format!("{}/", root().join("data").to_str().unwrap()),
+        )
+        + "\n[profile]\ncalibrate = 0\n";
+    let cfg = dir.path().join("590.toml");
+    std::fs::write(&cfg, text).unwrap();
+    let out = dir.path().join("out");
+    let o = creepfit(&[
+        "profile",
+        cfg.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let b = summary["constants"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["name"] == "B")
+        .unwrap();
+    let upper = b["upper_end"].as_str().unwrap();
+    assert!(
+        upper == "bound" || upper == "crossed",
+        "B upper side: {upper}"
+    );
+    assert!(b["points"].as_u64().unwrap() < 60, "{}", b["points"]);
+}
+
 #[test]
 fn bad_profile_settings_are_one_line_errors() {
     let dir = TempDir::new().unwrap();

@@ -309,6 +309,8 @@ fn constant_side(
     let mut u = u_hat;
     let mut r_prev = 0.0;
     let mut warm = reference.params.clone();
+    // The point before `warm` and its coordinate (the optimum before the first point).
+    let mut prev: Option<(f64, Vec<f64>)> = None;
     let mut h = (ROOT_STEP * se_u).clamp(MIN_STEP, MAX_STEP);
     let seed = 0x5eed ^ ((j as u64) << 8) ^ u64::from(dir > 0.0);
     loop {
@@ -328,15 +330,29 @@ fn constant_side(
         if (bound - u_new) * dir < 0.25 * h {
             u_new = bound; // land exactly on the bound
         }
-        let p = fit_point(
-            ctx,
-            reference,
-            j,
-            u_new,
-            &warm,
-            th.t68,
-            seed ^ (points.len() as u64) << 16,
-        );
+        let point_seed = seed ^ (points.len() as u64) << 16;
+        let mut p = match &prev {
+            // Predictor: the others extrapolated along the last step's tangent (a ridge such
+            // as B(1−H*) = const at 590 °C is followed, not left and refound).
+            Some((u_prev, x_prev)) => {
+                let start = tangent_start(ctx, &warm, x_prev, u - u_prev, u_new - u);
+                fit_point(ctx, reference, j, u_new, &start, th.t68, point_seed)
+            }
+            None => fit_point(ctx, reference, j, u_new, &warm, th.t68, point_seed),
+        };
+        if prev.is_some() && (!p.ok() || p.delta.max(0.0).sqrt() - r_prev > 2.0 * ROOT_STEP) {
+            // The corrector from the previous point itself, kept if lower.
+            let q = fit_point(ctx, reference, j, u_new, &warm, th.t68, point_seed);
+            if q.ok() && (!p.ok() || q.delta < p.delta) {
+                p = ProfilePoint {
+                    fits: p.fits + q.fits,
+                    retried: true,
+                    ..q
+                };
+            } else {
+                p.fits += q.fits;
+            }
+        }
         if !p.ok() {
             points.push(p);
             if h <= MIN_STEP {
@@ -363,7 +379,7 @@ fn constant_side(
         }
         .clamp(MIN_STEP, MAX_STEP);
         let crossed = p.delta >= th.t95;
-        warm = p.params.clone();
+        prev = Some((u, std::mem::replace(&mut warm, p.params.clone())));
         u = u_new;
         r_prev = r;
         points.push(p);
@@ -374,6 +390,28 @@ fn constant_side(
             };
         }
     }
+}
+
+/// Start of the next profile point by linear extrapolation of the other constants in the unit
+/// box: `last` was reached from `before` by a step `ds` of the held coordinate, the next step
+/// is `dn`; clamped to the box. Why: continuation from `last` alone leaves the others where
+/// they were, and along a narrow ridge (B·(1−H*) fixed at 590 °C) a warm fit started off it
+/// by more than a small step converges to a far worse local optimum (Δ ≈ 83 instead of
+/// 0.02), so the step never grew and the side ran out of points.
+fn tangent_start(ctx: &Context, last: &[f64], before: &[f64], ds: f64, dn: f64) -> Vec<f64> {
+    if ds.abs() < 1e-15 {
+        return last.to_vec();
+    }
+    let a = ctx.space.to_unit(last);
+    let b = ctx.space.to_unit(before);
+    let u: Vec<f64> = a
+        .iter()
+        .zip(&b)
+        .map(|(&ua, &ub)| (ua + (ua - ub) * dn / ds).clamp(0.0, 1.0))
+        .collect();
+    let mut x = last.to_vec();
+    ctx.space.from_unit(&u, &mut x);
+    x
 }
 
 /// The (coord, Δ) sequence of a side, starting with the optimum.
