@@ -14,7 +14,9 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 sed "s#\.\./data/#$PWD/data/#" configs/560C.toml > "$tmp/560.toml"
 printf '\n[profile]\npredict_stress_MPa = [70]\n' >> "$tmp/560.toml"
-field() { grep -o "\"$1\": [0-9.e-]*" "$tmp/out/summary.json" | head -1 | awk '{printf "%.2f", $2}'; }
+# A phase's seconds, read inside "timings_s" ("calibration" and "combinations" are also
+# top-level keys of summary.json holding other things).
+field() { sed -n '/"timings_s"/,/}/p' "$tmp/out/summary.json" | grep -o "\"$1\": [0-9.e-]*" | head -1 | awk '{printf "%.2f", $2}'; }
 for i in $(seq "$runs"); do
     start=$(date +%s.%N)
     ./target/release/creepfit profile "$tmp/560.toml" --threads 2 --out "$tmp/out" > /dev/null
