@@ -163,6 +163,10 @@ pub enum Command {
         /// configuration's [predict] at).
         #[arg(long, allow_hyphen_values = true)]
         at: Option<String>,
+        /// Add the 95 % prediction interval of a new test and the 95 % confidence interval
+        /// of the model's prediction (profile likelihood) to predictions.csv.
+        #[arg(long)]
+        intervals: bool,
         /// Output folder (default results/<name>/predict/).
         #[arg(long)]
         out: Option<PathBuf>,
@@ -260,6 +264,7 @@ pub fn run(cli: Cli) -> Result<()> {
             config,
             constants,
             at,
+            intervals,
             out,
         } => {
             let at = at
@@ -270,6 +275,7 @@ pub fn run(cli: Cli) -> Result<()> {
                 .transpose()?;
             let cli = Overrides {
                 predict_at: at,
+                predict_intervals: intervals.then_some(true),
                 ..out_only(out)
             };
             predict_cmd(&config, &constants, &cli)
@@ -884,9 +890,24 @@ fn predict_cmd(config: &Path, constants: &Path, cli: &Overrides) -> Result<()> {
     let params = tables::read_constants(constants, model.as_ref())?;
     let out = cfg.out_dir("predict");
     let _lock = lock_folder(&out)?;
-    let run = crate::predict::predict(&cfg, &data, model.as_ref(), &params, &cfg.predict.at);
+    let mut run = crate::predict::predict(&cfg, &data, model.as_ref(), &params, &cfg.predict.at);
     for n in crate::predict::extrapolation_notes(&data, &cfg.predict.at) {
         eprintln!("warning: {n}");
+    }
+    if cfg.predict.intervals {
+        let loads: Vec<crate::model::Load> = cfg
+            .predict
+            .at
+            .iter()
+            .map(|c| crate::model::Load::new(c.stress_mpa, c.temperature_c, cfg.objective.omega_f))
+            .collect();
+        run.intervals = Some(crate::uncertainty::predict::intervals_at(
+            &cfg,
+            model.as_ref(),
+            &data,
+            &params,
+            &loads,
+        )?);
     }
     println!("{}: model {}", cfg.name, model.name());
     print!("{}", crate::predict::table(&run));

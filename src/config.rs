@@ -416,6 +416,11 @@ pub struct PredictConfig {
     pub at: Vec<Condition>,
     /// Degree of the Larson–Miller master curve in log10 σ. Default 2.
     pub lmp_degree: usize,
+    /// Intervals beside each prediction (`--intervals`): the 95 % prediction interval of a
+    /// new test and the 95 % confidence interval of the model's prediction, from the profile
+    /// likelihood under the error model (README, "How sure"). Default false.
+    #[serde(default)]
+    pub intervals: bool,
 }
 
 impl Default for PredictConfig {
@@ -423,6 +428,7 @@ impl Default for PredictConfig {
         PredictConfig {
             at: Vec::new(),
             lmp_degree: crate::lmp::DEFAULT_DEGREE,
+            intervals: false,
         }
     }
 }
@@ -433,6 +439,7 @@ struct RawPredict {
     #[serde(default)]
     at: Vec<String>,
     lmp_degree: Option<usize>,
+    intervals: Option<bool>,
 }
 
 /// `[profile]`: the profile likelihoods, intervals and prediction intervals of
@@ -543,6 +550,8 @@ pub struct Overrides {
     pub diagnose: DiagnoseOverrides,
     /// `--at`: conditions of `predict`, replacing `[predict] at`.
     pub predict_at: Option<Vec<Condition>>,
+    /// `--intervals`: intervals beside `predict`'s predictions, over `[predict] intervals`.
+    pub predict_intervals: Option<bool>,
     /// Where and how to run (never part of the identity).
     pub run: RunOptions,
 }
@@ -1049,6 +1058,10 @@ impl RunConfig {
                         .collect::<std::result::Result<_, _>>()?,
                 },
                 lmp_degree: raw.predict.lmp_degree.unwrap_or(crate::lmp::DEFAULT_DEGREE),
+                intervals: cli
+                    .predict_intervals
+                    .or(raw.predict.intervals)
+                    .unwrap_or(false),
             },
             profile: raw.profile,
             run: cli.run.clone(),
@@ -1643,6 +1656,7 @@ rtol = 1e-8
                 ..DiagnoseOverrides::default()
             },
             predict_at: None,
+            predict_intervals: None,
             run: RunOptions {
                 out: Some("o".into()),
                 threads: Some(1),

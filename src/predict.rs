@@ -105,7 +105,57 @@ pub struct PredictRun {
     pub lmp: std::result::Result<LarsonMiller, String>,
     /// Names of the model's output columns (H, Phi, omega for KHD).
     pub output_names: Vec<&'static str>,
+    /// Intervals per condition under `--intervals` ([`crate::uncertainty::predict::intervals_at`]).
+    pub intervals: Option<Vec<crate::uncertainty::predict::ConditionIntervals>>,
 }
+
+/// `predictions.csv`'s interval columns under `--intervals`, with the quantity and interval
+/// each reads: the 95 % prediction interval of a new test (`_lo95`/`_hi95`), then the 95 %
+/// confidence interval of the model's prediction (`_conf_lo95`/`_conf_hi95`).
+pub const INTERVAL_COLUMNS: [(&str, &str, bool, bool); 12] = [
+    ("rupture_time_lo95_h", "rupture_time_h", false, false),
+    ("rupture_time_hi95_h", "rupture_time_h", false, true),
+    (
+        "rupture_strain_lo95_pct",
+        "rupture_strain_pct",
+        false,
+        false,
+    ),
+    ("rupture_strain_hi95_pct", "rupture_strain_pct", false, true),
+    (
+        "min_rate_lo95_pct_per_h",
+        "min_rate_pct_per_h",
+        false,
+        false,
+    ),
+    ("min_rate_hi95_pct_per_h", "min_rate_pct_per_h", false, true),
+    ("rupture_time_conf_lo95_h", "rupture_time_h", true, false),
+    ("rupture_time_conf_hi95_h", "rupture_time_h", true, true),
+    (
+        "rupture_strain_conf_lo95_pct",
+        "rupture_strain_pct",
+        true,
+        false,
+    ),
+    (
+        "rupture_strain_conf_hi95_pct",
+        "rupture_strain_pct",
+        true,
+        true,
+    ),
+    (
+        "min_rate_conf_lo95_pct_per_h",
+        "min_rate_pct_per_h",
+        true,
+        false,
+    ),
+    (
+        "min_rate_conf_hi95_pct_per_h",
+        "min_rate_pct_per_h",
+        true,
+        true,
+    ),
+];
 
 /// Dense time grid from 0 to `t_end` (h), refined towards the end of life.
 pub fn dense_grid(t_end: f64, n: usize) -> Vec<f64> {
@@ -189,6 +239,7 @@ pub fn predict(
         predictions,
         lmp,
         output_names: model.output_names(),
+        intervals: None,
     }
 }
 
@@ -221,6 +272,27 @@ pub fn table(run: &PredictRun) -> String {
                 format!("  ({})", p.outcome.as_str())
             }
         ));
+    }
+    if let Some(iv) = &run.intervals {
+        s.push_str(
+            "95 % intervals (maximum-likelihood fit from these constants, error model of README \"How sure\"): \
+             prediction interval of a NEW TEST (adds the scatter between specimens) | confidence interval of the model's prediction\n",
+        );
+        for (p, c) in run.predictions.iter().zip(iv) {
+            for q in &c.quantities {
+                s.push_str(&format!(
+                    "{:>6} {:>8} | {:<19} {:.5e} | new test [{:.5e}, {:.5e}] | model [{:.5e}, {:.5e}]\n",
+                    p.condition.temperature_c,
+                    p.condition.stress_mpa,
+                    q.quantity,
+                    q.value,
+                    q.pred_lo95,
+                    q.pred_hi95,
+                    q.conf_lo95,
+                    q.conf_hi95
+                ));
+            }
+        }
     }
     match &run.lmp {
         Ok(l) => s.push_str(&format!(
@@ -277,27 +349,40 @@ pub fn write_outputs(
     let rows: Vec<Vec<String>> = run
         .predictions
         .iter()
-        .map(|p| {
-            vec![
+        .enumerate()
+        .map(|(k, p)| {
+            let mut row = vec![
                 num(p.condition.temperature_c),
                 num(p.condition.stress_mpa),
                 num(p.rupture_time_h),
                 num(100.0 * p.rupture_strain),
                 num(100.0 * p.min_rate),
-            ]
+            ];
+            if let Some(iv) = &run.intervals {
+                for (_, q, conf, hi) in INTERVAL_COLUMNS {
+                    let v = iv[k].get(q).map_or(f64::NAN, |i| match (conf, hi) {
+                        (false, false) => i.pred_lo95,
+                        (false, true) => i.pred_hi95,
+                        (true, false) => i.conf_lo95,
+                        (true, true) => i.conf_hi95,
+                    });
+                    row.push(num(v));
+                }
+            }
+            row
         })
         .collect();
-    write_csv(
-        &out.join("predictions.csv"),
-        &[
-            "temperature_C",
-            "stress_MPa",
-            "rupture_time_h",
-            "rupture_strain_pct",
-            "min_rate_pct_per_h",
-        ],
-        &rows,
-    )?;
+    let mut header = vec![
+        "temperature_C",
+        "stress_MPa",
+        "rupture_time_h",
+        "rupture_strain_pct",
+        "min_rate_pct_per_h",
+    ];
+    if run.intervals.is_some() {
+        header.extend(INTERVAL_COLUMNS.iter().map(|c| c.0));
+    }
+    write_csv(&out.join("predictions.csv"), &header, &rows)?;
     let lmp_rows: Vec<Vec<String>> = run
         .predictions
         .iter()

@@ -205,6 +205,76 @@ fn predict_at_tested_conditions_equals_simulate_and_keeps_the_contract() {
     assert_eq!(e.trim().lines().count(), 1, "{e}");
 }
 
+/// `predict --intervals` on the 560 °C data (constants near its maximum-likelihood
+/// optimum): the contract's five columns, then the 95 % prediction interval of a new test and
+/// the 95 % confidence interval of the model's prediction for each quantity; every interval
+/// ordered around the prediction, the new-test interval containing the model's, the rupture
+/// time at an untested 70 MPa longer and its interval above the 85 MPa one's lower end; the
+/// printout says which interval is which. Without the flag the columns stay five.
+#[test]
+fn predict_intervals_add_their_columns() {
+    let tmp = TempDir::new().unwrap();
+    let c = tmp.path().join("c.csv");
+    std::fs::write(
+        &c,
+        "name,value\nA,1.023e-10\nB,0.11506\nHstar,0.4\nh,12261.7\nKc,2.7764e-5\nC,5.7764\n",
+    )
+    .unwrap();
+    let out = tmp.path().join("out");
+    let args = [
+        "predict",
+        "configs/560C.toml",
+        "--constants",
+        c.to_str().unwrap(),
+        "--at",
+        "560:70,560:85",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    let plain = csv(&{
+        ok(&args);
+        out.join("predictions.csv")
+    });
+    assert_eq!(plain[0].len(), 5);
+    let mut with = args.to_vec();
+    with.push("--intervals");
+    let stdout = ok(&with);
+    assert!(
+        stdout.contains("NEW TEST") && stdout.contains("confidence interval"),
+        "{stdout}"
+    );
+    let rows = csv(&out.join("predictions.csv"));
+    let mut want: Vec<&str> = plain[0].iter().map(String::as_str).collect();
+    want.extend([
+        "rupture_time_lo95_h",
+        "rupture_time_hi95_h",
+        "rupture_strain_lo95_pct",
+        "rupture_strain_hi95_pct",
+        "min_rate_lo95_pct_per_h",
+        "min_rate_hi95_pct_per_h",
+        "rupture_time_conf_lo95_h",
+        "rupture_time_conf_hi95_h",
+        "rupture_strain_conf_lo95_pct",
+        "rupture_strain_conf_hi95_pct",
+        "min_rate_conf_lo95_pct_per_h",
+        "min_rate_conf_hi95_pct_per_h",
+    ]);
+    assert_eq!(rows[0], want);
+    assert_eq!(rows.len(), 3);
+    let f = |r: &[String], k: usize| -> f64 { r[k].parse().unwrap() };
+    for r in &rows[1..] {
+        // (value column, new-test lo/hi, model lo/hi)
+        for (v, p, m) in [(2, 5, 11), (3, 7, 13), (4, 9, 15)] {
+            let (val, plo, phi, mlo, mhi) = (f(r, v), f(r, p), f(r, p + 1), f(r, m), f(r, m + 1));
+            assert!(plo <= mlo && mlo < mhi && mhi <= phi, "{r:?}");
+            // The interval's centre is the maximum-likelihood fit from the given constants,
+            // which are rounded values of the optimum: the prediction lies inside.
+            assert!(mlo < val && val < mhi, "{r:?}");
+        }
+    }
+    assert!(f(&rows[1], 2) > f(&rows[2], 2) && f(&rows[1], 11) > f(&rows[2], 11));
+}
+
 #[test]
 fn bad_conditions_are_one_line_errors() {
     let tmp = TempDir::new().unwrap();

@@ -349,3 +349,61 @@ mod tests {
         assert!(percentile95(&[1.0, f64::NAN]).0.is_nan());
     }
 }
+
+/// What `creepfit predict --intervals` adds at each condition: the maximum-likelihood
+/// reference it rests on and the intervals of the three predicted quantities.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ConditionIntervals {
+    /// The intervals ([`prediction_intervals`]); a quantity that cannot be predicted is left
+    /// out.
+    pub quantities: Vec<PredictedInterval>,
+}
+
+impl ConditionIntervals {
+    /// The interval of `quantity` (`rupture_time_h`, …), if it could be computed.
+    pub fn get(&self, quantity: &str) -> Option<&PredictedInterval> {
+        self.quantities.iter().find(|q| q.quantity == quantity)
+    }
+}
+
+/// Intervals at untested conditions for `predict --intervals`: a local maximum-likelihood
+/// fit from `params` under the error model (as `profile --constants`), thresholds calibrated
+/// as `profile` does (`[profile] calibrate` bootstrap replicates over the rupture times at
+/// the conditions; plain χ² with 0), then [`prediction_intervals`] at each `load`.
+pub fn intervals_at(
+    cfg: &crate::config::RunConfig,
+    model: &dyn crate::model::Model,
+    data: &crate::data::Dataset,
+    params: &[f64],
+    loads: &[Load],
+) -> crate::error::Result<Vec<ConditionIntervals>> {
+    let ctx = super::report::context(cfg, model, data);
+    let f = ctx.fit(&ctx.space, params, false);
+    let reference = super::reference_from(&ctx, vec![f])?;
+    let pc = &cfg.profile;
+    let th = if pc.calibrate > 0 {
+        let cons = super::report::calibration_constants(&ctx, &reference);
+        let qs: Vec<(String, Quantity)> = loads
+            .iter()
+            .map(|l| {
+                (
+                    format!("rupture time at {} MPa", l.stress_mpa),
+                    Quantity::Prediction {
+                        load: *l,
+                        what: Predicted::LnRuptureTime,
+                    },
+                )
+            })
+            .collect();
+        let cal = super::calibrate::bartlett(&ctx, &reference, &cons, &qs, pc.calibrate, pc.seed);
+        Thresholds::chi2(cal.factor)
+    } else {
+        Thresholds::chi2(1.0)
+    };
+    Ok(loads
+        .iter()
+        .map(|l| ConditionIntervals {
+            quantities: prediction_intervals(&ctx, &reference, l, &th),
+        })
+        .collect())
+}
