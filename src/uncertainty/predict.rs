@@ -350,8 +350,8 @@ mod tests {
     }
 }
 
-/// What `creepfit predict --intervals` adds at each condition: the maximum-likelihood
-/// reference it rests on and the intervals of the three predicted quantities.
+/// What `creepfit predict --intervals` adds at one condition: the intervals of the three
+/// predicted quantities.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ConditionIntervals {
     /// The intervals ([`prediction_intervals`]); a quantity that cannot be predicted is left
