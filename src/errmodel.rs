@@ -258,29 +258,23 @@ impl ErrorModel {
     /// Maximum-likelihood estimate from residuals; the rupture-time scatter is the root mean
     /// square of the log lifetime residuals, not below `lifetime_sd_floor`.
     pub fn estimate(res: &Residuals, lifetime_sd_floor: f64) -> ErrorModel {
-        let strain = res.strain.iter().map(|e| Ar1::estimate(e)).collect();
-        let l: Vec<f64> = res.lifetime.iter().flatten().copied().collect();
-        let rms = if l.is_empty() {
-            0.0
-        } else {
-            (l.iter().map(|v| v * v).sum::<f64>() / l.len() as f64).sqrt()
-        };
         ErrorModel {
-            strain,
-            lifetime_sd: rms.max(lifetime_sd_floor),
+            strain: res.strain.iter().map(|e| Ar1::estimate(e)).collect(),
+            lifetime_sd: lifetime_scatter(res, lifetime_sd_floor),
         }
     }
 
     /// As [`ErrorModel::estimate`] with every curve's reading error white (φ = 0): the first
     /// stage of a maximum-likelihood fit, where a smooth misfit is still seen as misfit.
     pub fn estimate_white(res: &Residuals, lifetime_sd_floor: f64) -> ErrorModel {
-        let mut m = ErrorModel::estimate(res, lifetime_sd_floor);
-        for (a, e) in m.strain.iter_mut().zip(&res.strain) {
-            let n = e.len().max(1) as f64;
-            let ms = e.iter().map(|v| v * v).sum::<f64>() / n;
-            *a = Ar1::white(ms.sqrt().max(SIGMA_FLOOR));
+        let white = |e: &Vec<f64>| {
+            let ms = e.iter().map(|v| v * v).sum::<f64>() / e.len().max(1) as f64;
+            Ar1::white(ms.sqrt().max(SIGMA_FLOOR))
+        };
+        ErrorModel {
+            strain: res.strain.iter().map(white).collect(),
+            lifetime_sd: lifetime_scatter(res, lifetime_sd_floor),
         }
-        m
     }
 
     /// Exact −2 ln L of `res` under this model (strain and lifetime parts).
@@ -317,6 +311,17 @@ impl ErrorModel {
             .sum();
         s + res.lifetime.iter().flatten().count() as f64
     }
+}
+
+/// Root mean square of the log lifetime residuals, not below `floor`.
+fn lifetime_scatter(res: &Residuals, floor: f64) -> f64 {
+    let l: Vec<f64> = res.lifetime.iter().flatten().copied().collect();
+    let rms = if l.is_empty() {
+        0.0
+    } else {
+        (l.iter().map(|v| v * v).sum::<f64>() / l.len() as f64).sqrt()
+    };
+    rms.max(floor)
 }
 
 #[cfg(test)]
