@@ -52,16 +52,20 @@ fn main() {
         errors
     );
     md += &table_md(&rows);
-    let factors: Vec<f64> = results
-        .iter()
-        .map(|r| r.factor)
-        .filter(|f| f.is_finite())
-        .collect();
-    if !factors.is_empty() {
-        let mut f = factors.clone();
+    for (label, get) in [
+        (
+            "constants",
+            (|r| r.factor) as fn(&creepfit::uncertainty::coverage::SetCoverage) -> f64,
+        ),
+        ("predictions", |r| r.prediction_factor),
+    ] {
+        let mut f: Vec<f64> = results.iter().map(get).filter(|f| f.is_finite()).collect();
+        if f.is_empty() {
+            continue;
+        }
         f.sort_by(|a, b| a.total_cmp(b));
         md += &format!(
-            "\nCalibration factor: median {:.3}, 10 % {:.3}, 90 % {:.3}.\n",
+            "\nCalibration factor of the {label}: median {:.3}, 10 % {:.3}, 90 % {:.3}.\n",
             f[f.len() / 2],
             f[f.len() / 10],
             f[(9 * f.len()) / 10]

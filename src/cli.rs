@@ -185,6 +185,11 @@ pub enum Command {
         /// Seed of the starts (default: [sweep] seed).
         #[arg(long)]
         seed: Option<u64>,
+        /// Add the 95 % intervals of each held-out rupture time (prediction interval of a new
+        /// test, confidence interval of the model's prediction) from the training data, and
+        /// count the measured lives inside (default: [predict] intervals).
+        #[arg(long)]
+        intervals: bool,
         /// Output folder (default results/<name>/holdout-<T>C/).
         #[arg(long)]
         out: Option<PathBuf>,
@@ -285,11 +290,13 @@ pub fn run(cli: Cli) -> Result<()> {
             temperature,
             starts,
             seed,
+            intervals,
             out,
         } => {
             let cli = Overrides {
                 starts,
                 seed,
+                predict_intervals: intervals.then_some(true),
                 ..out_only(out)
             };
             crate::holdout::holdout_cmd(&config, temperature, &cli)

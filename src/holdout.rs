@@ -14,6 +14,7 @@ use crate::data::{Curve, Dataset};
 use crate::error::{Error, Result};
 use crate::fit::{run_fit_multistart, FitRun};
 use crate::lmp::LarsonMiller;
+use crate::model::Load;
 use crate::objective::{mean_abs, Objective};
 use crate::output::lock_folder;
 use crate::report::plot::{plot_creep_curves, plot_xy, AxisScale, XyAxes, XyGroup};
@@ -34,6 +35,27 @@ pub struct HeldOut {
     pub lmp_rupture_time_h: f64,
     /// RMS of (predicted − measured strain) / rupture strain over the measured points, %.
     pub curve_rms_pct: f64,
+    /// Under `--intervals`: the rupture time's 95 % intervals at this test's load from the
+    /// training data ([`crate::uncertainty::predict::intervals_at`]), or none.
+    pub interval: Option<RuptureInterval>,
+}
+
+/// The 95 % intervals of a held-out test's rupture time, h.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RuptureInterval {
+    /// Prediction at the maximum-likelihood constants the intervals were computed from.
+    pub value_h: f64,
+    /// Prediction interval of a new test (adds the specimen scatter).
+    pub pred95: (f64, f64),
+    /// Confidence interval of the model's prediction.
+    pub conf95: (f64, f64),
+}
+
+impl RuptureInterval {
+    /// Whether the measured rupture time lies in the prediction interval of a new test.
+    pub fn contains(&self, t_h: f64) -> bool {
+        self.pred95.0 <= t_h && t_h <= self.pred95.1
+    }
 }
 
 impl HeldOut {
@@ -72,6 +94,16 @@ impl Holdout {
                 .collect::<Vec<_>>(),
         )
     }
+    /// Under `--intervals`: (measured lives inside the 95 % prediction interval of a new test,
+    /// tests with an interval).
+    pub fn inside_pred95(&self) -> (usize, usize) {
+        let with: Vec<&HeldOut> = self.tests.iter().filter(|t| t.interval.is_some()).collect();
+        let inside = with
+            .iter()
+            .filter(|t| t.interval.is_some_and(|i| i.contains(t.rupture_time_h)))
+            .count();
+        (inside, with.len())
+    }
     /// The baseline's.
     pub fn lmp_mean_abs_log10(&self) -> f64 {
         mean_abs(
@@ -84,8 +116,14 @@ impl Holdout {
     }
 }
 
-/// Fit `cfg` on the curves of `data` not at `temperature_c`, predict those at it.
-pub fn holdout(cfg: &RunConfig, data: &Dataset, temperature_c: f64) -> Result<Holdout> {
+/// Fit `cfg` on the curves of `data` not at `temperature_c`, predict those at it; with
+/// `intervals`, also the 95 % intervals of each held-out rupture time from the training data.
+pub fn holdout(
+    cfg: &RunConfig,
+    data: &Dataset,
+    temperature_c: f64,
+    intervals: bool,
+) -> Result<Holdout> {
     if !cfg.has_laws() {
         return Err(Error::config(
             &cfg.path,
@@ -127,6 +165,38 @@ pub fn holdout(cfg: &RunConfig, data: &Dataset, temperature_c: f64) -> Result<Ho
         settings.objective(),
     )
     .evaluate(&best.params);
+    // One interval per distinct held-out stress (replicates share it).
+    let mut stresses: Vec<f64> = test
+        .iter()
+        .filter(|c| c.rupture_time_h.is_some())
+        .map(|c| c.stress_mpa)
+        .collect();
+    stresses.sort_by(f64::total_cmp);
+    stresses.dedup();
+    let by_stress: Vec<Option<RuptureInterval>> = if intervals {
+        let loads: Vec<Load> = stresses
+            .iter()
+            .map(|&s| Load::new(s, temperature_c, cfg.objective.omega_f))
+            .collect();
+        crate::uncertainty::predict::intervals_at(
+            cfg,
+            fit.model.as_ref(),
+            &train_data,
+            &best.params,
+            &loads,
+        )?
+        .iter()
+        .map(|ci| {
+            ci.get("rupture_time_h").map(|q| RuptureInterval {
+                value_h: q.value,
+                pred95: (q.pred_lo95, q.pred_hi95),
+                conf95: (q.conf_lo95, q.conf_hi95),
+            })
+        })
+        .collect()
+    } else {
+        vec![None; stresses.len()]
+    };
     let tests = test
         .iter()
         .zip(&eval.curves)
@@ -145,6 +215,10 @@ pub fn holdout(cfg: &RunConfig, data: &Dataset, temperature_c: f64) -> Result<Ho
                     .as_ref()
                     .map_or(f64::NAN, |l| l.rupture_time(c.temperature_c, c.stress_mpa)),
                 curve_rms_pct: 100.0 * (ss / n as f64).sqrt(),
+                interval: stresses
+                    .iter()
+                    .position(|&s| s == c.stress_mpa)
+                    .and_then(|k| by_stress[k]),
             }
         })
         .collect();
@@ -182,11 +256,45 @@ pub fn table(h: &Holdout) -> String {
         h.model_mean_abs_log10(),
         h.lmp_mean_abs_log10()
     ));
+    let (inside, with) = h.inside_pred95();
+    if with > 0 {
+        s.push_str("95 % intervals of the rupture time from the training data (maximum-likelihood fit, error model of README \"How sure\"): prediction interval of a NEW TEST | confidence interval of the model's prediction\n");
+        for t in &h.tests {
+            if let Some(i) = t.interval {
+                s.push_str(&format!(
+                    "{:>6} {:>9} | measured {:>11.1} | new test [{:.1}, {:.1}] {} | model {:.1} [{:.1}, {:.1}]\n",
+                    t.stress_mpa,
+                    t.specimen.as_deref().unwrap_or("-"),
+                    t.rupture_time_h,
+                    i.pred95.0,
+                    i.pred95.1,
+                    if i.contains(t.rupture_time_h) { "inside " } else { "OUTSIDE" },
+                    i.value_h,
+                    i.conf95.0,
+                    i.conf95.1
+                ));
+            }
+        }
+        s.push_str(&format!(
+            "measured lives inside the 95 % prediction interval of a new test: {inside} of {with}\n"
+        ));
+    }
     if let Err(e) = &h.lmp {
         s.push_str(&format!("no Larson–Miller baseline: {e}\n"));
     }
     s
 }
+
+/// `holdout.csv`'s columns under `--intervals` (after `curve_rms_pct`): the 95 % prediction
+/// interval of a new test, the 95 % confidence interval of the model's prediction, and the
+/// prediction at the maximum-likelihood constants both were computed from (h).
+pub const INTERVAL_COLUMNS: [&str; 5] = [
+    "rupture_time_lo95_h",
+    "rupture_time_hi95_h",
+    "rupture_time_conf_lo95_h",
+    "rupture_time_conf_hi95_h",
+    "ml_rupture_time_h",
+];
 
 /// `creepfit holdout`: run, print, write `holdout.csv`, `constants.csv`, `summary.json`,
 /// `curves.png` and `parity.png`.
@@ -194,7 +302,8 @@ pub fn holdout_cmd(config: &Path, temperature_c: f64, cli: &Overrides) -> Result
     let (cfg, data) = crate::cli::load(config, cli)?;
     let out = cfg.out_dir(&format!("holdout-{temperature_c}C"));
     let _lock = lock_folder(&out)?;
-    let h = holdout(&cfg, &data, temperature_c)?;
+    let h = holdout(&cfg, &data, temperature_c, cfg.predict.intervals)?;
+    let with_intervals = h.tests.iter().any(|t| t.interval.is_some());
     let best = &h.fit.fits[h.fit.best];
     let specimens = h.tests.iter().any(|t| t.specimen.is_some());
     let rows: Vec<Vec<String>> = h
@@ -211,13 +320,24 @@ pub fn holdout_cmd(config: &Path, temperature_c: f64, cli: &Overrides) -> Result
                 num(t.lmp_log10_err()),
                 num(t.curve_rms_pct),
             ];
+            if with_intervals {
+                let i = t.interval;
+                let f = |g: fn(&RuptureInterval) -> f64| num(i.as_ref().map_or(f64::NAN, g));
+                r.extend([
+                    f(|i| i.pred95.0),
+                    f(|i| i.pred95.1),
+                    f(|i| i.conf95.0),
+                    f(|i| i.conf95.1),
+                    f(|i| i.value_h),
+                ]);
+            }
             if specimens {
                 r.push(t.specimen.clone().unwrap_or_default());
             }
             r
         })
         .collect();
-    let header = [
+    let mut header = vec![
         "temperature_C",
         "stress_MPa",
         "rupture_time_h",
@@ -227,6 +347,9 @@ pub fn holdout_cmd(config: &Path, temperature_c: f64, cli: &Overrides) -> Result
         "lmp_log10_err",
         "curve_rms_pct",
     ];
+    if with_intervals {
+        header.extend(INTERVAL_COLUMNS);
+    }
     write_csv(
         &out.join("holdout.csv"),
         &tables::with_specimen(&header, specimens),
@@ -239,6 +362,10 @@ pub fn holdout_cmd(config: &Path, temperature_c: f64, cli: &Overrides) -> Result
         &best.params,
         cfg.t_ref,
     )?;
+    let inside_pred95 = {
+        let (inside, with) = h.inside_pred95();
+        json!({"inside": inside, "tests": with})
+    };
     let summary = json!({
         "held_out_temperature_C": h.temperature_c,
         "model": h.fit.model.name(),
@@ -251,6 +378,7 @@ pub fn holdout_cmd(config: &Path, temperature_c: f64, cli: &Overrides) -> Result
         "tests": h.tests.len(),
         "model_mean_abs_log10_err": jnum(h.model_mean_abs_log10()),
         "lmp_mean_abs_log10_err": jnum(h.lmp_mean_abs_log10()),
+        "inside_pred95": inside_pred95,
         "mean_curve_rms_pct": jnum(mean_abs(&h.tests.iter().map(|t| t.curve_rms_pct).collect::<Vec<_>>())),
         "larson_miller": match &h.lmp {
             Ok(l) => json!(l),

@@ -424,6 +424,26 @@ pub fn write_outputs(
         })
     });
     write_csv_rows(&out.join("curves.csv"), &header, curve_rows)?;
+    if let Some(iv) = &run.intervals {
+        let rows: Vec<Vec<String>> = run
+            .predictions
+            .iter()
+            .zip(iv)
+            .flat_map(|(p, ci)| {
+                ci.band.iter().map(move |b| {
+                    vec![
+                        num(p.condition.temperature_c),
+                        num(p.condition.stress_mpa),
+                        num(b.time_h),
+                        num(b.strain_pct),
+                        num(b.lo95_pct),
+                        num(b.hi95_pct),
+                    ]
+                })
+            })
+            .collect();
+        write_csv(&out.join("band.csv"), &BAND_COLUMNS, &rows)?;
+    }
     let names: Vec<&str> = model.inner_constants().iter().map(|c| c.name).collect();
     let summary = json!({
         "model": model.name(),
@@ -454,6 +474,18 @@ pub fn write_outputs(
     )?;
     Ok(plots(out, cfg, data, model, params, run))
 }
+
+/// `band.csv`'s columns under `--intervals`: the 95 % confidence band of each predicted curve
+/// (the model's prediction, from the constants' uncertainty; pointwise prediction profile
+/// likelihood) at `[profile] band_points` fractions of its rupture time.
+pub const BAND_COLUMNS: [&str; 6] = [
+    "temperature_C",
+    "stress_MPa",
+    "time_h",
+    "strain_pct",
+    "strain_conf_lo95_pct",
+    "strain_conf_hi95_pct",
+];
 
 /// Most measured points a plot draws per curve.
 const PLOT_POINTS: usize = 2000;
@@ -513,6 +545,58 @@ fn plots(
         &curves,
     ) {
         failures.push(e.to_string());
+    }
+    // 1b. Under --intervals: each predicted curve with its 95 % confidence band.
+    if let Some(iv) = &run.intervals {
+        let mut groups = Vec::new();
+        for (k, (p, ci)) in run.predictions.iter().zip(iv).enumerate() {
+            if ci.band.is_empty() {
+                continue;
+            }
+            groups.push(XyGroup {
+                label: p.condition.label(),
+                line: p.curve.iter().map(|(t, e, _)| (*t, 100.0 * e)).collect(),
+                points: vec![],
+                dashed: false,
+                color: Some(k),
+                triangles: false,
+            });
+            for (label, side) in [
+                (format!("{}: 95 % band", p.condition.label()), true),
+                (String::new(), false),
+            ] {
+                groups.push(XyGroup {
+                    label,
+                    line: ci
+                        .band
+                        .iter()
+                        .map(|b| (b.time_h, if side { b.hi95_pct } else { b.lo95_pct }))
+                        .collect(),
+                    points: vec![],
+                    dashed: true,
+                    color: Some(k),
+                    triangles: false,
+                });
+            }
+        }
+        if !groups.is_empty() {
+            if let Err(e) = plot_xy(
+                &out.join("band.png"),
+                &format!(
+                    "{} — predicted curves with the 95 % confidence band of the model's prediction",
+                    cfg.name
+                ),
+                XyAxes {
+                    x_label: "time (h)",
+                    y_label: "creep strain (%)",
+                    x_scale: AxisScale::Linear,
+                    y_scale: AxisScale::Linear,
+                },
+                &groups,
+            ) {
+                failures.push(e.to_string());
+            }
+        }
     }
 
     // Temperatures of the diagrams: the data's and the asked ones.

@@ -273,6 +273,29 @@ fn predict_intervals_add_their_columns() {
         }
     }
     assert!(f(&rows[1], 2) > f(&rows[2], 2) && f(&rows[1], 11) > f(&rows[2], 11));
+    // band.csv: the 95 % confidence band of each predicted curve at 9 times before rupture,
+    // in the order asked, each band around its strain; band.png drawn.
+    let band = csv(&out.join("band.csv"));
+    assert_eq!(
+        band[0],
+        [
+            "temperature_C",
+            "stress_MPa",
+            "time_h",
+            "strain_pct",
+            "strain_conf_lo95_pct",
+            "strain_conf_hi95_pct"
+        ]
+    );
+    assert_eq!(band.len(), 1 + 2 * 9);
+    for (k, r) in band[1..].iter().enumerate() {
+        assert_eq!(r[1], if k < 9 { "70" } else { "85" });
+        let (t, e, lo, hi) = (f(r, 2), f(r, 3), f(r, 4), f(r, 5));
+        let t_r = f(&rows[1 + k / 9], 2);
+        assert!(t > 0.0 && t < t_r * 1.05, "{r:?}");
+        assert!(lo <= e && e <= hi && lo < hi && lo > 0.0, "{r:?}");
+    }
+    assert!(out.join("band.png").exists());
 }
 
 #[test]
@@ -403,6 +426,52 @@ starts = 2
     for f in ["constants.csv", "curves.png", "parity.png"] {
         assert!(out.join(f).exists(), "{f}");
     }
+    // With --intervals: the 95 % intervals of each held-out life from the training data, the
+    // model's inside the new test's, and the count of measured lives inside.
+    let out_i = tmp.path().join("hoi");
+    let stdout = ok(&[
+        "holdout",
+        cfg.to_str().unwrap(),
+        "--temperature",
+        "575",
+        "--intervals",
+        "--out",
+        out_i.to_str().unwrap(),
+    ]);
+    assert!(
+        stdout.contains("inside the 95 % prediction interval of a new test: 2 of 2"),
+        "{stdout}"
+    );
+    let hi = csv(&out_i.join("holdout.csv"));
+    assert_eq!(
+        hi[0][8..],
+        [
+            "rupture_time_lo95_h",
+            "rupture_time_hi95_h",
+            "rupture_time_conf_lo95_h",
+            "rupture_time_conf_hi95_h",
+            "ml_rupture_time_h"
+        ]
+    );
+    for r in &hi[1..] {
+        let v: Vec<f64> = r[8..13].iter().map(|x| x.parse().unwrap()).collect();
+        let measured: f64 = r[2].parse().unwrap();
+        assert!(
+            v[0] <= v[2] && v[2] <= v[4] && v[4] <= v[3] && v[3] <= v[1],
+            "{r:?}"
+        );
+        assert!(v[0] <= measured && measured <= v[1], "{r:?}");
+        // The new test's interval holds at least the 1 % lifetime-scatter floor each side.
+        assert!(
+            v[1] / v[0] >= (2.0 * 1.96 * 0.01f64).exp() * (1.0 - 1e-6),
+            "{r:?}"
+        );
+    }
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out_i.join("summary.json")).unwrap())
+            .unwrap();
+    assert_eq!(s["inside_pred95"]["inside"], 2);
+    assert_eq!(s["inside_pred95"]["tests"], 2);
     // Leaving out a temperature that leaves one to fit is refused.
     let o = creepfit(&[
         "holdout",

@@ -144,6 +144,12 @@ fn profile_writes_its_contract_on_the_seed_data() {
     let th = &summary["thresholds"];
     assert!(th["factor"].as_f64().unwrap() >= 1.0);
     assert!((th["t95"].as_f64().unwrap() / th["factor"].as_f64().unwrap() - 3.8415).abs() < 1e-3);
+    // The predictions' thresholds have their own factor, from the predictions' statistics.
+    let pf = th["prediction_factor"].as_f64().unwrap();
+    assert!(pf >= 1.0);
+    assert!((th["prediction_t95"].as_f64().unwrap() / pf - 3.8415).abs() < 1e-3);
+    let cal = &summary["calibration"];
+    assert_eq!(cal["prediction_factor"].as_f64().unwrap(), pf);
     let pred = &summary["predictions"][0];
     assert_eq!(pred["stress_mpa"], 70.0);
     let q = &pred["quantities"][0];

@@ -7,6 +7,13 @@
 //! rupture times it is larger, and the factor c = mean(T) scales the χ²₁ thresholds
 //! (Bartlett's correction: T/c is χ²₁ to a higher order than T).
 //!
+//! The factor depends on the quantity (Bartlett's b/n is the quantity's own), so the
+//! constants and the predictions get one each: the constants' intervals the mean T of the
+//! constants, the predictions' intervals the mean T of the predictions. Measured (README "How
+//! sure", coverage): one factor pooled over both made the predicted rupture time's 95 %
+//! interval cover in 99.0 % of 200 sets (seeds 81001–81200), while the constants' covered in
+//! 93.5–97 %.
+//!
 //! Replicate k draws from its own random stream ([`replicate_rng`]): the factor does not
 //! depend on the thread count.
 
@@ -25,15 +32,50 @@ const CALIBRATION_STREAM: u64 = 11;
 /// The bootstrap's result.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Calibration {
-    /// Mean of T over every quantity and replicate (the factor before any floor).
+    /// Mean of T over every quantity and replicate.
     pub mean_t: f64,
-    /// The factor applied to the χ²₁ thresholds: max(1, mean T).
+    /// The factor applied to the χ²₁ thresholds of the constants' intervals: max(1, mean T
+    /// over the constants), the pooled mean if no constant was calibrated.
     pub factor: f64,
+    /// The factor of the predictions' intervals: max(1, mean T over the predictions), the
+    /// constants' factor if no prediction was calibrated.
+    pub prediction_factor: f64,
     /// Replicates drawn, and how many of them could not be refitted.
     pub replicates: usize,
     pub failed: usize,
     /// Mean T per quantity (in the order given) and how many replicates it rests on.
     pub per_quantity: Vec<(String, f64, usize)>,
+}
+
+/// The factors from the per-quantity (mean T, replicates) of a calibration whose first
+/// `n_constants` entries are constants and the rest predictions: (the mean T over all, the
+/// constants' factor, the predictions' factor). Each factor is max(1, the mean T over its
+/// group's replicates); an empty group takes the other's (the constants' the pooled mean,
+/// the predictions' the constants' factor); nothing at all gives 1.
+pub fn factors(stats: &[(f64, usize)], n_constants: usize) -> (f64, f64, f64) {
+    let pooled = |range: std::ops::Range<usize>| {
+        let (s, n) = stats[range]
+            .iter()
+            .filter(|(m, n)| m.is_finite() && *n > 0)
+            .fold((0.0, 0usize), |(s, c), (m, n)| (s + m * *n as f64, c + n));
+        if n > 0 {
+            s / n as f64
+        } else {
+            f64::NAN
+        }
+    };
+    let k = n_constants.min(stats.len());
+    let floor = |m: f64| if m.is_finite() { m.max(1.0) } else { 1.0 };
+    let all = pooled(0..stats.len());
+    let cons = pooled(0..k);
+    let factor = floor(if cons.is_finite() { cons } else { all });
+    let preds = pooled(k..stats.len());
+    let prediction_factor = if preds.is_finite() {
+        floor(preds)
+    } else {
+        factor
+    };
+    (all, factor, prediction_factor)
 }
 
 /// Bootstrap `b` replicates and compute T for each constant of `constants` (indices) and
@@ -120,29 +162,60 @@ pub fn bartlett(
         .map(|&j| ctx.names()[j].to_string())
         .chain(quantities.iter().map(|(l, _)| l.clone()))
         .collect();
-    let mut per_quantity = Vec::with_capacity(k);
-    let (mut sum, mut n) = (0.0, 0usize);
-    for (i, l) in labels.into_iter().enumerate() {
-        let v: Vec<f64> = ok.iter().map(|r| r[i]).filter(|v| v.is_finite()).collect();
-        sum += v.iter().sum::<f64>();
-        n += v.len();
-        let m = if v.is_empty() {
-            f64::NAN
-        } else {
-            v.iter().sum::<f64>() / v.len() as f64
-        };
-        per_quantity.push((l, m, v.len()));
-    }
-    let mean_t = if n > 0 { sum / n as f64 } else { f64::NAN };
+    let per_quantity: Vec<(String, f64, usize)> = labels
+        .into_iter()
+        .enumerate()
+        .map(|(i, l)| {
+            let v: Vec<f64> = ok.iter().map(|r| r[i]).filter(|v| v.is_finite()).collect();
+            let m = if v.is_empty() {
+                f64::NAN
+            } else {
+                v.iter().sum::<f64>() / v.len() as f64
+            };
+            (l, m, v.len())
+        })
+        .collect();
+    let stats: Vec<(f64, usize)> = per_quantity.iter().map(|q| (q.1, q.2)).collect();
+    let (mean_t, factor, prediction_factor) = factors(&stats, constants.len());
     Calibration {
         mean_t,
-        factor: if mean_t.is_finite() {
-            mean_t.max(1.0)
-        } else {
-            1.0
-        },
+        factor,
+        prediction_factor,
         replicates: b,
         failed,
         per_quantity,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::factors;
+
+    #[test]
+    fn factors_per_group_as_a_table() {
+        // (per-quantity (mean T, replicates), constants, (mean T, constants', predictions'))
+        type Case<'a> = (&'a [(f64, usize)], usize, (f64, f64, f64));
+        let cases: &[Case] = &[
+            // Each group its own mean, weighted by replicates.
+            (&[(2.0, 10), (1.0, 10), (1.2, 20)], 2, (1.35, 1.5, 1.2)),
+            // A group below 1 is floored at 1.
+            (&[(2.0, 10), (0.6, 10)], 1, (1.3, 2.0, 1.0)),
+            // No predictions: the constants' factor.
+            (&[(1.4, 10), (1.6, 10)], 2, (1.5, 1.5, 1.5)),
+            // No constants: the constants' factor is the pooled one.
+            (&[(1.8, 10)], 0, (1.8, 1.8, 1.8)),
+            // A quantity with no replicate (NaN) counts for nothing.
+            (&[(f64::NAN, 0), (1.3, 10)], 1, (1.3, 1.3, 1.3)),
+            // Nothing: 1 and 1.
+            (&[], 0, (f64::NAN, 1.0, 1.0)),
+        ];
+        for (stats, k, want) in cases {
+            let got = factors(stats, *k);
+            let same = |a: f64, b: f64| (a.is_nan() && b.is_nan()) || (a - b).abs() < 1e-12;
+            assert!(
+                same(got.0, want.0) && same(got.1, want.1) && same(got.2, want.2),
+                "{stats:?} {k}: {got:?} != {want:?}"
+            );
+        }
     }
 }

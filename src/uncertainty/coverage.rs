@@ -63,6 +63,10 @@ impl Default for CoverageSettings {
 /// A (lo, hi) interval.
 pub type Iv = (f64, f64);
 
+fn nan() -> f64 {
+    f64::NAN
+}
+
 /// An f64 that JSON wrote as `null` (NaN, ±∞) reads back as NaN.
 fn de_f64<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<f64, D::Error> {
     Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
@@ -151,6 +155,9 @@ pub struct SetCoverage {
     pub factor: f64,
     #[serde(deserialize_with = "de_f64")]
     pub mean_t: f64,
+    /// Calibration factor of the prediction's thresholds.
+    #[serde(default = "nan", deserialize_with = "de_f64")]
+    pub prediction_factor: f64,
     pub constants: Vec<ConstantCoverage>,
     pub rupture: Option<RuptureCoverage>,
     /// Inner fits of the profiles.
@@ -177,6 +184,7 @@ pub fn run_set(dir: &Path, seed: u64, s: &CoverageSettings) -> SetCoverage {
         points: 0,
         factor: f64::NAN,
         mean_t: f64::NAN,
+        prediction_factor: f64::NAN,
         constants: vec![],
         rupture: None,
         fits: 0,
@@ -234,8 +242,14 @@ fn measure(dir: &Path, seed: u64, s: &CoverageSettings, out: &mut SetCoverage) -
         ..cfg.profile.clone()
     };
     let c = core(&ctx, &cfg, None, &pc, &[load])?;
-    let (reference, th, profiles) = (c.reference, c.thresholds, c.profiles);
+    let (reference, th, pth, profiles) = (
+        c.reference,
+        c.thresholds,
+        c.prediction_thresholds,
+        c.profiles,
+    );
     out.factor = th.factor;
+    out.prediction_factor = pth.factor;
     out.mean_t = c.calibration.as_ref().map_or(f64::NAN, |c| c.mean_t);
     out.restarts = c.restarts;
     let plain = Thresholds::chi2(1.0);
@@ -269,8 +283,8 @@ fn measure(dir: &Path, seed: u64, s: &CoverageSettings, out: &mut SetCoverage) -
 
     // The rupture time at the untested stress.
     if truth_run.ruptured() {
-        let qc = quantity_interval(&ctx, &reference, &q, &th);
-        let qp = if th.factor == 1.0 {
+        let qc = quantity_interval(&ctx, &reference, &q, &pth);
+        let qp = if pth.factor == 1.0 {
             qc.clone()
         } else {
             quantity_interval(&ctx, &reference, &q, &plain)
@@ -391,11 +405,12 @@ pub fn run_coverage(
             }
             if progress {
                 eprintln!(
-                    "{} {} {}: factor {:.2}, {:.1} s{}",
+                    "{} {} {}: factor {:.2} (predictions {:.2}), {:.1} s{}",
                     r.name,
                     r.family,
                     r.sampling,
                     r.factor,
+                    r.prediction_factor,
                     r.wall_s,
                     r.error
                         .as_deref()

@@ -357,6 +357,9 @@ pub struct ConditionIntervals {
     /// The intervals ([`prediction_intervals`]); a quantity that cannot be predicted is left
     /// out.
     pub quantities: Vec<PredictedInterval>,
+    /// The 95 % confidence band of the predicted curve at `[profile] band_points` times
+    /// ([`prediction_band`]); empty if the prediction does not rupture.
+    pub band: Vec<BandPoint>,
 }
 
 impl ConditionIntervals {
@@ -369,7 +372,8 @@ impl ConditionIntervals {
 /// Intervals at untested conditions for `predict --intervals`: a local maximum-likelihood
 /// fit from `params` under the error model (as `profile --constants`), thresholds calibrated
 /// as `profile` does (`[profile] calibrate` bootstrap replicates over the rupture times at
-/// the conditions; plain χ² with 0), then [`prediction_intervals`] at each `load`.
+/// the conditions; plain χ² with 0), then [`prediction_intervals`] and [`prediction_band`]
+/// at each `load`.
 pub fn intervals_at(
     cfg: &crate::config::RunConfig,
     model: &dyn crate::model::Model,
@@ -396,14 +400,18 @@ pub fn intervals_at(
             })
             .collect();
         let cal = super::calibrate::bartlett(&ctx, &reference, &cons, &qs, pc.calibrate, pc.seed);
-        Thresholds::chi2(cal.factor)
+        Thresholds::chi2(cal.prediction_factor)
     } else {
         Thresholds::chi2(1.0)
     };
+    let fractions: Vec<f64> = (1..=pc.band_points)
+        .map(|k| k as f64 / (pc.band_points + 1) as f64)
+        .collect();
     Ok(loads
         .iter()
         .map(|l| ConditionIntervals {
             quantities: prediction_intervals(&ctx, &reference, l, &th),
+            band: prediction_band(&ctx, &reference, l, &fractions, &th),
         })
         .collect())
 }

@@ -729,7 +729,12 @@ fn quantity_side(
                 end: SideEnd::Crossed,
             };
         }
-        let &(fc, fd) = env.last().expect("a point was kept");
+        // Fits that succeeded but all landed on the other side of ĝ (a held quantity the
+        // penalty cannot move, e.g. on noise-free data): no step was made; ask for less.
+        let Some(&(fc, fd)) = env.last() else {
+            target = g_hat + 0.5 * (target - g_hat);
+            continue;
+        };
         let asked = (target - g_hat) * dir - far_before;
         let got = (fc - g_hat) * dir - far_before;
         if fd < th.t95 && asked > 0.0 && got < 0.01 * asked && fd - delta_before < 0.01 * th.t95 {

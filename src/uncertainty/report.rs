@@ -63,8 +63,10 @@ pub struct ProfileRun {
     /// constants), and −2 ln L at the given constants for the latter.
     pub reference_from: String,
     pub given_neg2ll: Option<f64>,
-    /// The thresholds used and the calibration behind them.
+    /// The thresholds of the constants' (and combinations') intervals, those of the
+    /// predictions' intervals, and the calibration behind them.
     pub thresholds: Thresholds,
+    pub prediction_thresholds: Thresholds,
     pub calibration: Option<Calibration>,
     /// Profiles of every constant, model order.
     pub profiles: Vec<ConstantProfile>,
@@ -129,6 +131,7 @@ pub struct Core {
     pub reference_from: String,
     pub given_neg2ll: Option<f64>,
     pub thresholds: Thresholds,
+    pub prediction_thresholds: Thresholds,
     pub calibration: Option<Calibration>,
     pub profiles: Vec<ConstantProfile>,
     pub restarts: usize,
@@ -199,10 +202,17 @@ pub fn core(
                 })
                 .collect();
             let cal = bartlett(ctx, &reference, &cons, &qs, pc.calibrate, pc.seed);
-            (Thresholds::chi2(cal.factor), Some(cal))
+            (
+                (
+                    Thresholds::chi2(cal.factor),
+                    Thresholds::chi2(cal.prediction_factor),
+                ),
+                Some(cal),
+            )
         } else {
-            (Thresholds::chi2(1.0), None)
+            ((Thresholds::chi2(1.0), Thresholds::chi2(1.0)), None)
         };
+        let (th, pth) = th;
         timings.calibration += t1.elapsed().as_secs_f64();
         let t2 = Instant::now();
         let all: Vec<usize> = (0..ctx.space.len()).collect();
@@ -231,6 +241,7 @@ pub fn core(
                     reference_from: from,
                     given_neg2ll,
                     thresholds: th,
+                    prediction_thresholds: pth,
                     calibration: cal,
                     profiles,
                     restarts,
@@ -255,7 +266,12 @@ pub fn run(
     let loads = loads(cfg, data, pc);
     let only: Vec<Load> = loads.iter().map(|l| l.1).collect();
     let c = core(&ctx, cfg, given, pc, &only)?;
-    let (reference, thresholds, mut timings) = (c.reference, c.thresholds, c.timings);
+    let (reference, thresholds, pth, mut timings) = (
+        c.reference,
+        c.thresholds,
+        c.prediction_thresholds,
+        c.timings,
+    );
     let t3 = Instant::now();
     let combinations = well_determined(&ctx, &reference, &c.profiles, &thresholds, 3);
     timings.combinations = t3.elapsed().as_secs_f64();
@@ -266,10 +282,10 @@ pub fn run(
     let mut predictions = Vec::with_capacity(loads.len());
     for (t, l) in &loads {
         let ti = Instant::now();
-        let quantities = prediction_intervals(&ctx, &reference, l, &thresholds);
+        let quantities = prediction_intervals(&ctx, &reference, l, &pth);
         timings.prediction_intervals += ti.elapsed().as_secs_f64();
         let tb = Instant::now();
-        let band = prediction_band(&ctx, &reference, l, &fractions, &thresholds);
+        let band = prediction_band(&ctx, &reference, l, &fractions, &pth);
         timings.bands += tb.elapsed().as_secs_f64();
         predictions.push(LoadPrediction {
             temperature_c: *t,
@@ -285,6 +301,7 @@ pub fn run(
         reference_from: c.reference_from,
         given_neg2ll: c.given_neg2ll,
         thresholds,
+        prediction_thresholds: pth,
         calibration: c.calibration,
         profiles: c.profiles,
         combinations,
@@ -496,6 +513,9 @@ pub fn summary(cfg: &RunConfig, run: &ProfileRun) -> serde_json::Value {
             "t68": jnum(run.thresholds.t68),
             "t95": jnum(run.thresholds.t95),
             "factor": jnum(run.thresholds.factor),
+            "prediction_t68": jnum(run.prediction_thresholds.t68),
+            "prediction_t95": jnum(run.prediction_thresholds.t95),
+            "prediction_factor": jnum(run.prediction_thresholds.factor),
             "chi2_t68": 1.0,
             "chi2_t95": jnum(super::chi2_1(0.95)),
         },
@@ -537,8 +557,8 @@ pub fn report_md(cfg: &RunConfig, run: &ProfileRun) -> String {
     );
     md += &match &run.calibration {
         Some(c) => format!(
-            "Thresholds of Δ(−2 ln L): {:.3} (68 %) and {:.3} (95 %): the χ²₁ quantiles × {:.3}, the mean likelihood-ratio statistic of {} parametric-bootstrap replicates ({} failed) at the fitted values (Bartlett correction; floored at 1).\n\n",
-            th.t68, th.t95, th.factor, c.replicates, c.failed
+            "Thresholds of Δ(−2 ln L): {:.3} (68 %) and {:.3} (95 %) for the constants, {:.3} and {:.3} for the predictions: the χ²₁ quantiles × {:.3} and × {:.3}, the mean likelihood-ratio statistic of the constants' and of the predictions' true values over {} parametric-bootstrap replicates ({} failed) at the fitted values (Bartlett correction; floored at 1).\n\n",
+            th.t68, th.t95, run.prediction_thresholds.t68, run.prediction_thresholds.t95, th.factor, run.prediction_thresholds.factor, c.replicates, c.failed
         ),
         None => format!(
             "Thresholds of Δ(−2 ln L): the χ²₁ quantiles {:.3} (68 %) and {:.3} (95 %), not calibrated.\n\n",
