@@ -389,15 +389,19 @@ starts = 2
 "#,
     )
     .unwrap();
+    // Leave 575 °C out into `out` (with `extra` options): stdout and summary.json.
+    let holdout_575 = |out: &std::path::Path, extra: &[&str]| {
+        let mut args = vec!["holdout", cfg.to_str().unwrap(), "--temperature", "575"];
+        args.extend(extra);
+        args.extend(["--out", out.to_str().unwrap()]);
+        let stdout = ok(&args);
+        let summary: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
+                .unwrap();
+        (stdout, summary)
+    };
     let out = tmp.path().join("ho");
-    let stdout = ok(&[
-        "holdout",
-        cfg.to_str().unwrap(),
-        "--temperature",
-        "575",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let (stdout, s) = holdout_575(&out, &[]);
     assert!(stdout.contains("mean |log10 error|"), "{stdout}");
     let h = csv(&out.join("holdout.csv"));
     assert_eq!(
@@ -418,8 +422,6 @@ starts = 2
         let err: f64 = r[5].parse().unwrap();
         assert!(err.abs() < 1e-3, "held-out log10 error {err}");
     }
-    let s: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(s["tests"], 2);
     assert!(s["model_mean_abs_log10_err"].as_f64().unwrap() < 1e-3);
     assert!(s["lmp_mean_abs_log10_err"].as_f64().is_some());
@@ -429,15 +431,7 @@ starts = 2
     // With --intervals: the 95 % intervals of each held-out life from the training data, the
     // model's inside the new test's, and the count of measured lives inside.
     let out_i = tmp.path().join("hoi");
-    let stdout = ok(&[
-        "holdout",
-        cfg.to_str().unwrap(),
-        "--temperature",
-        "575",
-        "--intervals",
-        "--out",
-        out_i.to_str().unwrap(),
-    ]);
+    let (stdout, s) = holdout_575(&out_i, &["--intervals"]);
     assert!(
         stdout.contains("inside the 95 % prediction interval of a new test: 2 of 2"),
         "{stdout}"
@@ -467,9 +461,6 @@ starts = 2
             "{r:?}"
         );
     }
-    let s: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out_i.join("summary.json")).unwrap())
-            .unwrap();
     assert_eq!(s["inside_pred95"]["inside"], 2);
     assert_eq!(s["inside_pred95"]["tests"], 2);
     // Leaving out a temperature that leaves one to fit is refused.
