@@ -5,6 +5,9 @@
 //!   constants each) and of both together (`configs/cmv-joint.toml`, 2 temperatures × 3
 //!   curves, 8 constants: A and Kc with activation energies). The bound: the joint
 //!   fit costs at most 2.5× a single-temperature one.
+//! - `joint/guess_*`: the computed initial guess alone (the paper's IV.C procedure; for the
+//!   joint configuration per temperature, the laws fitted, then again per temperature with
+//!   the common constants held and the laws fitted once more).
 //! - `joint/local_fit_*_displaced_w1`: the same two fits from their optimum displaced by 0.05
 //!   in every scaled coordinate: the cost of the fit itself, whatever the guess.
 //! - `joint/fit_procedure_*`: the same two as `fit --start guess` does them (the guess, then
@@ -107,6 +110,17 @@ fn bench(c: &mut Criterion) {
             f.lm.iterations, f.lm.evaluations, f.eval.objective
         );
         let stem = name.trim_end_matches(".toml");
+        g.bench_function(format!("guess_{stem}"), |b| {
+            b.iter(|| {
+                initial_guess(
+                    model.as_ref(),
+                    black_box(&data.curves),
+                    &space,
+                    settings.omega_f,
+                    &settings.ode,
+                )
+            })
+        });
         g.bench_function(format!("local_fit_{stem}_from_guess_w1"), |b| {
             b.iter(|| {
                 local_fit(

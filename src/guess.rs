@@ -5,7 +5,9 @@
 //! With constants that follow temperature laws, the guess is made per temperature (the
 //! model's procedure on that temperature's curves, in a box that holds every value the law
 //! can reach there) and each law is then fitted to those per-temperature values
-//! ([`crate::model::law`], e.g. ln c on 1/T for an Arrhenius law).
+//! ([`crate::model::law`], e.g. ln c on 1/T for an Arrhenius law); with several temperatures
+//! the procedure then runs once more per temperature with the constants common to all
+//! temperatures held, and the laws are fitted again ([`per_temperature`]).
 
 use serde::Serialize;
 
@@ -24,7 +26,8 @@ pub enum GuessProcedure {
     /// The model has none: the centre of the box (in the optimiser's scaled coordinates).
     BoxCentre,
     /// The model's procedure per temperature, then each temperature law fitted to the
-    /// per-temperature values.
+    /// per-temperature values (twice with several temperatures: the second time with the
+    /// common constants held).
     PerTemperature,
 }
 
@@ -86,7 +89,10 @@ pub fn initial_guess(
 /// there: the image of the constant's bounds and its law parameter's bounds), then each law
 /// fitted to its constant's per-temperature values ([`LawKind::fit`]: e.g. ln c against
 /// 1/T − 1/T_ref for an Arrhenius law); a held law parameter keeps its value and only c_ref
-/// is fitted. Values outside their bounds are put on them (listed in `clamped`).
+/// is fitted. With several temperatures, a second pass runs `inner`'s procedure again at each
+/// temperature with the constants that follow no law held at the first pass's values, and
+/// fits the laws to those per-temperature values (reported in `per_temperature`). Values
+/// outside their bounds are put on them (listed in `clamped`).
 pub fn per_temperature(
     inner: &dyn Model,
     laws: &Laws,
@@ -115,10 +121,9 @@ pub fn per_temperature(
             (space.fixed[p], space.fixed[p])
         }
     };
-    let mut per_t: Vec<(f64, Vec<f64>)> = Vec::with_capacity(temps.len());
-    let mut min_rates = Vec::new();
-    let mut clamped: Vec<String> = Vec::new();
-    for &t in &temps {
+    // The model's procedure at temperature `t`, with the constants that follow no law held
+    // at `common` when given.
+    let guess_at = |t: f64, common: Option<&[f64]>| -> Guess {
         let t_k = t + ZERO_CELSIUS_K;
         let group: Vec<Curve> = curves
             .iter()
@@ -134,8 +139,19 @@ pub fn per_temperature(
             lb.push(lo);
             ub.push(hi);
         }
-        let t_space = ParamSpace::new(lb, ub, space.scale[..n].to_vec());
-        let g = inner.initial_guess(&group, &t_space, omega_f, ode);
+        let mut t_space = ParamSpace::new(lb, ub, space.scale[..n].to_vec());
+        if let Some(x) = common {
+            for j in (0..n).filter(|&j| laws.param[j].is_none()) {
+                t_space.hold(j, x[j]);
+            }
+        }
+        inner.initial_guess(&group, &t_space, omega_f, ode)
+    };
+    let mut per_t: Vec<(f64, Vec<f64>)> = Vec::with_capacity(temps.len());
+    let mut min_rates = Vec::new();
+    let mut clamped: Vec<String> = Vec::new();
+    for &t in &temps {
+        let g = guess_at(t, None);
         min_rates.extend(g.min_rates.iter().copied());
         for c in g.clamped {
             if !clamped.contains(&c) {
@@ -166,41 +182,64 @@ pub fn per_temperature(
         }
         x[j] = c;
     };
-    for j in 0..n {
-        let values: Vec<f64> = per_t.iter().map(|(_, p)| p[j]).collect();
-        let log = space.scale[j] == Scale::Log;
-        match laws.param[j] {
-            None => {
-                let (c, _) = LawKind::Constant
-                    .fit(&t_k, &values, laws.t_ref_k, Some(0.0), log)
-                    .unwrap_or((f64::NAN, 0.0));
-                put(j, c, &mut x, &mut clamped, specs[j].name);
-            }
-            Some(p) => {
-                let kind = laws.kinds[j];
-                let held = (!space.free[p]).then(|| space.fixed[p]);
-                // One temperature and a free parameter: the parameter from the centre of
-                // its box (it cannot be told from one temperature).
-                let fitted = kind
-                    .fit(&t_k, &values, laws.t_ref_k, held, log)
-                    .or_else(|| {
-                        kind.fit(
-                            &t_k[..1],
-                            &values[..1],
-                            laws.t_ref_k,
-                            Some(held.unwrap_or_else(|| space.from_unit_one(p, 0.5))),
-                            log,
-                        )
-                    });
-                let (c, q) = fitted.unwrap_or((f64::NAN, f64::NAN));
-                put(j, c, &mut x, &mut clamped, specs[j].name);
-                if space.free[p] {
-                    let name =
-                        crate::model::law::param_name(specs[j].name, kind).unwrap_or_default();
-                    put(p, q, &mut x, &mut clamped, &name);
+    // Each constant's law fitted to its per-temperature values (`laws_only`: only the
+    // constants that follow a law).
+    let regress = |per_t: &[(f64, Vec<f64>)],
+                   x: &mut Vec<f64>,
+                   clamped: &mut Vec<String>,
+                   laws_only: bool| {
+        for j in 0..n {
+            let values: Vec<f64> = per_t.iter().map(|(_, p)| p[j]).collect();
+            let log = space.scale[j] == Scale::Log;
+            match laws.param[j] {
+                None if laws_only => {}
+                None => {
+                    let (c, _) = LawKind::Constant
+                        .fit(&t_k, &values, laws.t_ref_k, Some(0.0), log)
+                        .unwrap_or((f64::NAN, 0.0));
+                    put(j, c, x, clamped, specs[j].name);
+                }
+                Some(p) => {
+                    let kind = laws.kinds[j];
+                    let held = (!space.free[p]).then(|| space.fixed[p]);
+                    // One temperature and a free parameter: the parameter from the centre
+                    // of its box (it cannot be told from one temperature).
+                    let fitted = kind
+                        .fit(&t_k, &values, laws.t_ref_k, held, log)
+                        .or_else(|| {
+                            kind.fit(
+                                &t_k[..1],
+                                &values[..1],
+                                laws.t_ref_k,
+                                Some(held.unwrap_or_else(|| space.from_unit_one(p, 0.5))),
+                                log,
+                            )
+                        });
+                    let (c, q) = fitted.unwrap_or((f64::NAN, f64::NAN));
+                    put(j, c, x, clamped, specs[j].name);
+                    if space.free[p] {
+                        let name =
+                            crate::model::law::param_name(specs[j].name, kind).unwrap_or_default();
+                        put(p, q, x, clamped, &name);
+                    }
                 }
             }
         }
+    };
+    regress(&per_t, &mut x, &mut clamped, false);
+    // Second pass, with several temperatures: the constants common to all temperatures are
+    // now one compromise of their per-temperature values, with which the per-temperature
+    // values of the others (e.g. A, fitted with each temperature's own B) no longer agree;
+    // the procedure is run again per temperature with the common constants held, and the
+    // laws fitted to those values. On the seed's 560 + 590 °C data the first pass gave
+    // Q_A = 0 and Q_Kc = 1000 kJ/mol (both on bounds; the fit ends at 598 and 0).
+    if temps.len() > 1 {
+        let common = x.clone();
+        per_t = temps
+            .iter()
+            .map(|&t| (t, guess_at(t, Some(&common)).params))
+            .collect();
+        regress(&per_t, &mut x, &mut clamped, true);
     }
     Guess {
         params: x,

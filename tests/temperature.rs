@@ -328,6 +328,67 @@ fn activation_energies_are_recovered_from_synthetic_curves() {
     }
 }
 
+/// The KHD procedure keeps every held constant and makes the others with it: with B, H*, h
+/// and C held, A is the minimum-rate regression's intercept at S = B(1 − H*) and Kc is
+/// fitted with all of them; nothing held, it is the paper's procedure (A differs).
+#[test]
+fn khd_guess_keeps_held_constants() {
+    use creepfit::model::khd_guess::min_rate_intercept;
+    let khd = build("khd", &[]).unwrap();
+    let at_560: Vec<f64> = khd_at(560.0);
+    let curves = synth(khd.as_ref(), &at_560, &TESTS[..3], 0.0, 5);
+    let mut space = ParamSpace::new(
+        space().lb[..6].to_vec(),
+        space().ub[..6].to_vec(),
+        space().scale[..6].to_vec(),
+    );
+    let free = khd.initial_guess(&curves, &space, OMEGA_F, &tight());
+    let held = [(1, 0.13), (2, 0.55), (3, 1e5), (5, 4.5)];
+    for &(j, v) in &held {
+        space.hold(j, v);
+    }
+    let g = khd.initial_guess(&curves, &space, OMEGA_F, &tight());
+    for &(j, v) in &held {
+        assert_eq!(g.params[j], v, "constant {j}");
+    }
+    let stress: Vec<f64> = curves.iter().map(|c| c.stress_mpa).collect();
+    let ln_rates: Vec<f64> = g.min_rates.iter().map(|r| r.ln()).collect();
+    let ln_a = min_rate_intercept(&stress, &ln_rates, 0.13 * (1.0 - 0.55)).1;
+    assert!(
+        (g.params[0].ln() - ln_a).abs() < 1e-12,
+        "A {} vs {}",
+        g.params[0],
+        ln_a.exp()
+    );
+    assert!((g.params[0] / free.params[0] - 1.0).abs() > 1e-3);
+    assert!(
+        g.params[4] > space.lb[4] && g.params[4] < space.ub[4],
+        "Kc {}",
+        g.params[4]
+    );
+}
+
+/// The truth's KHD constants at `t_c` °C (A and Kc from their Arrhenius laws).
+fn khd_at(t_c: f64) -> Vec<f64> {
+    arrhenius_a_kc().constants_at(&TRUTH, t_c)
+}
+
+/// With several temperatures the guess's second pass holds the constants common to all
+/// temperatures: every per-temperature guess it reports has exactly the guess's B, H*, h
+/// and C.
+#[test]
+fn per_temperature_guess_is_made_with_the_common_constants() {
+    let model = arrhenius_a_kc();
+    let curves = synth(model.as_ref(), &TRUTH, &TESTS, 0.0, 3);
+    let g = model.initial_guess(&curves, &space(), OMEGA_F, &tight());
+    assert_eq!(g.per_temperature.len(), 3);
+    for (t, p) in &g.per_temperature {
+        for j in [1, 2, 3, 5] {
+            assert_eq!(p[j], g.params[j], "{t} °C, constant {j}");
+        }
+    }
+}
+
 /// Largest relative column error of the sensitivity Jacobian against central differences
 /// for `model` at `x` (all constants free in `space`), on curves at three temperatures.
 fn jacobian_errors(model: &dyn Model, space: &ParamSpace, x: &[f64]) -> Vec<f64> {

@@ -35,19 +35,23 @@ const IH: usize = 3;
 const IKC: usize = 4;
 const IC: usize = 5;
 
+/// ln A minimising Σ (ln ε̇_i − ln A − ln sinh(S σ_i))² at a given S (closed form: the mean),
+/// with the sum of squares left: rates in 1/h, stresses in MPa, S in 1/MPa.
+pub fn min_rate_intercept(stress: &[f64], ln_rates: &[f64], s: f64) -> (f64, f64) {
+    let lsh: Vec<f64> = stress.iter().map(|sig| ln_sinh(s * sig)).collect();
+    let ln_a = ln_rates.iter().zip(&lsh).map(|(l, q)| l - q).sum::<f64>() / ln_rates.len() as f64;
+    let c = ln_rates
+        .iter()
+        .zip(&lsh)
+        .map(|(l, q)| (l - ln_a - q).powi(2))
+        .sum::<f64>();
+    (c, ln_a)
+}
+
 /// (A, S) minimising Σ (ln ε̇_i − ln A − ln sinh(S σ_i))² for given rates.
 pub fn fit_min_rates(stress: &[f64], rates: &[f64]) -> (f64, f64) {
     let ln_rates: Vec<f64> = rates.iter().map(|r| r.ln()).collect();
-    let cost = |s: f64| -> (f64, f64) {
-        let lsh: Vec<f64> = stress.iter().map(|sig| ln_sinh(s * sig)).collect();
-        let ln_a = ln_rates.iter().zip(&lsh).map(|(l, q)| l - q).sum::<f64>() / rates.len() as f64;
-        let c = ln_rates
-            .iter()
-            .zip(&lsh)
-            .map(|(l, q)| (l - ln_a - q).powi(2))
-            .sum::<f64>();
-        (c, ln_a)
-    };
+    let cost = |s: f64| min_rate_intercept(stress, &ln_rates, s);
     // Golden-section search on ln S over a wide bracket (S σ from 1e-3 to 100).
     let smax = stress.iter().cloned().fold(0.0, f64::max).max(1e-12);
     let (mut lo, mut hi) = ((1e-3 / smax).ln(), (100.0 / smax).ln());
@@ -83,31 +87,47 @@ fn ln_sinh(x: f64) -> f64 {
     }
 }
 
-/// (H*, h) → constants with A, B from the minimum-rate regression; residuals of the primary
-/// stage of every curve.
+/// The free ones of (H*, h) → constants with A, B from the minimum-rate regression (a held
+/// B fixes S = B(1 − H*) and A is then the regression's intercept at that S; a held A or
+/// B keeps its value); residuals of the primary stage of every curve.
 struct PrimaryProblem<'a> {
     objective: Objective<'a>,
     space: ParamSpace,
     base: Vec<f64>,
     a: f64,
     s: f64,
+    stress: Vec<f64>,
+    ln_rates: Vec<f64>,
+    /// Which of [IHS, IH] the problem moves, in that order.
+    free: Vec<usize>,
 }
 
 impl PrimaryProblem<'_> {
     fn params(&self, u: &[f64]) -> [f64; MAX_PARAMS] {
         let mut x = [0.0; MAX_PARAMS];
         x[..self.base.len()].copy_from_slice(&self.base);
-        x[IHS] = self.space.from_unit_one(IHS, u[0]);
-        x[IH] = self.space.from_unit_one(IH, u[1]);
-        x[IA] = self.a;
-        x[IB] = self.s / (1.0 - x[IHS]);
+        for (k, &j) in self.free.iter().enumerate() {
+            x[j] = self.space.from_unit_one(j, u[k]);
+        }
+        let held = |j: usize| !self.space.free[j];
+        if held(IB) {
+            if !held(IA) {
+                let s = x[IB] * (1.0 - x[IHS]);
+                x[IA] = min_rate_intercept(&self.stress, &self.ln_rates, s).1.exp();
+            }
+        } else {
+            if !held(IA) {
+                x[IA] = self.a;
+            }
+            x[IB] = self.s / (1.0 - x[IHS]);
+        }
         x
     }
 }
 
 impl LeastSquaresProblem for PrimaryProblem<'_> {
     fn n_params(&self) -> usize {
-        2
+        self.free.len()
     }
     fn n_residuals(&self) -> usize {
         self.objective.n_residuals()
@@ -118,7 +138,11 @@ impl LeastSquaresProblem for PrimaryProblem<'_> {
     }
 }
 
-/// Run the procedure for the KHD constants [A, B, H*, h, Kc, C] within `space`.
+/// Run the procedure for the KHD constants [A, B, H*, h, Kc, C] within `space`. A held
+/// constant of `space` keeps its value and every step is made with it: e.g. with B and H*
+/// held, A is the minimum-rate regression's intercept at S = B(1 − H*) (how
+/// [`crate::guess::per_temperature`] makes the per-temperature values of constants that
+/// follow a law consistent with the constants common to all temperatures).
 pub fn initial_guess(
     model: &dyn Model,
     curves: &[Curve],
@@ -128,11 +152,16 @@ pub fn initial_guess(
 ) -> Guess {
     let n = space.len();
     let mid = |j: usize| space.from_unit_one(j, 0.5);
-    let mut x: Vec<f64> = (0..n).map(mid).collect();
+    let held = |j: usize| !space.free[j];
+    let mut x: Vec<f64> = (0..n)
+        .map(|j| if held(j) { space.fixed[j] } else { mid(j) })
+        .collect();
 
     // 1. C from the mean rupture strain.
     let mean_ef = curves.iter().map(|c| c.rupture_strain).sum::<f64>() / curves.len() as f64;
-    x[IC] = omega_f / mean_ef;
+    if !held(IC) {
+        x[IC] = omega_f / mean_ef;
+    }
 
     // 2. Minimum rates → (A, S); then (H*, h) on the primary stages.
     let min_rates: Vec<f64> = curves
@@ -141,7 +170,9 @@ pub fn initial_guess(
         .collect();
     let stress: Vec<f64> = curves.iter().map(|c| c.stress_mpa).collect();
     let (a, s) = fit_min_rates(&stress, &min_rates);
-    x[IA] = a;
+    if !held(IA) {
+        x[IA] = a;
+    }
     let primary: Vec<Curve> = curves
         .iter()
         .map(|c| {
@@ -163,7 +194,7 @@ pub fn initial_guess(
             }
         })
         .collect();
-    let mut best_u = [
+    let best_u0 = [
         space.to_unit_one(IHS, mid(IHS)),
         space.to_unit_one(IH, mid(IH)),
     ];
@@ -183,15 +214,26 @@ pub fn initial_guess(
         base: x.clone(),
         a,
         s,
+        stress: stress.clone(),
+        ln_rates: min_rates.iter().map(|r| r.ln()).collect(),
+        free: [IHS, IH].into_iter().filter(|&j| !held(j)).collect(),
     };
     // A few starts in H* guard against the primary fit stalling at a bound.
+    let nf = prob.free.len();
     let mut best_f = f64::INFINITY;
-    for u0 in [0.2, 0.5, 0.8] {
+    let mut best_u: Vec<f64> = prob.free.iter().map(|&j| best_u0[j - IHS]).collect();
+    let h_starts: &[f64] = if held(IHS) { &[0.5] } else { &[0.2, 0.5, 0.8] };
+    for &u0 in h_starts.iter().take(if nf == 0 { 0 } else { 3 }) {
+        let start: Vec<f64> = prob
+            .free
+            .iter()
+            .map(|&j| if j == IHS { u0 } else { 0.5 })
+            .collect();
         let rep = minimize(
             &prob,
-            &[u0, 0.5],
-            &[0.0, 0.0],
-            &[1.0, 1.0],
+            &start,
+            &vec![0.0; nf],
+            &vec![1.0; nf],
             &LmOptions {
                 max_iterations: 60,
                 ..LmOptions::default()
@@ -199,7 +241,7 @@ pub fn initial_guess(
         );
         if rep.objective < best_f {
             best_f = rep.objective;
-            best_u = [rep.x[0], rep.x[1]];
+            best_u = rep.x;
         }
     }
     let xp = prob.params(&best_u);
@@ -225,7 +267,16 @@ pub fn initial_guess(
     };
     clamp(&mut x, &mut clamped);
 
-    // 3. Kc alone on eq. 8 with w = 1.
+    // 3. Kc alone on eq. 8 with w = 1 (unless held).
+    if held(IKC) {
+        return Guess {
+            params: x,
+            min_rates,
+            clamped,
+            procedure: GuessProcedure::Model,
+            per_temperature: Vec::new(),
+        };
+    }
     let mut kc_space = space.clone();
     for j in 0..n {
         if j != IKC {
