@@ -447,11 +447,11 @@ fn with_threads<T: Send>(
 fn diagnose_cmd(config: &Path, cli: &Overrides) -> Result<()> {
     let (cfg, data) = load(config, cli)?;
     let temps = temperatures(&data);
-    if temps.len() > 1 {
+    if temps.len() > 1 && !cfg.has_laws() {
         return Err(Error::config(
             &cfg.path,
             format!(
-                "temperature_C: diagnose works at one temperature; the data have {} ({} °C): set temperature_C",
+                "temperature_C: diagnose works at one temperature unless a constant follows a temperature law; the data have {} ({} °C): set temperature_C",
                 temps.len(),
                 temps.iter().map(|t| t.to_string()).collect::<Vec<_>>().join(", ")
             ),

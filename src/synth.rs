@@ -517,6 +517,131 @@ pub fn scenario_of(i: usize) -> &'static str {
     CYCLE[i % CYCLE.len()]
 }
 
+/// The configuration of [`two_temperature_set`]'s data: KHD with A and Kc Arrhenius (T_ref the
+/// mean test temperature, 575 °C), boxes about the seed steel's (paths are placeholders: the
+/// data come in memory).
+pub const TWO_TEMPERATURE_CONFIG: &str = r#"
+name = "two-temperatures"
+curves = "curves.csv"
+ruptures = "ruptures.csv"
+model = "khd"
+extensions = []
+[constants]
+A     = { lb = 1e-11, ub = 1e-7, scale = "log", law = "arrhenius", Q = { lb = 0, ub = 1000 } }
+B     = { lb = 0.05,  ub = 0.3 }
+Hstar = { lb = 0.2,   ub = 0.9 }
+h     = { lb = 1e3,   ub = 1e6,  scale = "log" }
+Kc    = { lb = 1e-7,  ub = 1e-3, scale = "log", law = "arrhenius", Q = { lb = 0, ub = 1000 } }
+C     = { lb = 1.5,   ub = 10 }
+[objective]
+w_grid = [1.0]
+"#;
+
+/// A generated data set at two temperatures for the joint calibration and `diagnose`: KHD
+/// with A and Kc Arrhenius about 575 °C, its truth drawn from `seed` about the seed steel's
+/// (A_ref, h, Kc_ref ×/÷ e^0.3, B ± 5 %, H* ± 0.03, C ± 10 %, Q_A 350 ± 50, Q_Kc 250 ± 50 kJ/mol),
+/// three curves at 560 °C (85/100/110 MPa) and three at 590 °C (75/90/100 MPa), each stress ± 2
+/// MPa; 30 points a curve to rupture; an AR(1) reading error of marginal sd 0.005–0.03 %
+/// strain with φ = 0 (half the sets) or 0.3–0.9; a 1 % log-normal scatter of the rupture times.
+/// `effect` (an extension's name and the value of its constant) adds that extension to the
+/// truth (common to both temperatures). `None` when a curve does not rupture.
+pub fn two_temperature_set(
+    seed: u64,
+    effect: Option<(&str, f64)>,
+) -> Result<Option<Vec<crate::data::Curve>>> {
+    use crate::model::{with_laws, LawKind};
+    let exts: Vec<String> = effect.iter().map(|(k, _)| k.to_string()).collect();
+    let mut kinds = vec![
+        LawKind::Arrhenius,
+        LawKind::Constant,
+        LawKind::Constant,
+        LawKind::Constant,
+        LawKind::Arrhenius,
+        LawKind::Constant,
+    ];
+    kinds.extend(exts.iter().map(|_| LawKind::Constant));
+    let model = with_laws(build("khd", &exts)?, &kinds, 575.0);
+    let ode = OdeOptions {
+        rtol: 1e-10,
+        atol: 1e-13,
+        ..OdeOptions::default()
+    };
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut truth = vec![
+        1.2e-9 * (0.3 * normal(&mut rng)).exp(),
+        0.12 * (1.0 + 0.05 * normal(&mut rng)),
+        0.55 + 0.03 * normal(&mut rng),
+        6e4 * (0.3 * normal(&mut rng)).exp(),
+        1.5e-5 * (0.3 * normal(&mut rng)).exp(),
+        5.0 * (1.0 + 0.1 * normal(&mut rng)),
+    ];
+    if let Some((_, v)) = effect {
+        truth.push(v);
+    }
+    truth.push(350.0 + 50.0 * normal(&mut rng));
+    truth.push(250.0 + 50.0 * normal(&mut rng));
+    let sd = 5e-5 + 2.5e-4 * rng.gen::<f64>();
+    let phi = if rng.gen::<bool>() {
+        0.0
+    } else {
+        0.3 + 0.6 * rng.gen::<f64>()
+    };
+    let mut curves = Vec::new();
+    for (t, s0) in [
+        (560.0, 85.0),
+        (560.0, 100.0),
+        (560.0, 110.0),
+        (590.0, 75.0),
+        (590.0, 90.0),
+        (590.0, 100.0),
+    ] {
+        let s: f64 = (s0 + 2.0 * (2.0 * rng.gen::<f64>() - 1.0)).round();
+        let load = Load::new(s, t, 1.0 / 3.0);
+        let r = model.simulate(&truth, &load, &[], &mut [], &ode);
+        if !r.ruptured() {
+            return Ok(None);
+        }
+        let m = 30;
+        let mut times: Vec<f64> = (0..m)
+            .map(|k| {
+                let f = if k == 0 || k == m - 1 {
+                    k as f64 / (m - 1) as f64
+                } else {
+                    (k as f64 + rng.gen_range(-0.35..0.35)) / (m - 1) as f64
+                };
+                r.t_end * (1.0 - (1.0 - f).powf(1.5))
+            })
+            .collect();
+        times.sort_by(|a, b| a.total_cmp(b));
+        let mut e = vec![0.0; m];
+        model.simulate(&truth, &load, &times, &mut e, &ode);
+        let mut prev = 0.0;
+        for (k, v) in e.iter_mut().enumerate() {
+            let innov = normal(&mut rng);
+            let err = if k == 0 {
+                sd * innov
+            } else {
+                phi * prev + sd * (1.0 - phi * phi).sqrt() * innov
+            };
+            prev = err;
+            *v += err;
+        }
+        let t_r = r.t_end * (0.01 * normal(&mut rng)).exp();
+        curves.push(crate::data::Curve {
+            temperature_c: t,
+            stress_mpa: s,
+            specimen: None,
+            min_rate_estimated: crate::data::estimate_min_rate(&times, &e, t_r),
+            rupture_strain: e[m - 1],
+            times_h: times,
+            strains: e,
+            rupture_time_h: Some(t_r),
+            min_rate_measured: None,
+        });
+    }
+    Ok(Some(curves))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -39,7 +39,7 @@ use crate::error::{Error, Result};
 use crate::fit::{param_space, FitSettings};
 use crate::guess::initial_guess;
 use crate::likelihood::{ml_fit, raw_objective, MlFit, MlOptions};
-use crate::model::{build, ext, Model};
+use crate::model::{build, ext, with_laws, LawKind, Model};
 use crate::objective::{mean_abs, ParamSpace};
 use crate::sweep::latin_hypercube;
 pub use decide::Verdict;
@@ -100,7 +100,7 @@ impl Spec {
     }
     /// A random start, uniform in the unit box.
     fn random_start(&self, rng: &mut ChaCha8Rng) -> Vec<f64> {
-        let u: Vec<f64> = (0..self.space.len()).map(|_| rng.gen()).collect();
+        let u: Vec<f64> = (0..self.space.n_free()).map(|_| rng.gen()).collect();
         let mut x = vec![0.0; self.space.len()];
         self.space.from_unit(&u, &mut x);
         x
@@ -128,15 +128,19 @@ fn specs(cfg: &RunConfig) -> Result<Vec<Spec>> {
         lists.push((e, l));
     }
     for (name, exts) in lists {
-        let model = build(&cfg.model, &exts)?;
+        let model = with_config_laws(cfg, build(&cfg.model, &exts)?)?;
         let (mut lb, mut ub, mut sc) = (vec![], vec![], vec![]);
         let mut extra = vec![];
-        for c in model.constants() {
+        let mut held = vec![];
+        for (j, c) in model.constants().iter().enumerate() {
             match cfg.constants.iter().position(|k| k.name == c.name) {
                 Some(i) => {
                     lb.push(base_space.lb[i]);
                     ub.push(base_space.ub[i]);
                     sc.push(base_space.scale[i]);
+                    if !base_space.free[i] {
+                        held.push((j, base_space.fixed[i]));
+                    }
                 }
                 None => {
                     lb.push(c.lb);
@@ -146,14 +150,44 @@ fn specs(cfg: &RunConfig) -> Result<Vec<Spec>> {
                 }
             }
         }
+        let mut space = ParamSpace::new(lb, ub, sc);
+        for (j, v) in held {
+            space.hold(j, v);
+        }
         out.push(Spec {
             name,
             model,
-            space: ParamSpace::new(lb, ub, sc),
+            space,
             extra,
         });
     }
     Ok(out)
+}
+
+/// `model` (the configured model with some extensions) with the configuration's temperature
+/// laws on the constants the configuration declares; an extension's own constants are
+/// common to all temperatures. Without laws, `model` itself.
+fn with_config_laws(cfg: &RunConfig, model: Box<dyn Model>) -> Result<Box<dyn Model>> {
+    if !cfg.has_laws() {
+        return Ok(model);
+    }
+    let t_ref = cfg.t_ref.ok_or_else(|| {
+        Error::config(
+            &cfg.path,
+            "T_ref: not resolved; bind the configuration to its data",
+        )
+    })?;
+    let kinds: Vec<LawKind> = model
+        .constants()
+        .iter()
+        .map(|c| {
+            cfg.constants
+                .iter()
+                .find(|k| k.name == c.name)
+                .map_or(LawKind::Constant, |k| k.law)
+        })
+        .collect();
+    Ok(with_laws(model, &kinds, t_ref))
 }
 
 /// The best (lowest −2 ln L) of maximum-likelihood fits from `starts`, the first `warm` of
@@ -871,8 +905,9 @@ pub fn diagnose_with(cfg: &RunConfig, data: &Dataset, dc: &DiagnoseConfig) -> Re
     };
     let specs = specs(cfg)?;
 
-    // The initial guess (the KHD procedure, on the KHD constants), extended by name.
-    let khd = build(&cfg.model, &[])?;
+    // The initial guess (the KHD procedure, on the KHD constants, per temperature with the
+    // laws), extended by name.
+    let khd = with_config_laws(cfg, build(&cfg.model, &[])?)?;
     let khd_names: Vec<&str> = khd.constants().iter().map(|c| c.name).collect();
     let khd_space = {
         let s = param_space(cfg);
@@ -885,11 +920,17 @@ pub fn diagnose_with(cfg: &RunConfig, data: &Dataset, dc: &DiagnoseConfig) -> Re
                     .expect("KHD constant")
             })
             .collect();
-        ParamSpace::new(
+        let mut space = ParamSpace::new(
             idx.iter().map(|&i| s.lb[i]).collect(),
             idx.iter().map(|&i| s.ub[i]).collect(),
             idx.iter().map(|&i| s.scale[i]).collect(),
-        )
+        );
+        for (j, &i) in idx.iter().enumerate() {
+            if !s.free[i] {
+                space.hold(j, s.fixed[i]);
+            }
+        }
+        space
     };
     let guess = initial_guess(
         khd.as_ref(),
@@ -914,7 +955,7 @@ pub fn diagnose_with(cfg: &RunConfig, data: &Dataset, dc: &DiagnoseConfig) -> Re
             }
         }
         let mut rng = ChaCha8Rng::seed_from_u64(dc.seed);
-        for u in latin_hypercube(dc.starts, spec.space.len(), &mut rng) {
+        for u in latin_hypercube(dc.starts, spec.space.n_free(), &mut rng) {
             let mut x = vec![0.0; spec.space.len()];
             spec.space.from_unit(&u, &mut x);
             starts.push(x);

@@ -30,10 +30,17 @@ fn list(v: &[f64], prec: usize) -> String {
         .join(" / ")
 }
 
-fn curve_label(c: &super::CurveSignature) -> String {
+/// A curve's row label: its stress (and specimen), preceded by its temperature when the
+/// curves are at several (`several_t`).
+fn curve_label(c: &super::CurveSignature, several_t: bool) -> String {
+    let t = if several_t {
+        format!("{} °C, ", c.temperature_c)
+    } else {
+        String::new()
+    };
     match &c.specimen {
-        Some(s) => format!("{} ({s})", c.stress_mpa),
-        None => format!("{}", c.stress_mpa),
+        Some(s) => format!("{t}{} ({s})", c.stress_mpa),
+        None => format!("{t}{}", c.stress_mpa),
     }
 }
 
@@ -107,14 +114,20 @@ pub fn report_md(cfg: &RunConfig, d: &Diagnosis) -> String {
             f(g.lifetime_bias, 3)
         );
     }
+    let several_t = d
+        .base
+        .curves
+        .iter()
+        .any(|c| c.temperature_c != d.base.curves[0].temperature_c);
     s += &format!(
-        "| stress MPa | {} bias % (z) | first point % | last point: t/t_f, meas / pred strain % | lifetime error % | reading error sd %, φ |\n|---|---|---|---|---|---|\n",
+        "| {}stress MPa | {} bias % (z) | first point % | last point: t/t_f, meas / pred strain % | lifetime error % | reading error sd %, φ |\n|---|---|---|---|---|---|\n",
+        if several_t { "temperature °C, " } else { "" },
         STAGES.iter().map(|st| st.0).collect::<Vec<_>>().join(" / ")
     );
     for c in &d.base.curves {
         s += &format!(
             "| {} | {} | {:+.2} | {:.3}, {:.3} / {:.3} | {:+.2} | {:.4}, {:.2} |\n",
-            curve_label(c),
+            curve_label(c, several_t),
             (0..3)
                 .map(|k| format!("{} ({})", f(c.stage_bias_pct[k], 2), f(c.stage_z[k], 1)))
                 .collect::<Vec<_>>()

@@ -26,6 +26,8 @@ pub const REPORT_Z: f64 = 2.0;
 /// Diagnostics of one curve.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct CurveSignature {
+    /// Test temperature, °C.
+    pub temperature_c: f64,
     /// Stress, MPa.
     pub stress_mpa: f64,
     /// Specimen, if the data have one.
@@ -101,6 +103,7 @@ pub fn curve_signature(c: &Curve, e: &[f64], t_pred: f64, noise: &Ar1) -> CurveS
     let n = c.times_h.len();
     let t_last = c.times_h[n - 1];
     CurveSignature {
+        temperature_c: c.temperature_c,
         stress_mpa: c.stress_mpa,
         specimen: c.specimen.clone(),
         stage_bias_pct,
