@@ -11,7 +11,7 @@ use crate::data::Dataset;
 use crate::diagnose::diagnose;
 use crate::error::{Error, Result};
 use crate::fit::{run_fit, FitSettings};
-use crate::model::{build, Load};
+use crate::model::Load;
 use crate::objective::Objective;
 use crate::ode::OdeOptions;
 use crate::output::lock_folder;
@@ -489,7 +489,7 @@ fn diagnose_cmd(config: &Path, cli: &Overrides) -> Result<()> {
         if c.name != "base" {
             exts.push(c.name.clone());
         }
-        let model = build(&cfg.model, &exts)?;
+        let model = cfg.build_model_with(&exts)?;
         let x: Vec<f64> = c.constants.iter().map(|p| p.1).collect();
         let settings = FitSettings::from_config(&cfg);
         let obj = crate::likelihood::raw_objective(model.as_ref(), &curves, &settings);

@@ -1212,6 +1212,34 @@ impl RunConfig {
         Ok(laws::with_laws(m, &kinds, t_ref))
     }
 
+    /// The configured model with `extensions` instead of the configured ones, carrying the
+    /// configuration's temperature laws on the constants it declares (matched by name; an
+    /// extension's constant it does not declare is common to all temperatures): the models
+    /// `diagnose` compares.
+    pub fn build_model_with(&self, extensions: &[String]) -> Result<Box<dyn Model>> {
+        let m = model::build(&self.model, extensions)?;
+        if !self.has_laws() {
+            return Ok(m);
+        }
+        let t_ref = self.t_ref.ok_or_else(|| {
+            Error::config(
+                &self.path,
+                "T_ref: not resolved; bind the configuration to its data (RunConfig::resolve or with_data) or give T_ref",
+            )
+        })?;
+        let kinds: Vec<LawKind> = m
+            .constants()
+            .iter()
+            .map(|c| {
+                self.constants
+                    .iter()
+                    .find(|k| k.name == c.name)
+                    .map_or(LawKind::Constant, |k| k.law)
+            })
+            .collect();
+        Ok(laws::with_laws(m, &kinds, t_ref))
+    }
+
     /// Load the run's data ([`data::load`] with [`RunConfig::load_options`]), each curve
     /// averaged down to `objective.max_points` points when that is set.
     pub fn load_data(&self) -> Result<Dataset> {

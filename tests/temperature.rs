@@ -580,3 +580,40 @@ fn joint_diagnose_names_a_hidden_effect_and_passes_a_clean_set() {
     let d = run(None, 93002);
     assert_eq!(d.verdict, Verdict::Adequate, "{:?}", d.decision);
 }
+
+/// The models `diagnose` compares carry the configuration's laws: with no extension the
+/// configured model itself; with one, its constant common to all temperatures and the laws'
+/// parameters after the model's constants; at one temperature its curves are those of the
+/// configured model's constants there.
+#[test]
+fn models_with_extensions_carry_the_laws() {
+    let (cfg, _) = resolved(&file("cmv-joint.toml"), "cmv-joint.toml");
+    let names = |m: &dyn Model| -> Vec<String> {
+        m.constants().iter().map(|c| c.name.to_string()).collect()
+    };
+    let plain = cfg.build_model().unwrap();
+    let same = cfg.build_model_with(&[]).unwrap();
+    assert_eq!(names(plain.as_ref()), names(same.as_ref()));
+    let ext = cfg
+        .build_model_with(&["loading_strain".to_string()])
+        .unwrap();
+    assert_eq!(
+        names(ext.as_ref()),
+        ["A", "B", "Hstar", "h", "Kc", "C", "EL", "A.Q", "Kc.Q"]
+    );
+    let x = cfg.starts_all_given().unwrap();
+    let mut xe = x[..6].to_vec();
+    xe.push(1e12); // E_L so large that the loading strain vanishes
+    xe.extend_from_slice(&x[6..]);
+    for t in [560.0, 590.0] {
+        let load = Load::new(100.0, t, 1.0 / 3.0);
+        let a = plain.simulate(&x, &load, &[], &mut [], &tight());
+        let b = ext.simulate(&xe, &load, &[], &mut [], &tight());
+        assert!(
+            (a.t_end / b.t_end - 1.0).abs() < 1e-6,
+            "{t} °C: {} vs {}",
+            a.t_end,
+            b.t_end
+        );
+    }
+}

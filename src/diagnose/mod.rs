@@ -39,7 +39,7 @@ use crate::error::{Error, Result};
 use crate::fit::{param_space, FitSettings};
 use crate::guess::initial_guess;
 use crate::likelihood::{ml_fit, raw_objective, MlFit, MlOptions};
-use crate::model::{build, ext, with_laws, LawKind, Model};
+use crate::model::{ext, Model};
 use crate::objective::{mean_abs, ParamSpace};
 use crate::sweep::latin_hypercube;
 pub use decide::Verdict;
@@ -128,7 +128,7 @@ fn specs(cfg: &RunConfig) -> Result<Vec<Spec>> {
         lists.push((e, l));
     }
     for (name, exts) in lists {
-        let model = with_config_laws(cfg, build(&cfg.model, &exts)?)?;
+        let model = cfg.build_model_with(&exts)?;
         let (mut lb, mut ub, mut sc) = (vec![], vec![], vec![]);
         let mut extra = vec![];
         let mut held = vec![];
@@ -162,32 +162,6 @@ fn specs(cfg: &RunConfig) -> Result<Vec<Spec>> {
         });
     }
     Ok(out)
-}
-
-/// `model` (the configured model with some extensions) with the configuration's temperature
-/// laws on the constants the configuration declares; an extension's own constants are
-/// common to all temperatures. Without laws, `model` itself.
-fn with_config_laws(cfg: &RunConfig, model: Box<dyn Model>) -> Result<Box<dyn Model>> {
-    if !cfg.has_laws() {
-        return Ok(model);
-    }
-    let t_ref = cfg.t_ref.ok_or_else(|| {
-        Error::config(
-            &cfg.path,
-            "T_ref: not resolved; bind the configuration to its data",
-        )
-    })?;
-    let kinds: Vec<LawKind> = model
-        .constants()
-        .iter()
-        .map(|c| {
-            cfg.constants
-                .iter()
-                .find(|k| k.name == c.name)
-                .map_or(LawKind::Constant, |k| k.law)
-        })
-        .collect();
-    Ok(with_laws(model, &kinds, t_ref))
 }
 
 /// The best (lowest −2 ln L) of maximum-likelihood fits from `starts`, the first `warm` of
@@ -907,7 +881,7 @@ pub fn diagnose_with(cfg: &RunConfig, data: &Dataset, dc: &DiagnoseConfig) -> Re
 
     // The initial guess (the KHD procedure, on the KHD constants, per temperature with the
     // laws), extended by name.
-    let khd = with_config_laws(cfg, build(&cfg.model, &[])?)?;
+    let khd = cfg.build_model_with(&[])?;
     let khd_names: Vec<&str> = khd.constants().iter().map(|c| c.name).collect();
     let khd_space = {
         let s = param_space(cfg);
