@@ -1195,27 +1195,13 @@ impl RunConfig {
     /// The model of the run: the registry's model with its extensions and, when some
     /// constant has a temperature law, the laws about `T_ref` ([`laws::with_laws`]).
     pub fn build_model(&self) -> Result<Box<dyn Model>> {
-        let m = model::build(&self.model, &self.extensions)?;
-        if !self.has_laws() {
-            return Ok(m);
-        }
-        let t_ref = self.t_ref.ok_or_else(|| {
-            Error::config(
-                &self.path,
-                "T_ref: not resolved; bind the configuration to its data (RunConfig::resolve or with_data) or give T_ref",
-            )
-        })?;
-        let kinds: Vec<LawKind> = self.constants[..m.constants().len()]
-            .iter()
-            .map(|c| c.law)
-            .collect();
-        Ok(laws::with_laws(m, &kinds, t_ref))
+        self.build_model_with(&self.extensions)
     }
 
     /// The configured model with `extensions` instead of the configured ones, carrying the
     /// configuration's temperature laws on the constants it declares (matched by name; an
-    /// extension's constant it does not declare is common to all temperatures): the models
-    /// `diagnose` compares.
+    /// extension's constant it does not declare is common to all temperatures): the run's
+    /// model ([`RunConfig::build_model`]) and the models `diagnose` compares.
     pub fn build_model_with(&self, extensions: &[String]) -> Result<Box<dyn Model>> {
         let m = model::build(&self.model, extensions)?;
         if !self.has_laws() {

@@ -194,10 +194,6 @@ pub fn initial_guess(
             }
         })
         .collect();
-    let best_u0 = [
-        space.to_unit_one(IHS, mid(IHS)),
-        space.to_unit_one(IH, mid(IH)),
-    ];
     let prob = PrimaryProblem {
         // The primary-stage fit has no lifetime term (w = 0); the run's ω_f and integrator.
         objective: Objective::new(
@@ -221,9 +217,17 @@ pub fn initial_guess(
     // A few starts in H* guard against the primary fit stalling at a bound.
     let nf = prob.free.len();
     let mut best_f = f64::INFINITY;
-    let mut best_u: Vec<f64> = prob.free.iter().map(|&j| best_u0[j - IHS]).collect();
-    let h_starts: &[f64] = if held(IHS) { &[0.5] } else { &[0.2, 0.5, 0.8] };
-    for &u0 in h_starts.iter().take(if nf == 0 { 0 } else { 3 }) {
+    let mut best_u: Vec<f64> = prob
+        .free
+        .iter()
+        .map(|&j| space.to_unit_one(j, mid(j)))
+        .collect();
+    let h_starts: &[f64] = match (nf, held(IHS)) {
+        (0, _) => &[],
+        (_, true) => &[0.5],
+        _ => &[0.2, 0.5, 0.8],
+    };
+    for &u0 in h_starts {
         let start: Vec<f64> = prob
             .free
             .iter()
@@ -268,45 +272,38 @@ pub fn initial_guess(
     clamp(&mut x, &mut clamped);
 
     // 3. Kc alone on eq. 8 with w = 1 (unless held).
-    if held(IKC) {
-        return Guess {
-            params: x,
-            min_rates,
-            clamped,
-            procedure: GuessProcedure::Model,
-            per_temperature: Vec::new(),
+    if !held(IKC) {
+        let mut kc_space = space.clone();
+        for j in 0..n {
+            if j != IKC {
+                kc_space.hold(j, x[j]);
+            }
+        }
+        let problem = CreepProblem {
+            // The guess's own choice: Kc fitted to both sides of the lifetime error at w = 1.
+            objective: Objective::new(
+                model,
+                curves,
+                vec![1.0; curves.len()],
+                ObjectiveSettings {
+                    lifetime: LifetimeTerm::Both,
+                    omega_f,
+                    ode: *ode,
+                },
+            ),
+            space: kc_space.clone(),
+            jacobian: JacobianMethod::default(),
         };
-    }
-    let mut kc_space = space.clone();
-    for j in 0..n {
-        if j != IKC {
-            kc_space.hold(j, x[j]);
+        let mut best = (f64::INFINITY, x[IKC]);
+        for u0 in [0.1, 0.5, 0.9] {
+            let rep = minimize(&problem, &[u0], &[0.0], &[1.0], &LmOptions::default());
+            if rep.objective < best.0 {
+                best = (rep.objective, kc_space.from_unit_one(IKC, rep.x[0]));
+            }
         }
+        x[IKC] = best.1;
+        clamp(&mut x, &mut clamped);
     }
-    let problem = CreepProblem {
-        // The guess's own choice: Kc fitted to both sides of the lifetime error at w = 1.
-        objective: Objective::new(
-            model,
-            curves,
-            vec![1.0; curves.len()],
-            ObjectiveSettings {
-                lifetime: LifetimeTerm::Both,
-                omega_f,
-                ode: *ode,
-            },
-        ),
-        space: kc_space.clone(),
-        jacobian: JacobianMethod::default(),
-    };
-    let mut best = (f64::INFINITY, x[IKC]);
-    for u0 in [0.1, 0.5, 0.9] {
-        let rep = minimize(&problem, &[u0], &[0.0], &[1.0], &LmOptions::default());
-        if rep.objective < best.0 {
-            best = (rep.objective, kc_space.from_unit_one(IKC, rep.x[0]));
-        }
-    }
-    x[IKC] = best.1;
-    clamp(&mut x, &mut clamped);
     Guess {
         params: x,
         min_rates,
