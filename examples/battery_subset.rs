@@ -29,7 +29,13 @@ fn main() {
                 let l = creepfit::battery::oracle_lambda(&cfg, &set.truth);
                 format!("{s} {scenario} lambda {l:.2}")
             } else {
-                serde_json::to_string(&creepfit::battery::run_one(&out, index, s)).unwrap()
+                serde_json::to_string(&creepfit::battery::run_one(
+                    &out,
+                    index,
+                    s,
+                    creepfit::synth::World::Identical,
+                ))
+                .unwrap()
             }
         })
         .collect();

@@ -28,8 +28,9 @@ use crate::errmodel::{Ar1, ErrorModel};
 use crate::error::{Error, Result};
 use crate::fit::{param_space, FitSettings};
 use crate::likelihood::min_whitened_ss;
+use crate::likelihood::EffectKind;
 use crate::model::build;
-use crate::synth::{generate, scenario_of, write_set, Truth};
+use crate::synth::{generate_in, scenario_of, write_set, Truth, World};
 
 /// Oracle noncentrality at or above which an effect counts as detectable.
 pub const DETECTABLE_LAMBDA: f64 = 25.0;
@@ -68,6 +69,21 @@ pub struct SetResult {
     pub replicates: usize,
     /// Wall time of `diagnose`, s.
     pub wall_s: f64,
+    /// The world the set comes from.
+    #[serde(default)]
+    pub world: World,
+    /// True scatter of the specimens' ln creep-rate and ln ductility factors (specimens
+    /// world).
+    #[serde(default)]
+    pub scatter_true: Vec<f64>,
+    /// The base model's estimated scatter per kind (rate, ductility; 0 where the fit carries
+    /// none) and its 95 % interval.
+    #[serde(default)]
+    pub scatter_est: Vec<f64>,
+    #[serde(default)]
+    pub scatter_lo95: Vec<f64>,
+    #[serde(default)]
+    pub scatter_hi95: Vec<f64>,
     /// Why the set could not be generated or diagnosed, if so.
     pub error: Option<String>,
 }
@@ -136,12 +152,42 @@ pub fn oracle_lambda(cfg: &RunConfig, truth: &Truth) -> f64 {
         space.from_unit(&u, &mut x);
         starts.push(x);
     }
-    min_whitened_ss(model.as_ref(), &curves, &space, &starts, &settings, &noise)
-        .map_or(f64::NAN, |b| b.0)
+    // Known specimen effects: the base model at each specimen's own constants.
+    let factors = truth.specimens.as_ref().map(|sp| {
+        let role = |r: crate::model::Role| {
+            model
+                .constants()
+                .iter()
+                .position(|c| c.role == r)
+                .expect("the base model has its rate and ductility constants")
+        };
+        crate::objective::CurveFactors {
+            index: vec![
+                role(crate::model::Role::Rate),
+                role(crate::model::Role::InverseDuctility),
+            ],
+            factors: sp
+                .rate_effects
+                .iter()
+                .zip(&sp.ductility_effects)
+                .map(|(e, z)| vec![e.exp(), (-z).exp()])
+                .collect(),
+        }
+    });
+    min_whitened_ss(
+        model.as_ref(),
+        &curves,
+        &space,
+        &starts,
+        &settings,
+        &noise,
+        factors.as_ref(),
+    )
+    .map_or(f64::NAN, |b| b.0)
 }
 
 /// Generate set `seed` into `dir/sets/set-<seed>/`, diagnose it, and compute its oracle λ.
-pub fn run_one(dir: &Path, index: usize, seed: u64) -> SetResult {
+pub fn run_one(dir: &Path, index: usize, seed: u64, world: World) -> SetResult {
     let scenario = scenario_of(index);
     let name = format!("set-{seed}");
     let mut r = SetResult {
@@ -162,11 +208,16 @@ pub fn run_one(dir: &Path, index: usize, seed: u64) -> SetResult {
         gof_p: vec![],
         replicates: 0,
         wall_s: f64::NAN,
+        world,
+        scatter_true: vec![],
+        scatter_est: vec![],
+        scatter_lo95: vec![],
+        scatter_hi95: vec![],
         error: None,
     };
     let folder = dir.join("sets").join(&name);
     let res = (|| -> Result<()> {
-        let set = generate(&name, scenario, seed)?;
+        let set = generate_in(&name, scenario, None, seed, world)?;
         write_set(&set, &folder)?;
         let t = &set.truth;
         r.family = t.family.clone();
@@ -193,6 +244,23 @@ pub fn run_one(dir: &Path, index: usize, seed: u64) -> SetResult {
         r.gof_p = d.gof.iter().map(|g| g.p_value).collect();
         r.replicates = d.bootstrap.replicates;
         r.wall_s = d.wall_s;
+        if let Some(sp) = &t.specimens {
+            r.scatter_true = vec![sp.rate_sd, sp.ductility_sd];
+        }
+        // Per kind (rate, ductility): the estimate and interval, 0 where not fitted (the
+        // interval of a kind the fit dropped is not known: NaN).
+        for kind in [EffectKind::Rate, EffectKind::Ductility] {
+            let got = d.base.specimen.as_ref().and_then(|sp| {
+                sp.kinds
+                    .iter()
+                    .position(|k| *k == kind)
+                    .map(|j| (sp.scatter[j], sp.scatter_lo95[j], sp.scatter_hi95[j]))
+            });
+            let (e, lo, hi) = got.unwrap_or((0.0, f64::NAN, f64::NAN));
+            r.scatter_est.push(e);
+            r.scatter_lo95.push(lo);
+            r.scatter_hi95.push(hi);
+        }
         Ok(())
     })();
     if let Err(e) = res {
@@ -232,6 +300,7 @@ pub fn run_battery(
     dir: &Path,
     first_seed: u64,
     n: usize,
+    world: World,
     progress: bool,
 ) -> Result<Vec<SetResult>> {
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
@@ -259,7 +328,7 @@ pub fn run_battery(
     let fresh: Vec<SetResult> = todo
         .par_iter()
         .map(|&(i, seed)| {
-            let r = run_one(dir, i, seed);
+            let r = run_one(dir, i, seed, world);
             let line = serde_json::to_string(&r).expect("plain values") + "\n";
             {
                 let mut f = file.lock().expect("results lock");

@@ -135,6 +135,10 @@ pub enum Command {
         /// mid_life_step.
         #[arg(long)]
         scenario: Option<String>,
+        /// The laboratory: identical specimens, or specimens with their own creep rate and
+        /// ductility, replicates and a reading error growing with strain.
+        #[arg(long, value_enum, default_value_t = crate::synth::World::Identical)]
+        world: crate::synth::World,
     },
     /// Generate a battery of data sets, diagnose each, and write the confusion matrix and
     /// power tables (resumes an interrupted battery in the same folder).
@@ -150,6 +154,9 @@ pub enum Command {
         /// Worker threads (default: all cores).
         #[arg(long)]
         threads: Option<usize>,
+        /// The laboratory the sets come from (see `synth --world`).
+        #[arg(long, value_enum, default_value_t = crate::synth::World::Identical)]
+        world: crate::synth::World,
     },
     /// Predict at untested conditions: curves, rupture time, rupture strain and minimum
     /// creep rate, beside the Larson–Miller baseline of the configuration's rupture times.
@@ -393,14 +400,16 @@ pub fn run(cli: Cli) -> Result<()> {
             sets,
             seed,
             scenario,
-        } => synth_cmd(&out, sets, seed, scenario.as_deref()),
+            world,
+        } => synth_cmd(&out, sets, seed, scenario.as_deref(), world),
         Command::Battery {
             out,
             sets,
             seed,
             threads,
+            world,
         } => with_threads(threads, || {
-            let results = crate::battery::run_battery(&out, seed, sets, true)?;
+            let results = crate::battery::run_battery(&out, seed, sets, world, true)?;
             let r = crate::battery::write_reports(&out, &results, seed)?;
             println!(
                 "{} sets: false alarms {} of {} no-effect sets; named correctly (detectable): {}; outside the catalogue with an extension verdict: {} of {}",
@@ -528,7 +537,13 @@ fn diagnose_cmd(config: &Path, cli: &Overrides) -> Result<()> {
     plots_done(&out, failures)
 }
 
-fn synth_cmd(out: &Path, sets: usize, seed: u64, scenario: Option<&str>) -> Result<()> {
+fn synth_cmd(
+    out: &Path,
+    sets: usize,
+    seed: u64,
+    scenario: Option<&str>,
+    world: crate::synth::World,
+) -> Result<()> {
     if let Some(sc) = scenario {
         if !crate::synth::SCENARIOS.contains(&sc) {
             return Err(crate::Error::Invalid(format!(
@@ -541,7 +556,7 @@ fn synth_cmd(out: &Path, sets: usize, seed: u64, scenario: Option<&str>) -> Resu
         let s = seed + i as u64;
         let sc = scenario.unwrap_or_else(|| crate::synth::scenario_of(i));
         let name = format!("set-{s}");
-        let set = crate::synth::generate(&name, sc, s)?;
+        let set = crate::synth::generate_in(&name, sc, None, s, world)?;
         crate::synth::write_set(&set, &out.join(&name))?;
         println!(
             "{name}: {} ({}), {} curves, {:?}",

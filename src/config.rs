@@ -129,6 +129,61 @@ pub struct ObjectiveConfig {
     pub lifetime_term: LifetimeTerm,
     /// Damage at rupture ω_f. Default 1/3.
     pub omega_f: f64,
+    /// Specimen effects of the likelihood (random effects integrated out, [`crate::likelihood`]):
+    /// each curve's own creep-rate factor (`rate`) and ductility factor (`ductility`), their
+    /// scatter between specimens estimated. `"auto"` (default): both when the data have
+    /// replicates (two or more specimens at one temperature and stress), none otherwise —
+    /// with one specimen per condition a specimen's own rate or ductility cannot be told
+    /// from the stress and temperature dependence of the constants. A list (`["rate"]`,
+    /// `["rate", "ductility"]`, `[]`) asks for exactly those.
+    pub specimen_effects: SpecimenEffects,
+}
+
+/// `[objective] specimen_effects`: `"auto"` or a list of kinds.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum SpecimenEffects {
+    /// `"auto"`: both kinds with replicates in the data, none without.
+    Auto(AutoWord),
+    /// Exactly these kinds.
+    Kinds(Vec<crate::likelihood::EffectKind>),
+}
+
+/// The word `auto`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum AutoWord {
+    /// `auto`.
+    Auto,
+}
+
+impl SpecimenEffects {
+    /// The effects for `curves`, and a note for the user when `auto` left them out.
+    pub fn resolve(
+        &self,
+        curves: &[crate::data::Curve],
+    ) -> (crate::likelihood::SpecimenOptions, Option<String>) {
+        use crate::likelihood::{EffectKind, SpecimenOptions};
+        match self {
+            SpecimenEffects::Auto(_) => {
+                if crate::specimen::has_replicates(curves) {
+                    (SpecimenOptions::BOTH, None)
+                } else {
+                    (
+                        SpecimenOptions::NONE,
+                        Some("no two specimens share a temperature and stress: specimen-to-specimen scatter cannot be told from the stress and temperature dependence of the constants, so the likelihood treats every specimen as the population's (set [objective] specimen_effects to fit it anyway)".into()),
+                    )
+                }
+            }
+            SpecimenEffects::Kinds(k) => (
+                SpecimenOptions {
+                    rate: k.contains(&EffectKind::Rate),
+                    ductility: k.contains(&EffectKind::Ductility),
+                },
+                None,
+            ),
+        }
+    }
 }
 
 impl Default for ObjectiveConfig {
@@ -141,6 +196,7 @@ impl Default for ObjectiveConfig {
             w_sets: Vec::new(),
             lifetime_term: LifetimeTerm::Late,
             omega_f: 1.0 / 3.0,
+            specimen_effects: SpecimenEffects::Auto(AutoWord::Auto),
         }
     }
 }
@@ -281,6 +337,7 @@ impl SolverConfig {
             lambda_max: self.lambda_max,
             geodesic: self.geodesic.then_some(self.geodesic_alpha),
             geodesic_h: self.geodesic_h,
+            plateau: None,
         }
     }
     /// Integration options (the horizon `t_end` is set per curve by its user).

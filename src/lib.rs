@@ -29,6 +29,7 @@ pub mod ode;
 pub mod output;
 pub mod predict;
 pub mod report;
+pub mod specimen;
 pub mod sweep;
 pub mod synth;
 pub mod uncertainty;

@@ -218,6 +218,7 @@ pub struct ObjectiveSettings {
 
 /// Eq. 8 for one set of curves, one model and one weight per curve. Built only by
 /// [`Objective::new`], so every objective takes its settings from one place.
+#[derive(Clone)]
 pub struct Objective<'a> {
     model: &'a dyn Model,
     curves: &'a [Curve],
@@ -227,6 +228,21 @@ pub struct Objective<'a> {
     lifetime: LifetimeTerm,
     omega_f: f64,
     ode: OdeOptions,
+    /// Per-curve factors on some constants (specimen effects), if any.
+    effects: Option<CurveFactors>,
+}
+
+/// Multiplicative factors on some constants, one set per curve: the constants of curve `i`
+/// are the population's with `params[index[k]] × factors[i][k]`. This is how a specimen's
+/// own creep rate or ductility enters a simulation (random effects, [`crate::likelihood`]).
+/// Derivatives with respect to the population constants stay exact (the factor multiplies
+/// the dual number).
+#[derive(Debug, Clone, PartialEq)]
+pub struct CurveFactors {
+    /// Index in the model's constants of each factor's constant.
+    pub index: Vec<usize>,
+    /// Per curve, one factor per entry of `index`.
+    pub factors: Vec<Vec<f64>>,
 }
 
 /// Prediction for one curve at one constant set.
@@ -388,7 +404,41 @@ impl<'a> Objective<'a> {
             lifetime: settings.lifetime,
             omega_f: settings.omega_f,
             ode: settings.ode,
+            effects: None,
         }
+    }
+
+    /// The same objective with the constants of each curve multiplied by its factors
+    /// (`None`: the population's constants for every curve).
+    pub fn with_factors(mut self, effects: Option<CurveFactors>) -> Self {
+        if let Some(e) = &effects {
+            assert_eq!(
+                e.factors.len(),
+                self.curves.len(),
+                "one factor set per curve"
+            );
+        }
+        self.effects = effects;
+        self
+    }
+
+    /// The per-curve factors, if any.
+    pub fn factors(&self) -> Option<&CurveFactors> {
+        self.effects.as_ref()
+    }
+
+    /// The constants of curve `i`: `params` with the curve's factors applied (a copy on the
+    /// stack; `params` itself when there are no factors).
+    #[inline]
+    fn curve_params<S: Scalar>(&self, i: usize, params: &[S], buf: &mut [S; MAX_PARAMS]) -> usize {
+        let n = params.len();
+        buf[..n].copy_from_slice(params);
+        if let Some(e) = &self.effects {
+            for (k, &j) in e.index.iter().enumerate() {
+                buf[j] = buf[j] * e.factors[i][k];
+            }
+        }
+        n
     }
 
     /// Eq. 8 of bin-averaged curves ([`bin_curves`]): the strain residual of curve `i`,
@@ -451,9 +501,11 @@ impl<'a> Objective<'a> {
         strain: &mut [S],
     ) -> Result<(Outcome, S, S, f64), EvalFailure> {
         let c = &self.curves[i];
+        let mut buf = [S::cst(0.0); MAX_PARAMS];
+        let n = self.curve_params(i, params, &mut buf);
         let res = S::simulate(
             self.model,
-            params,
+            &buf[..n],
             &self.load(c),
             &c.times_h,
             strain,
@@ -569,8 +621,10 @@ impl<'a> Objective<'a> {
                     sink(off + j0, &buf[..part.len()]);
                 }
             };
+            let mut pbuf = [Dual::<SENS>::cst(0.0); MAX_PARAMS];
+            let np = self.curve_params(i, params, &mut pbuf);
             let res = self.model.simulate_sens_each(
-                params,
+                &pbuf[..np],
                 &self.load(c),
                 &c.times_h,
                 &mut points,
@@ -626,8 +680,10 @@ impl<'a> Objective<'a> {
                     });
                 }
                 Err(_) => {
+                    let mut buf = [0.0; MAX_PARAMS];
+                    let np = self.curve_params(i, params, &mut buf);
                     let res = self.model.simulate(
-                        params,
+                        &buf[..np],
                         &self.load(c),
                         &c.times_h,
                         &mut strain,

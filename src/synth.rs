@@ -150,6 +150,42 @@ pub enum Sampling {
     Logged,
 }
 
+/// The laboratory the data come from: identical specimens (every curve the true model's), or
+/// specimens as real laboratories test them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "snake_case")]
+pub enum World {
+    /// Every specimen the population's: the sets of earlier batteries, bit for bit.
+    #[default]
+    Identical,
+    /// Specimens that are not identical: each curve's creep rate carries its own log-normal
+    /// factor (sd 10–30 %), in half the sets its ductility too (sd 8 %); one or two stresses
+    /// are tested twice (replicates, with a `specimen` column); the reading error grows with
+    /// strain (sd × (1 + g ε/ε_f), g up to 2). Drawn from a stream of its own, so that the
+    /// rest of a set (family, stresses, sampling, noise) is the identical world's.
+    Specimens,
+}
+
+/// The specimens of a set in the [`World::Specimens`] world.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+pub struct SpecimenTruth {
+    /// sd of the ln creep-rate factor between specimens.
+    pub rate_sd: f64,
+    /// sd of the ln ductility factor (0: none).
+    pub ductility_sd: f64,
+    /// Per curve: its ln creep-rate factor.
+    pub rate_effects: Vec<f64>,
+    /// Per curve: its ln ductility factor (rupture strain × e^ζ).
+    pub ductility_effects: Vec<f64>,
+    /// Per curve: the specimen label written to the files.
+    pub labels: Vec<String>,
+    /// Growth of the reading error with strain: sd × (1 + g ε/ε_f).
+    pub error_growth: f64,
+}
+
+/// Separates the specimen world's random stream from the set's own.
+const SPECIMEN_STREAM: u64 = 0x5ee0_5ca7_7e25_0001;
+
 /// Everything that defines a generated set (the truth).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Truth {
@@ -165,7 +201,7 @@ pub struct Truth {
     pub effect: Effect,
     /// True KHD constants [A, B, H*, h, Kc, C].
     pub constants: Vec<f64>,
-    /// Stresses, MPa.
+    /// Stresses, MPa, one per curve (a replicated stress twice).
     pub stresses: Vec<f64>,
     /// Sampling.
     pub sampling: Sampling,
@@ -183,6 +219,12 @@ pub struct Truth {
     pub true_strain: Vec<Vec<f64>>,
     /// Per curve: the sampled times (h).
     pub times_h: Vec<Vec<f64>>,
+    /// The world the set comes from.
+    #[serde(default)]
+    pub world: World,
+    /// The specimens (world `specimens` only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub specimens: Option<SpecimenTruth>,
 }
 
 /// One generated data set: its files' contents and its truth.
@@ -284,13 +326,63 @@ fn digitised_times<R: Rng>(dense_t: &[f64], dense_e: &[f64], n: usize, rng: &mut
 
 /// Generate the set `name` of `scenario` from `seed`.
 pub fn generate(name: &str, scenario: &str, seed: u64) -> Result<SynthSet> {
-    generate_inner(name, scenario, None, seed)
+    generate_inner(name, scenario, None, seed, World::Identical)
 }
 
 /// [`generate`] with the effect (and its size) given instead of drawn; everything else is
 /// drawn from `seed` as for the effect's scenario.
 pub fn generate_with_effect(name: &str, effect: Effect, seed: u64) -> Result<SynthSet> {
-    generate_inner(name, effect.name(), Some(effect), seed)
+    generate_inner(name, effect.name(), Some(effect), seed, World::Identical)
+}
+
+/// [`generate`] in `world` (with `effect` given, or drawn for `scenario` when `None`).
+pub fn generate_in(
+    name: &str,
+    scenario: &str,
+    effect: Option<Effect>,
+    seed: u64,
+    world: World,
+) -> Result<SynthSet> {
+    generate_inner(name, scenario, effect, seed, world)
+}
+
+/// The specimens of a set of `stresses` in the specimens world, from their own stream:
+/// replicated stresses, labels, effects, the error growth.
+fn draw_specimens(stresses: &[f64], seed: u64) -> (Vec<f64>, SpecimenTruth) {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ SPECIMEN_STREAM);
+    let rate_sd = 0.1 + 0.2 * rng.gen::<f64>();
+    let ductility_sd = if rng.gen::<bool>() { 0.08 } else { 0.0 };
+    let n_rep = rng.gen_range(1..=2usize).min(stresses.len());
+    let mut reps: Vec<usize> = (0..stresses.len()).collect();
+    reps.shuffle(&mut rng);
+    reps.truncate(n_rep);
+    let mut tests = Vec::new();
+    let mut labels = Vec::new();
+    for (k, &s) in stresses.iter().enumerate() {
+        tests.push(s);
+        labels.push(format!("S{}-a", k + 1));
+        if reps.contains(&k) {
+            tests.push(s);
+            labels.push(format!("S{}-b", k + 1));
+        }
+    }
+    let rate_effects = tests.iter().map(|_| rate_sd * normal(&mut rng)).collect();
+    let ductility_effects = tests
+        .iter()
+        .map(|_| ductility_sd * normal(&mut rng))
+        .collect();
+    let error_growth = 2.0 * rng.gen::<f64>();
+    (
+        tests,
+        SpecimenTruth {
+            rate_sd,
+            ductility_sd,
+            rate_effects,
+            ductility_effects,
+            labels,
+            error_growth,
+        },
+    )
 }
 
 fn generate_inner(
@@ -298,6 +390,7 @@ fn generate_inner(
     scenario: &str,
     effect: Option<Effect>,
     seed: u64,
+    world: World,
 ) -> Result<SynthSet> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let family = FAMILIES[rng.gen_range(0..FAMILIES.len())];
@@ -312,6 +405,13 @@ fn generate_inner(
             (s + 2.0 * (2.0 * rng.gen::<f64>() - 1.0)).round()
         })
         .collect();
+    let (tests, specimens) = match world {
+        World::Identical => (stresses.clone(), None),
+        World::Specimens => {
+            let (t, sp) = draw_specimens(&stresses, seed);
+            (t, Some(sp))
+        }
+    };
     let sampling = if rng.gen::<f64>() < 0.75 {
         Sampling::Digitised
     } else {
@@ -349,7 +449,7 @@ fn generate_inner(
         temperature_c: family.temperature_c,
         effect,
         constants: base.to_vec(),
-        stresses: stresses.clone(),
+        stresses: tests.clone(),
         sampling,
         noise_sd: vec![],
         noise_phi,
@@ -359,13 +459,31 @@ fn generate_inner(
         rupture_h: vec![],
         true_strain: vec![],
         times_h: vec![],
+        world,
+        specimens: specimens.clone(),
     };
     let mut rows: Vec<(f64, f64)> = Vec::new(); // (stress, time, strain) via parallel vecs
     let mut row_stress: Vec<f64> = Vec::new();
-    let mut ruptures = String::from("temperature_C,stress_MPa,rupture_time_h\n");
+    let mut row_test: Vec<usize> = Vec::new();
+    let mut ruptures = String::from(if specimens.is_some() {
+        "temperature_C,stress_MPa,rupture_time_h,specimen\n"
+    } else {
+        "temperature_C,stress_MPa,rupture_time_h\n"
+    });
     // Simulate every curve densely to its rupture.
     let mut dense: Vec<(f64, Vec<f64>, Vec<f64>)> = Vec::new();
-    for &s in &stresses {
+    // The constants of test k: the population's with its specimen's factors (A × e^η,
+    // C / e^ζ).
+    let test_params = |k: usize| -> Vec<f64> {
+        let mut p = params.clone();
+        if let Some(sp) = &specimens {
+            p[0] *= sp.rate_effects[k].exp();
+            p[5] /= sp.ductility_effects[k].exp();
+        }
+        p
+    };
+    for (k, &s) in tests.iter().enumerate() {
+        let params = test_params(k);
         let load = Load::new(s, family.temperature_c, 1.0 / 3.0);
         let r = model.simulate(&params, &load, &[], &mut [], &ode);
         if !(r.ruptured() && r.t_end > 1.0 && r.t_end < 1e7) {
@@ -392,7 +510,8 @@ fn generate_inner(
         ((lim / step).floor() * step).max(step) / 100.0
     });
     truth.strain_cut = strain_cut;
-    for (i, &s) in stresses.iter().enumerate() {
+    for (i, &s) in tests.iter().enumerate() {
+        let params = test_params(i);
         let (t_r, grid, e) = &dense[i];
         let load = Load::new(s, family.temperature_c, 1.0 / 3.0);
         let last = t_r * (0.95 + 0.05 * rng.gen::<f64>());
@@ -430,13 +549,30 @@ fn generate_inner(
         }
         let sd = noise_level * (0.8 + 0.45 * rng.gen::<f64>());
         let ar = crate::errmodel::Ar1::with_marginal(sd, noise_phi);
-        let err = ar.simulate(times.len(), &mut rng);
+        let mut err = ar.simulate(times.len(), &mut rng);
+        if let Some(sp) = &specimens {
+            for (v, e) in err.iter_mut().zip(&strain) {
+                *v *= 1.0 + sp.error_growth * e / eps_f;
+            }
+        }
         for k in 0..times.len() {
             rows.push((times[k], strain[k] + err[k]));
             row_stress.push(s);
+            row_test.push(i);
         }
         let t_f = t_r * (lifetime_sd * normal(&mut rng)).exp();
-        ruptures += &format!("{},{},{}\n", family.temperature_c, s, fmt(t_f));
+        match &specimens {
+            None => ruptures += &format!("{},{},{}\n", family.temperature_c, s, fmt(t_f)),
+            Some(sp) => {
+                ruptures += &format!(
+                    "{},{},{},{}\n",
+                    family.temperature_c,
+                    s,
+                    fmt(t_f),
+                    sp.labels[i]
+                )
+            }
+        }
         truth.noise_sd.push(sd);
         truth.true_rupture_h.push(*t_r);
         truth.rupture_h.push(t_f);
@@ -446,15 +582,24 @@ fn generate_inner(
     // Shuffled rows.
     let mut order: Vec<usize> = (0..rows.len()).collect();
     order.shuffle(&mut rng);
-    let mut curves = String::from("temperature_C,stress_MPa,time_h,strain_pct\n");
+    let mut curves = String::from(if specimens.is_some() {
+        "temperature_C,stress_MPa,time_h,strain_pct,specimen\n"
+    } else {
+        "temperature_C,stress_MPa,time_h,strain_pct\n"
+    });
     for k in order {
         curves += &format!(
-            "{},{},{},{}\n",
+            "{},{},{},{}",
             family.temperature_c,
             row_stress[k],
             fmt(rows[k].0),
             fmt(100.0 * rows[k].1)
         );
+        if let Some(sp) = &specimens {
+            curves += ",";
+            curves += &sp.labels[row_test[k]];
+        }
+        curves += "\n";
     }
     let names = ["A", "B", "Hstar", "h", "Kc", "C"];
     let logs = [true, false, false, true, true, false];

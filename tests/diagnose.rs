@@ -36,7 +36,14 @@ fn json(path: &Path) -> serde_json::Value {
 #[test]
 fn battery_of_40_generated_sets() {
     let dir = TempDir::new().unwrap();
-    let results = run_battery(dir.path(), 1001, 40, false).unwrap();
+    let results = run_battery(
+        dir.path(),
+        1001,
+        40,
+        creepfit::synth::World::Identical,
+        false,
+    )
+    .unwrap();
     assert_eq!(results.len(), 40);
     let r = write_reports(dir.path(), &results, 1001).unwrap();
     for (i, res) in results.iter().enumerate() {
@@ -73,7 +80,14 @@ fn battery_of_40_generated_sets() {
     assert_eq!(total, 40);
     assert!(dir.path().join("power.png").exists());
     // Resuming a finished battery recomputes nothing and gives the same results.
-    let again = run_battery(dir.path(), 1001, 40, false).unwrap();
+    let again = run_battery(
+        dir.path(),
+        1001,
+        40,
+        creepfit::synth::World::Identical,
+        false,
+    )
+    .unwrap();
     let text = |v: &[creepfit::battery::SetResult]| serde_json::to_string(v).unwrap();
     assert_eq!(text(&again), text(&results));
     assert_eq!(

@@ -17,6 +17,9 @@ use rayon::prelude::*;
 
 use crate::data::Curve;
 use crate::errmodel::ErrorModel;
+use crate::fit::FitSettings;
+use crate::likelihood::{raw_objective, MlFit};
+use crate::model::Model;
 use crate::objective::Evaluation;
 
 /// Replicates per batch (fixed, for thread-count invariance).
@@ -63,6 +66,92 @@ pub fn replicate_data<R: Rng>(
                 strains,
                 rupture_time_h,
                 ..c.clone()
+            }
+        })
+        .collect()
+}
+
+/// A replicate of `curves` under a fitted hierarchical model (`fit`, with specimen effects):
+/// every curve a NEW specimen, its effects drawn from the fitted scatter; each curve's
+/// measured times scaled by the ratio of the new specimen's predicted life to the fitted life
+/// of the real one (so a shorter-lived specimen is logged over its own shorter life, as the
+/// real one was over its own); the model's predictions there plus AR(1) reading error, and
+/// the rupture time scattered on the log scale by the fitted lifetime scatter. Without
+/// specimen effects in `fit` this is [`replicate_data`].
+pub fn replicate_hier<R: Rng>(
+    curves: &[Curve],
+    model: &dyn Model,
+    fit: &MlFit,
+    settings: &FitSettings,
+    rng: &mut R,
+) -> Vec<Curve> {
+    let eval = fit.eval.as_ref().expect("fitted");
+    let Some(sp) = &fit.specimen else {
+        return replicate_data(curves, eval, &fit.noise, rng);
+    };
+    let n = curves.len();
+    // Draw every effect first (a fixed use of the stream), kind-major.
+    let draws: Vec<Vec<f64>> = sp
+        .scatter
+        .iter()
+        .map(|t| {
+            (0..n)
+                .map(|_| t * rng.sample::<f64, _>(StandardNormal))
+                .collect()
+        })
+        .collect();
+    let mut base = fit.clone();
+    base.specimen = Some(crate::likelihood::SpecimenFit {
+        effects: draws,
+        ..sp.clone()
+    });
+    let factors = base.factors(model);
+    // The new specimens' lives at the real times (only their rupture times are used).
+    let obj = raw_objective(model, curves, settings).with_factors(factors.clone());
+    let first = obj.evaluate(&fit.params);
+    let scaled: Vec<Curve> = curves
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let (old, new) = (
+                eval.curves[i].rupture_time_h,
+                first.curves[i].rupture_time_h,
+            );
+            let ratio = if old.is_finite() && new.is_finite() && old > 0.0 {
+                new / old
+            } else {
+                1.0
+            };
+            Curve {
+                times_h: c.times_h.iter().map(|t| t * ratio).collect(),
+                rupture_time_h: c.rupture_time_h.map(|t| t * ratio),
+                ..c.clone()
+            }
+        })
+        .collect();
+    let ev = raw_objective(model, &scaled, settings)
+        .with_factors(factors)
+        .evaluate(&fit.params);
+    scaled
+        .into_iter()
+        .zip(&ev.curves)
+        .enumerate()
+        .map(|(i, (c, p))| {
+            let e = fit.noise.strain[i].simulate(c.times_h.len(), rng);
+            let strains: Vec<f64> = p.strain.iter().zip(&e).map(|(s, d)| s + d).collect();
+            let z: f64 = rng.sample(StandardNormal);
+            let rupture_time_h = c.rupture_time_h.map(|t| {
+                let base = if p.rupture_time_h.is_finite() {
+                    p.rupture_time_h
+                } else {
+                    t
+                };
+                base * (fit.noise.lifetime_sd * z).exp()
+            });
+            Curve {
+                strains,
+                rupture_time_h,
+                ..c
             }
         })
         .collect()

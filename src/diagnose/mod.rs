@@ -38,7 +38,9 @@ use crate::data::{Curve, Dataset};
 use crate::error::{Error, Result};
 use crate::fit::{param_space, FitSettings};
 use crate::guess::initial_guess;
-use crate::likelihood::{ml_fit, raw_objective, MlFit, MlOptions};
+use crate::likelihood::{
+    ml_fit, ml_fit_from, raw_objective, with_specimens, EffectStart, MlFit, MlOptions,
+};
 use crate::model::{ext, Model};
 use crate::objective::{mean_abs, ParamSpace};
 use crate::sweep::latin_hypercube;
@@ -165,19 +167,25 @@ fn specs(cfg: &RunConfig) -> Result<Vec<Spec>> {
 }
 
 /// The best (lowest −2 ln L) of maximum-likelihood fits from `starts`, the first `warm` of
-/// them optima already found (polished directly; the others are fresh starts, also fitted
-/// with white reading errors first); ties go to the earlier start. `None` when every start
-/// failed; the count of failed starts comes along.
+/// them optima already found (polished directly, their specimen effects starting at
+/// `effects`; the others are fresh starts, also fitted with white reading errors first);
+/// ties go to the earlier start. `None` when every start failed; the count of failed starts
+/// comes along.
 fn fit_best(
     spec: &Spec,
     curves: &[Curve],
     starts: &[Vec<f64>],
     warm: usize,
+    effects: Option<&EffectStart>,
     settings: &FitSettings,
     ml: &MlOptions,
 ) -> (Option<MlFit>, usize) {
-    let fits = fit_all(spec, curves, starts, warm, settings, ml);
+    let mut fits = fit_all(spec, curves, starts, warm, effects, settings, ml);
     let failed = fits.iter().filter(|f| !f.ok()).count();
+    if starts.len() > warm {
+        let fresh = fits.split_off(warm.min(fits.len()));
+        fits.extend(polish(spec, curves, &fresh, 1, settings, ml));
+    }
     let best = fits
         .into_iter()
         .filter(|f| f.ok())
@@ -185,14 +193,39 @@ fn fit_best(
     (best, failed)
 }
 
+/// The specimen effects of `ml` added to up to `k` distinct optima among `fits` (fits
+/// without them, best first): each the better of its hierarchical fit and itself.
+fn polish(
+    spec: &Spec,
+    curves: &[Curve],
+    fits: &[MlFit],
+    k: usize,
+    settings: &FitSettings,
+    ml: &MlOptions,
+) -> Vec<MlFit> {
+    if !ml.specimen.any() {
+        return fits.to_vec();
+    }
+    let tops = distinct_fits(spec, fits, k);
+    let mut out: Vec<MlFit> = tops
+        .into_par_iter()
+        .map(|f| with_specimens(f, spec.model.as_ref(), curves, &spec.space, settings, ml))
+        .collect();
+    // The others stay as they are (they hold the failed starts' records and other basins).
+    out.extend(fits.iter().cloned());
+    out
+}
+
 /// Maximum-likelihood fits from every start, in parallel, in start order (the first `warm`
-/// polished directly, the others both directly and white first, the better kept); a start
-/// within 1e-6 of the box of an earlier one is fitted once.
+/// polished directly with their specimen effects starting at `effects`, the others both
+/// directly and white first, the better kept); a start within 1e-6 of the box of an earlier
+/// one is fitted once.
 fn fit_all(
     spec: &Spec,
     curves: &[Curve],
     starts: &[Vec<f64>],
     warm: usize,
+    effects: Option<&EffectStart>,
     settings: &FitSettings,
     ml: &MlOptions,
 ) -> Vec<MlFit> {
@@ -216,21 +249,26 @@ fn fit_all(
                 white_first: false,
                 ..*ml
             };
-            let d = ml_fit(
-                spec.model.as_ref(),
-                curves,
-                &spec.space,
-                s,
-                settings,
-                &direct,
-            );
+            let model = spec.model.as_ref();
             if i < warm {
-                return d;
+                return ml_fit_from(model, curves, &spec.space, s, effects, settings, &direct);
             }
+            // A fresh start is fitted without specimen effects ([`polish`] adds them to the
+            // best optima found): the multistart's job is to find the basins, and a fit
+            // without effects costs a fraction of one with them.
+            let direct = MlOptions {
+                specimen: crate::likelihood::SpecimenOptions::NONE,
+                ..direct
+            };
+            let white = MlOptions {
+                specimen: crate::likelihood::SpecimenOptions::NONE,
+                ..*ml
+            };
+            let d = ml_fit(model, curves, &spec.space, s, settings, &direct);
             // A fresh start both ways: white first finds what an AR(1) model with φ near 1
             // takes for noise (a loading strain), the direct path keeps basins the white
             // stage leads away from (measured on the seed's 590 °C data).
-            let w = ml_fit(spec.model.as_ref(), curves, &spec.space, s, settings, ml);
+            let w = ml_fit(model, curves, &spec.space, s, settings, &white);
             match (d.ok(), w.ok()) {
                 (true, true) if w.neg2ll < d.neg2ll => w,
                 (false, true) => w,
@@ -249,6 +287,14 @@ pub const BASIN_WINDOW: f64 = 10.0;
 /// first: a fit is new when its −2 ln L differs by more than 0.01 from every kept one or its
 /// constants by more than 0.02 of the box in some coordinate.
 fn distinct_optima(spec: &Spec, fits: &[MlFit], k: usize) -> Vec<Vec<f64>> {
+    distinct_fits(spec, fits, k)
+        .into_iter()
+        .map(|f| f.params)
+        .collect()
+}
+
+/// The fits behind [`distinct_optima`].
+fn distinct_fits(spec: &Spec, fits: &[MlFit], k: usize) -> Vec<MlFit> {
     let mut ok: Vec<&MlFit> = fits.iter().filter(|f| f.ok()).collect();
     ok.sort_by(|a, b| a.neg2ll.total_cmp(&b.neg2ll));
     let best = ok.first().map_or(f64::NAN, |f| f.neg2ll);
@@ -267,7 +313,7 @@ fn distinct_optima(spec: &Spec, fits: &[MlFit], k: usize) -> Vec<Vec<f64>> {
             kept.push(f);
         }
     }
-    kept.into_iter().map(|f| f.params.clone()).collect()
+    kept.into_iter().cloned().collect()
 }
 
 /// Leave-one-stress-out prediction of one candidate.
@@ -468,6 +514,9 @@ pub struct Candidate {
     pub lifetime_errs_pct: Vec<f64>,
     /// The fitted error model.
     pub noise: Option<NoiseSummary>,
+    /// The specimen effects (scatter between specimens and each specimen's factors), when
+    /// the fit carries any.
+    pub specimen: Option<crate::likelihood::SpecimenFit>,
     /// Per-curve explanation.
     pub curves: Vec<CurveSignature>,
 }
@@ -618,6 +667,7 @@ fn candidate(spec: &Spec, curves: &[Curve], fit: Option<&MlFit>, failed: usize) 
         pinned: vec![],
         lifetime_errs_pct: vec![],
         noise: None,
+        specimen: None,
         curves: vec![],
     };
     if let Some(f) = fit {
@@ -641,6 +691,7 @@ fn candidate(spec: &Spec, curves: &[Curve], fit: Option<&MlFit>, failed: usize) 
             c.lifetime_errs_pct = ev.lifetime_errors_pct(curves);
         }
         c.noise = Some(noise_summary(f));
+        c.specimen = f.specimen.clone();
         c.curves = signatures(curves, f);
     }
     c
@@ -661,12 +712,7 @@ fn null_replicate(
 ) -> Vec<f64> {
     let base = fits[0].as_ref().expect("base fitted");
     let mut rng = bootstrap::replicate_rng(dc.seed, NULL_STREAM, b);
-    let data = bootstrap::replicate_data(
-        curves,
-        base.eval.as_ref().expect("fitted"),
-        &base.noise,
-        &mut rng,
-    );
+    let data = bootstrap::replicate_hier(curves, specs[0].model.as_ref(), base, settings, &mut rng);
     let n_ext = specs.len() - 1;
     let mut starts = basins[0].clone();
     for _ in 0..dc.replicate_starts {
@@ -681,7 +727,20 @@ fn null_replicate(
                 .collect()
         })
         .collect();
-    let (b0, _) = fit_best(&specs[0], &data, &starts, basins[0].len(), settings, ml);
+    // New specimens: their effects start at zero, the scatter at the data's estimate.
+    let fresh = base
+        .specimen
+        .as_ref()
+        .map(|sp| EffectStart::fresh(sp.kinds.clone(), sp.scatter.clone(), curves.len()));
+    let (b0, _) = fit_best(
+        &specs[0],
+        &data,
+        &starts,
+        basins[0].len(),
+        fresh.as_ref(),
+        settings,
+        ml,
+    );
     let ng = gof::SHAPES.len();
     let mut out = vec![f64::NAN; n_ext + ng + 1];
     let Some(b0) = b0 else {
@@ -696,7 +755,8 @@ fn null_replicate(
         st.extend(basins[k + 1].iter().take(1).cloned());
         let warm = st.len();
         st.extend(ext_random[k].iter().cloned());
-        let (fk, _) = fit_best(spec, &data, &st, warm, settings, ml);
+        let from = b0.specimen.as_ref().map(EffectStart::from);
+        let (fk, _) = fit_best(spec, &data, &st, warm, from.as_ref(), settings, ml);
         out[k] = fk.map_or(f64::NAN, |f| b0.neg2ll - f.neg2ll);
     }
     for (g, shape) in gof::SHAPES.iter().enumerate() {
@@ -738,17 +798,16 @@ fn gof_bootstrap(
     let observed: Vec<f64> = gs.iter().map(|g| g.statistic).collect();
     let (reps, _) = bootstrap::sequential(&observed, dc.bootstrap, |b| {
         let mut rng = bootstrap::replicate_rng(dc.seed, GOF_STREAM, b);
-        let data = bootstrap::replicate_data(
-            curves,
-            fit.eval.as_ref().expect("fitted"),
-            &fit.noise,
-            &mut rng,
-        );
+        let data = bootstrap::replicate_hier(curves, spec.model.as_ref(), fit, settings, &mut rng);
         let mut st = basins.to_vec();
         for _ in 0..dc.replicate_starts {
             st.push(spec.random_start(&mut rng));
         }
-        let (f, _) = fit_best(spec, &data, &st, basins.len(), settings, ml);
+        let fresh = fit
+            .specimen
+            .as_ref()
+            .map(|sp| EffectStart::fresh(sp.kinds.clone(), sp.scatter.clone(), curves.len()));
+        let (f, _) = fit_best(spec, &data, &st, basins.len(), fresh.as_ref(), settings, ml);
         gof::SHAPES
             .iter()
             .map(|sh| {
@@ -876,6 +935,7 @@ pub fn diagnose_with(cfg: &RunConfig, data: &Dataset, dc: &DiagnoseConfig) -> Re
     let ml = MlOptions {
         lifetime_sd_floor: dc.lifetime_sd_floor,
         white_first: true,
+        specimen: cfg.objective.specimen_effects.resolve(curves).0,
     };
     let specs = specs(cfg)?;
 
@@ -942,13 +1002,48 @@ pub fn diagnose_with(cfg: &RunConfig, data: &Dataset, dc: &DiagnoseConfig) -> Re
         // base optimum, the AR(1) fit took the misfit for noise (φ 0.995) and ended 551 units
         // of −2 ln L above the base; no other start found the basin of the truth.
         let warm = usize::from(i > 0 && fits[0].is_some() && !spec.extra.is_empty());
-        let all = fit_all(spec, curves, &starts, warm, &settings, &ml);
+        // The base optimum's specimen effects start the extension's warm fit: a nested
+        // extension then starts at the base's likelihood.
+        let warm_effects = fits
+            .first()
+            .and_then(|f: &Option<MlFit>| f.as_ref())
+            .and_then(|f| f.specimen.as_ref())
+            .map(EffectStart::from);
+        let mut all = fit_all(
+            spec,
+            curves,
+            &starts,
+            warm,
+            warm_effects.as_ref(),
+            &settings,
+            &ml,
+        );
         let failed = all.iter().filter(|f| !f.ok()).count();
+        let fresh = all.split_off(warm.min(all.len()));
+        all.extend(polish(
+            spec,
+            curves,
+            &fresh,
+            dc.replicate_basins,
+            &settings,
+            &ml,
+        ));
         basins.push(distinct_optima(spec, &all, dc.replicate_basins));
         let best =
             all.into_iter()
                 .filter(|f| f.ok())
                 .reduce(|a, b| if b.neg2ll < a.neg2ll { b } else { a });
+        let best = best.map(|mut f| {
+            crate::likelihood::scatter_intervals(
+                &mut f,
+                spec.model.as_ref(),
+                curves,
+                &spec.space,
+                &settings,
+                &ml,
+            );
+            f
+        });
         if i == 0 && best.is_none() {
             return Err(Error::Diagnose(format!(
                 "the base model could not be fitted from any of {} starts",

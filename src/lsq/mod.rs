@@ -68,6 +68,14 @@ pub trait LeastSquaresProblem: Sync {
     fn reweight(&self, _x: &[f64], _r: &mut [f64], _jac: Option<&mut DMatrix<f64>>) -> bool {
         false
     }
+    /// The damping's scale per parameter at the current point, given JᵀJ (`None`, the
+    /// default: its diagonal, Marquardt's scaling). A problem whose parameters come in
+    /// blocks that trade off against each other (random effects against the constants they
+    /// scatter) can give the diagonal of the Schur complement instead, so that a direction
+    /// the other block compensates is not damped as if it were stiff.
+    fn damping_scale(&self, _jtj: &DMatrix<f64>) -> Option<Vec<f64>> {
+        None
+    }
     /// Whether [`minimize`] should work on the normal equations
     /// ([`LeastSquaresProblem::residuals_and_normal_equations`]) instead of a stored m × n
     /// Jacobian: for problems whose Jacobian would dominate memory and time. Such a problem
@@ -153,6 +161,12 @@ pub struct LmOptions {
     /// Step of the finite difference along v that gives the directional second derivative
     /// of the residuals, as a fraction of v.
     pub geodesic_h: f64,
+    /// Stop on a plateau: (K, δ) ends the iteration when the objective has stayed within δ
+    /// (absolute) over the last K iterations (`None`: never). For a profiled likelihood,
+    /// whose weights move at every iteration, the relative tests may never pass along a
+    /// flat valley while the likelihood no longer changes on the scale that matters
+    /// (0.01 in −2 ln L is below any decision).
+    pub plateau: Option<(usize, f64)>,
 }
 
 impl Default for LmOptions {
@@ -167,6 +181,7 @@ impl Default for LmOptions {
             lambda_max: 1e16,
             geodesic: None,
             geodesic_h: 0.1,
+            plateau: None,
         }
     }
 }
@@ -183,6 +198,8 @@ pub enum Termination {
     ConvergedGradient,
     /// No acceptable step could be found even at the largest damping.
     Stalled,
+    /// The objective stayed within [`LmOptions::plateau`]'s δ over its last K iterations.
+    Plateau,
     /// `max_iterations` reached.
     IterationLimit,
     /// The residuals (or the Jacobian) could not be evaluated at the current point.
@@ -197,6 +214,7 @@ impl Termination {
             Termination::ConvergedObjective => "converged_objective",
             Termination::ConvergedGradient => "converged_gradient",
             Termination::Stalled => "stalled",
+            Termination::Plateau => "plateau",
             Termination::IterationLimit => "iteration_limit",
             Termination::SimulationFailure => "simulation_failure",
         }
@@ -208,6 +226,7 @@ impl Termination {
             Termination::ConvergedStep
                 | Termination::ConvergedObjective
                 | Termination::ConvergedGradient
+                | Termination::Plateau
         )
     }
 }
@@ -465,9 +484,25 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
         lambda: last_lambda.get(),
     };
 
+    // The objective at the start of each iteration (for the plateau test).
+    let mut history: Vec<f64> = Vec::new();
     for iter in 1..=opts.max_iterations {
         if !normal && problem.reweight(&x, &mut r, jac_fresh.then_some(&mut jac)) {
             f = sumsq(&r);
+        }
+        if let Some((k, delta)) = opts.plateau {
+            history.push(f);
+            if history.len() > k {
+                let w = &history[history.len() - k - 1..];
+                let (lo, hi) = w
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+                        (a.min(*v), b.max(*v))
+                    });
+                if hi - lo <= delta {
+                    return done(x, f, r, iter, evaluations, Termination::Plateau);
+                }
+            }
         }
         let jac_result = if jac_fresh {
             Ok(())
@@ -521,6 +556,8 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
         if lambda < 0.0 {
             lambda = opts.lambda0 * diag_max;
         }
+        let scale = problem.damping_scale(&jtj);
+
         // Inner loop: increase damping until a step reduces the objective.
         loop {
             last_lambda.set(lambda / diag_max);
@@ -530,7 +567,8 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
             let mut held = free.clone();
             let step = loop {
                 let Some((ch, step)) = solve_held(&jtj, &g, &held, |j| {
-                    lambda * jtj[(j, j)].max(DIAG_FLOOR * diag_max)
+                    let d = scale.as_ref().map_or(jtj[(j, j)], |s| s[j]);
+                    lambda * d.max(DIAG_FLOOR * diag_max)
                 }) else {
                     break None;
                 };

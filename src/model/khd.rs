@@ -1,7 +1,7 @@
 //! The Kowalewski–Hayhurst–Dyson creep-damage model of the seed paper (eqs. 1–4), in its
 //! four-state form and in its exact one-state reduction.
 
-use super::{ConstantSpec, CreepModel, Load, Scale};
+use super::{ConstantSpec, CreepModel, Load, Role, Scale};
 use crate::dual::Scalar;
 
 /// Largest sinh argument accepted as physical: beyond it the rate is absurd (A·e^200) and
@@ -19,6 +19,7 @@ pub fn constants() -> Vec<ConstantSpec> {
             ub: 1e-9,
             default: 1e-9,
             scale: Scale::Log,
+            role: Role::Rate,
             doc: "creep rate coefficient",
         },
         ConstantSpec {
@@ -28,6 +29,7 @@ pub fn constants() -> Vec<ConstantSpec> {
             ub: 0.2,
             default: 0.11,
             scale: Scale::Linear,
+            role: Role::Other,
             doc: "stress sensitivity of the creep rate",
         },
         ConstantSpec {
@@ -37,6 +39,7 @@ pub fn constants() -> Vec<ConstantSpec> {
             ub: 0.8,
             default: 0.426,
             scale: Scale::Linear,
+            role: Role::Other,
             doc: "saturation value of the hardening variable H",
         },
         ConstantSpec {
@@ -46,6 +49,7 @@ pub fn constants() -> Vec<ConstantSpec> {
             ub: 2e5,
             default: 5.05e4,
             scale: Scale::Log,
+            role: Role::Other,
             doc: "hardening modulus (primary creep)",
         },
         ConstantSpec {
@@ -55,6 +59,7 @@ pub fn constants() -> Vec<ConstantSpec> {
             ub: 3e-5,
             default: 6.86e-6,
             scale: Scale::Log,
+            role: Role::Other,
             doc: "carbide coarsening rate",
         },
         ConstantSpec {
@@ -64,6 +69,7 @@ pub fn constants() -> Vec<ConstantSpec> {
             ub: 10.0,
             default: 4.311,
             scale: Scale::Linear,
+            role: Role::InverseDuctility,
             doc: "cavitation damage per unit strain (omega = C eps)",
         },
     ]

@@ -50,6 +50,24 @@ pub struct ConstantSpec {
     pub scale: Scale,
     /// One line on what the constant does.
     pub doc: &'static str,
+    /// What a specimen's own value of it means ([`Role`]): where specimen-to-specimen
+    /// scatter of the creep rate and of the ductility enters the model.
+    pub role: Role,
+}
+
+/// The part a constant plays for specimen effects (random effects in the error model): a
+/// specimen's own creep rate is the population's rate constant times a factor, its own
+/// ductility the population's inverse-ductility constant divided by one.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Role {
+    /// No specimen effect acts through it.
+    #[default]
+    Other,
+    /// Multiplying it by f multiplies the creep rate by f (KHD: A).
+    Rate,
+    /// Dividing it by g multiplies the rupture strain by g (KHD: C, ε_r = ω_f/C).
+    InverseDuctility,
 }
 
 /// 0 °C in K: files give temperatures in °C, [`Load`] and the temperature laws work in K.

@@ -95,6 +95,7 @@ pub fn context<'a>(
             // Not read here: the profile's fits are scaled AR(1) fits from their starts
             // ([`super::constrained::ml_fit_scaled`]), as before the two-stage `ml_fit`.
             white_first: false,
+            specimen: cfg.objective.specimen_effects.resolve(&data.curves).0,
         },
     )
 }

@@ -5,7 +5,7 @@
 //! 1 + C_d ε and the one-state reduction still holds. Switched off: C_d = 0.
 
 use crate::dual::Scalar;
-use crate::model::{ConstantSpec, Scale};
+use crate::model::{ConstantSpec, Role, Scale};
 
 /// Registry name.
 pub const NAME: &str = "dislocation_damage";
@@ -19,6 +19,7 @@ pub fn constants() -> Vec<ConstantSpec> {
         ub: 50.0,
         default: 1.0,
         scale: Scale::Linear,
+        role: Role::Other,
         doc: "dislocation multiplication per unit strain: rate factor 1/(1-D) = 1 + Cd eps",
     }]
 }

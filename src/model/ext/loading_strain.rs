@@ -3,7 +3,7 @@
 //! The creep equations are unchanged; only the strain read-out moves. Switched off: E_L = ∞.
 
 use crate::dual::Scalar;
-use crate::model::{ConstantSpec, Scale};
+use crate::model::{ConstantSpec, Role, Scale};
 
 /// Registry name.
 pub const NAME: &str = "loading_strain";
@@ -17,6 +17,7 @@ pub fn constants() -> Vec<ConstantSpec> {
         ub: 1e7,
         default: 1e5,
         scale: Scale::Log,
+        role: Role::Other,
         doc: "apparent loading modulus: strain on loading = stress / EL",
     }]
 }

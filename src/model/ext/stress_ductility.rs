@@ -3,7 +3,7 @@
 //! ([`SIGMA_REF_MPA`]) so that ν does not trade off against C. Switched off: ν = 0.
 
 use crate::dual::Scalar;
-use crate::model::{ConstantSpec, Scale};
+use crate::model::{ConstantSpec, Role, Scale};
 
 /// Registry name.
 pub const NAME: &str = "stress_ductility";
@@ -20,6 +20,7 @@ pub fn constants() -> Vec<ConstantSpec> {
         ub: 10.0,
         default: 0.0,
         scale: Scale::Linear,
+        role: Role::Other,
         doc: "stress exponent of the damage rate: omega = C (stress/100 MPa)^nu eps",
     }]
 }

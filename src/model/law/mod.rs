@@ -189,6 +189,7 @@ pub fn constants_with_laws(inner: &[ConstantSpec], laws: &[LawKind]) -> Vec<Cons
                 ub,
                 default: 0.0f64.clamp(lb, ub),
                 scale: Scale::Linear,
+                role: super::Role::Other,
                 doc: match law {
                     LawKind::Arrhenius => "activation energy of the constant's Arrhenius law",
                     _ => "slope of the constant's linear temperature law",
