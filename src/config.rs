@@ -599,8 +599,9 @@ pub struct RunConfig {
     pub model: String,
     /// Extension names (DESIGN.md §6), in the order given.
     pub extensions: Vec<String>,
-    /// Stresses (MPa) of tests declared interrupted.
-    pub interrupted: Vec<f64>,
+    /// Tests declared interrupted: `"T:σ"`, `"T:σ:specimen"`, or a bare stress (MPa) when
+    /// the data are at one temperature ([`data::interrupted_flags`]).
+    pub interrupted: Vec<data::Interrupted>,
     /// Constants in the model's order (with extension defaults filled in).
     pub constants: Vec<ConstantConfig>,
     /// `[objective]`, with `--w` applied.
@@ -644,7 +645,7 @@ struct RawConfig {
     #[serde(default)]
     extensions: Vec<String>,
     #[serde(default)]
-    interrupted: Vec<f64>,
+    interrupted: Vec<data::Interrupted>,
     #[serde(default)]
     constants: BTreeMap<String, RawConstant>,
     #[serde(default)]
@@ -1128,12 +1129,14 @@ impl RunConfig {
                 ));
             }
         }
-        for &s in &self.interrupted {
-            if !(s.is_finite() && s > 0.0) {
-                return Err(invalid(
-                    "interrupted",
-                    format!("stresses must be positive and finite (got {s})"),
-                ));
+        for (k, e) in self.interrupted.iter().enumerate() {
+            if let data::Interrupted::Stress(s) = *e {
+                if !(s.is_finite() && s > 0.0) {
+                    return Err(invalid(
+                        format!("interrupted[{k}]"),
+                        format!("stresses must be positive and finite (got {s})"),
+                    ));
+                }
             }
         }
         validate_objective(&self.objective)?;
@@ -1173,8 +1176,18 @@ impl RunConfig {
         LoadOptions {
             temperature_c: self.temperature_c,
             interrupted: self.interrupted.clone(),
+            interrupted_source: Some((self.path.clone(), self.interrupted_line())),
             several_temperatures: self.has_laws(),
         }
+    }
+
+    /// The line of `interrupted` in the configuration file, for the errors its entries raise
+    /// once the data are loaded (0: no entries, or the file cannot be read again).
+    fn interrupted_line(&self) -> usize {
+        if self.interrupted.is_empty() {
+            return 0;
+        }
+        std::fs::read_to_string(&self.path).map_or(0, |t| field_line(&t, "interrupted"))
     }
 
     /// Whether some constant follows a temperature law other than `constant`.
@@ -1580,7 +1593,7 @@ rtol = 1e-8
         assert_eq!(c.curves, Path::new("cfg/../data/c.csv"));
         assert_eq!(c.ruptures, Path::new("cfg/r.csv"));
         assert_eq!(c.temperature_c, Some(560.0));
-        assert_eq!(c.interrupted, vec![70.0]);
+        assert_eq!(c.interrupted, vec![data::Interrupted::Stress(70.0)]);
         assert_eq!(c.constant_names(), ["A", "B", "Hstar", "h", "Kc", "C"]);
         assert_eq!(c.constants[0].scale, Scale::Log);
         assert_eq!(c.constants[1].scale, Scale::Linear);
@@ -1603,7 +1616,10 @@ rtol = 1e-8
         assert_eq!(w[0], vec![0.5; 3]);
         assert_eq!(w[2], vec![0.12, 0.12, 1.0]);
         assert!(c.objective.weight_vectors(2, &c.path).is_err());
-        assert_eq!(c.load_options().interrupted, vec![70.0]);
+        assert_eq!(
+            c.load_options().interrupted,
+            vec![data::Interrupted::Stress(70.0)]
+        );
         assert!(c.warnings.is_empty());
         assert_eq!(c.model_name(), "khd");
         assert_eq!(c.out_dir("fit"), Path::new("results/t/fit"));
@@ -1842,6 +1858,18 @@ rtol = 1e-8
                 "cfg/run.toml:3: name: '../../x' must not contain",
             ),
             ("name = \"a/b\"\n", "name: 'a/b' must not contain"),
+            (
+                "interrupted = [\"920\"]\n",
+                "cfg/run.toml:3: interrupted: '920': expected \"T:stress\"",
+            ),
+            (
+                "interrupted = [85, \"920:x\"]\n",
+                "cfg/run.toml:3: interrupted: '920:x': cannot parse the stress 'x'",
+            ),
+            (
+                "interrupted = [85, -1]\n",
+                "cfg/run.toml:3: interrupted[1]: stresses must be positive",
+            ),
             ("name = \" \"\n", "name: must not be empty"),
         ];
         for (extra, want) in cases {
@@ -1856,5 +1884,50 @@ rtol = 1e-8
         }
         let e = err_of("ruptures = \"b.csv\"\n");
         assert!(e.contains("missing field `curves`"), "{e}");
+    }
+    /// Keyed `interrupted` entries through a configuration: the data's two temperatures share
+    /// a stress, one test declared; an entry matching no curve names the file and line.
+    #[test]
+    fn interrupted_keyed_through_the_configuration() {
+        let dir = tempfile::tempdir().unwrap();
+        let w = |n: &str, t: &str| std::fs::write(dir.path().join(n), t).unwrap();
+        w(
+            "c.csv",
+            "temperature_C,stress_MPa,time_h,strain_pct\n\
+             720,80,0,0\n720,80,5,1\n720,80,10,2\n720,90,0,0\n720,90,3,1\n720,90,6,2\n\
+             920,80,0,0\n920,80,2,1\n920,80,4,2\n",
+        );
+        w(
+            "r.csv",
+            "temperature_C,stress_MPa,rupture_time_h\n720,80,10\n720,90,6\n920,80,4\n",
+        );
+        let cfg = |interrupted: &str| {
+            let p = dir.path().join("run.toml");
+            w(
+                "run.toml",
+                &format!(
+                    "curves = \"c.csv\"\nruptures = \"r.csv\"\n{interrupted}\n{}\
+                     A = {{ lb = 1e-10, ub = 1e-9, scale = \"log\", law = \"arrhenius\", Q = {{ lb = 0, ub = 500 }} }}\n",
+                    CONSTANTS.replace("A     = { lb = 1e-10, ub = 1e-9, scale = \"log\" }\n", "")
+                ),
+            );
+            RunConfig::resolve(&p, &Overrides::default())
+        };
+        let (_, data) = cfg("interrupted = [\"920:80\"]").unwrap();
+        let lives: Vec<Option<f64>> = data.curves.iter().map(|c| c.rupture_time_h).collect();
+        assert_eq!(lives, [Some(10.0), Some(6.0), None]);
+        let e = cfg("\ninterrupted = [\"920:80\", \"920:90\"]")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.ends_with("run.toml:4: interrupted[1] = 920:90: matches no curve"),
+            "{e}"
+        );
+        let e = cfg("interrupted = [80]").unwrap_err().to_string();
+        assert!(
+            e.contains("run.toml:3: interrupted[0] = 80: a bare stress is ambiguous")
+                && e.contains("\"720:80\""),
+            "{e}"
+        );
     }
 }
