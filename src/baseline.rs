@@ -578,8 +578,9 @@ impl MansonHaferd {
         poly(&self.coefficients, stress_mpa.log10())
     }
 
-    /// The linear least squares at fixed T_a (K): ([log10 t_a, a_0 … a_d], SSE).
-    fn at_t_a(
+    /// The linear least squares at fixed T_a (K): ([log10 t_a, a_0 … a_d], SSE of log10 t_r):
+    /// the profile [`RuptureParameter::fit`] minimises over T_a.
+    pub fn at_t_a(
         tests: &[(f64, f64, f64)],
         degree: usize,
         t_a_k: f64,
@@ -625,12 +626,16 @@ impl RuptureParameter for MansonHaferd {
             .filter(|&i| values[i].is_finite())
             .min_by(|&i, &j| values[i].total_cmp(&values[j]))
             .ok_or_else(|| bad("the tests do not determine its constants at any T_a".into()))?;
-        if best == 0 || best == MH_GRID - 1 {
+        if best == 0 {
             return Err(bad(format!(
-                "the least-squares T_a lies at the edge of the range searched (T_min − T_a = {} … {} K; best at {} K): the data do not determine the convergence point",
-                MH_T_A_GAP_K.0,
-                MH_T_A_GAP_K.1,
-                grid[best].exp()
+                "the least-squares T_a runs into the lowest test temperature (T_min − T_a = {} K, the edge of the range searched): the data do not determine the convergence point",
+                MH_T_A_GAP_K.0
+            )));
+        }
+        if best == MH_GRID - 1 {
+            return Err(bad(format!(
+                "the least-squares T_a runs to −∞ (the sum of squares still falls at T_min − T_a = {} K, the edge of the range searched): the iso-stress lines do not converge (their limit is parallel lines in log t_r against T, the Manson–Succop form), so T_a and t_a are not determined",
+                MH_T_A_GAP_K.1
             )));
         }
         let g = golden_min(&sse, grid[best - 1], grid[best + 1]);
@@ -951,7 +956,25 @@ mod tests {
         let e = MansonHaferd::fit(&tests_of(&edge, 0.0), &settings(2))
             .unwrap_err()
             .to_string();
-        assert!(e.contains("edge of the range searched"), "{e}");
+        assert!(e.contains("runs into the lowest test temperature"), "{e}");
+        // Iso-stress lines parallel in log t_r against T (log10 t_r = 30 − 0.03·T − 3·x):
+        // T_a → −∞, refused.
+        let parallel: Vec<(f64, f64, f64)> = TEMPS
+            .iter()
+            .flat_map(|&t| {
+                STRESSES.iter().map(move |&s| {
+                    (
+                        t,
+                        s,
+                        10f64.powf(30.0 - 0.03 * (t + 273.15) - 3.0 * s.log10()),
+                    )
+                })
+            })
+            .collect();
+        let e = MansonHaferd::fit(&parallel, &settings(2))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("runs to −∞"), "{e}");
         noisy_fit_is_no_worse_than_the_truth(&truth, |t| {
             Box::new(MansonHaferd::fit(t, &settings(2)).unwrap())
         });

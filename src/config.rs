@@ -421,6 +421,10 @@ pub struct PredictConfig {
     /// likelihood under the error model (README, "How sure"). Default false.
     #[serde(default)]
     pub intervals: bool,
+    /// Tensile strength per temperature (`tensile_strength = ["850:260", …]` in the file:
+    /// °C:MPa), for the Wilshire baseline of `predict` and `holdout`; empty: no Wilshire.
+    #[serde(default)]
+    pub tensile_strength: Vec<crate::baseline::TensileStrength>,
 }
 
 impl Default for PredictConfig {
@@ -429,6 +433,7 @@ impl Default for PredictConfig {
             at: Vec::new(),
             lmp_degree: crate::lmp::DEFAULT_DEGREE,
             intervals: false,
+            tensile_strength: Vec::new(),
         }
     }
 }
@@ -440,6 +445,8 @@ struct RawPredict {
     at: Vec<String>,
     lmp_degree: Option<usize>,
     intervals: Option<bool>,
+    #[serde(default)]
+    tensile_strength: Vec<String>,
 }
 
 /// `[profile]`: the profile likelihoods, intervals and prediction intervals of
@@ -1063,6 +1070,16 @@ impl RunConfig {
                     .predict_intervals
                     .or(raw.predict.intervals)
                     .unwrap_or(false),
+                tensile_strength: raw
+                    .predict
+                    .tensile_strength
+                    .iter()
+                    .enumerate()
+                    .map(|(k, s)| {
+                        crate::baseline::TensileStrength::parse(s)
+                            .map_err(|m| invalid(format!("predict.tensile_strength[{k}]"), m))
+                    })
+                    .collect::<std::result::Result<_, _>>()?,
             },
             profile: raw.profile,
             run: cli.run.clone(),
@@ -1145,6 +1162,17 @@ impl RunConfig {
         }
         validate_solver(&self.solver)?;
         self.diagnose.validate()?;
+        for (k, e) in self.predict.tensile_strength.iter().enumerate() {
+            if self.predict.tensile_strength[..k]
+                .iter()
+                .any(|o| o.temperature_c == e.temperature_c)
+            {
+                return Err(invalid(
+                    format!("predict.tensile_strength[{k}]"),
+                    format!("{} °C is given twice", e.temperature_c),
+                ));
+            }
+        }
         if self.predict.lmp_degree > 4 {
             return Err(invalid(
                 "predict.lmp_degree",
@@ -1865,6 +1893,14 @@ rtol = 1e-8
             (
                 "interrupted = [85, \"920:x\"]\n",
                 "cfg/run.toml:3: interrupted: '920:x': cannot parse the stress 'x'",
+            ),
+            (
+                "[predict]\ntensile_strength = [\"850:260\", \"850:250\"]\n",
+                "cfg/run.toml:4: predict.tensile_strength[1]: 850 °C is given twice",
+            ),
+            (
+                "[predict]\ntensile_strength = [\"850\"]\n",
+                "cfg/run.toml:4: predict.tensile_strength[0]: '850': expected T:strength",
             ),
             (
                 "interrupted = [85, -1]\n",

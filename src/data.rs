@@ -120,9 +120,11 @@ impl Interrupted {
         let mut parts = s.splitn(3, ':');
         let (t, sig) = match (parts.next(), parts.next()) {
             (Some(t), Some(sig)) => (t.trim(), sig.trim()),
-            _ => return Err(format!(
+            _ => {
+                return Err(format!(
                 "'{s}': expected \"T:stress\" or \"T:stress:specimen\" (°C:MPa), e.g. \"920:80\""
-            )),
+            ))
+            }
         };
         let t: f64 = t
             .parse()
