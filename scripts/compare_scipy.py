@@ -83,7 +83,8 @@ class Config:
         self.extensions = raw.get("extensions", [])
         if self.model != "khd" or self.extensions:
             sys.exit(f"error: {path}: only model = \"khd\" without extensions is implemented here")
-        self.interrupted = [float(s) for s in raw.get("interrupted", [])]
+        # A bare stress (MPa) or "T:stress[:specimen]" (src/data.rs, Interrupted).
+        self.interrupted = list(raw.get("interrupted", []))
         consts = raw.get("constants", {})
         self.lb, self.ub, self.log, self.start = [], [], [], []
         for n in NAMES:
@@ -120,6 +121,15 @@ class Config:
         lin = self.lb + u * (self.ub - self.lb)
         lg = np.exp(np.log(self.lb) + u * (np.log(self.ub) - np.log(self.lb)))
         return np.clip(np.where(self.log, lg, lin), self.lb, self.ub)
+
+
+def _declares(entry, t_c, s, sp):
+    """Whether an `interrupted` entry declares the curve at t_c °C, s MPa, specimen sp."""
+    if isinstance(entry, str):
+        parts = entry.split(":", 2)
+        return (_close(float(parts[0]), t_c) and _close(float(parts[1]), s)
+                and (len(parts) < 3 or parts[2].strip() == sp))
+    return _close(float(entry), s)
 
 
 def _close(a, b):
@@ -190,7 +200,7 @@ def load_data(cfg):
                 rank = 1
             if rank > rank_best:
                 best, rank_best = r, rank
-        interrupted = any(_close(x, s) for x in cfg.interrupted)
+        interrupted = any(_declares(x, t_c, s, sp) for x in cfg.interrupted)
         if interrupted:
             best = None
         elif best is None:

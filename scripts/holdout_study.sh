@@ -2,7 +2,7 @@
 # Leave-one-temperature-out study: for every configuration given, `creepfit holdout` at each
 # temperature of HOLDOUT_TEMPS (default "850 900"), and one table of the mean |log10 error|
 # of the held-out rupture times, creepfit beside the Larson–Miller baseline fitted to the same
-# training data.
+# training data and the best classical baseline (summary.json "one_to_beat").
 #
 #   scripts/holdout_study.sh [--starts N] CONFIG...
 #
@@ -14,7 +14,7 @@ if [[ "${1:-}" == "--starts" ]]; then starts=(--starts "$2"); shift 2; fi
 temps=${HOLDOUT_TEMPS:-"850 900"}
 cargo build --release --quiet
 bin=target/release/creepfit
-printf "%-28s %6s %6s %12s %12s %10s %8s\n" config T tests creepfit LMP curve_rms wall_s
+printf "%-28s %6s %6s %12s %12s %-24s %10s %8s\n" config T tests creepfit LMP one_to_beat curve_rms wall_s
 for cfg in "$@"; do
   stem=$(basename "$cfg" .toml)
   for t in $temps; do
@@ -25,8 +25,10 @@ for cfg in "$@"; do
     python3 - "$out/summary.json" "$stem" "$t" <<'PY'
 import json, sys
 s = json.load(open(sys.argv[1]))
+b = s.get("one_to_beat")
+best = f"{b['name']} {b['mean_abs_log10_err']:.3f}" if b else "none"
 print(f"{sys.argv[2]:<28} {sys.argv[3]:>6} {s['tests']:>6} {s['model_mean_abs_log10_err']:>12.3f} "
-      f"{s['lmp_mean_abs_log10_err']:>12.3f} {s['mean_curve_rms_pct']:>10.2f} {s['wall_s']:>8.1f}")
+      f"{s['lmp_mean_abs_log10_err']:>12.3f} {best:<24} {s['mean_curve_rms_pct']:>10.2f} {s['wall_s']:>8.1f}")
 PY
   done
 done

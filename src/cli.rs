@@ -159,7 +159,8 @@ pub enum Command {
         world: crate::synth::World,
     },
     /// Predict at untested conditions: curves, rupture time, rupture strain and minimum
-    /// creep rate, beside the Larson–Miller baseline of the configuration's rupture times.
+    /// creep rate, beside the classical baselines (Larson–Miller, Orr–Sherby–Dorn,
+    /// Manson–Haferd, Wilshire) fitted to the configuration's rupture times.
     Predict {
         /// Run configuration (TOML).
         config: PathBuf,
@@ -179,7 +180,9 @@ pub enum Command {
         out: Option<PathBuf>,
     },
     /// Leave one temperature out: fit on the others, predict the held-out tests' rupture
-    /// times and curves, and compare with the Larson–Miller baseline fitted to the same data.
+    /// times and curves, and compare with the classical baselines (Larson–Miller,
+    /// Orr–Sherby–Dorn, Manson–Haferd; Wilshire with [predict] tensile_strength) fitted to the
+    /// same training rupture times; the best of them is named the one to beat.
     Holdout {
         /// Run configuration (TOML).
         config: PathBuf,

@@ -478,6 +478,10 @@ pub struct PredictConfig {
     /// likelihood under the error model (README, "How sure"). Default false.
     #[serde(default)]
     pub intervals: bool,
+    /// Tensile strength per temperature (`tensile_strength = ["850:260", …]` in the file:
+    /// °C:MPa), for the Wilshire baseline of `predict` and `holdout`; empty: no Wilshire.
+    #[serde(default)]
+    pub tensile_strength: Vec<crate::baseline::TensileStrength>,
 }
 
 impl Default for PredictConfig {
@@ -486,6 +490,7 @@ impl Default for PredictConfig {
             at: Vec::new(),
             lmp_degree: crate::lmp::DEFAULT_DEGREE,
             intervals: false,
+            tensile_strength: Vec::new(),
         }
     }
 }
@@ -497,6 +502,8 @@ struct RawPredict {
     at: Vec<String>,
     lmp_degree: Option<usize>,
     intervals: Option<bool>,
+    #[serde(default)]
+    tensile_strength: Vec<String>,
 }
 
 /// `[profile]`: the profile likelihoods, intervals and prediction intervals of
@@ -656,8 +663,9 @@ pub struct RunConfig {
     pub model: String,
     /// Extension names (DESIGN.md §6), in the order given.
     pub extensions: Vec<String>,
-    /// Stresses (MPa) of tests declared interrupted.
-    pub interrupted: Vec<f64>,
+    /// Tests declared interrupted: `"T:σ"`, `"T:σ:specimen"`, or a bare stress (MPa) when
+    /// the data are at one temperature ([`data::interrupted_flags`]).
+    pub interrupted: Vec<data::Interrupted>,
     /// Constants in the model's order (with extension defaults filled in).
     pub constants: Vec<ConstantConfig>,
     /// `[objective]`, with `--w` applied.
@@ -701,7 +709,7 @@ struct RawConfig {
     #[serde(default)]
     extensions: Vec<String>,
     #[serde(default)]
-    interrupted: Vec<f64>,
+    interrupted: Vec<data::Interrupted>,
     #[serde(default)]
     constants: BTreeMap<String, RawConstant>,
     #[serde(default)]
@@ -1119,6 +1127,16 @@ impl RunConfig {
                     .predict_intervals
                     .or(raw.predict.intervals)
                     .unwrap_or(false),
+                tensile_strength: raw
+                    .predict
+                    .tensile_strength
+                    .iter()
+                    .enumerate()
+                    .map(|(k, s)| {
+                        crate::baseline::TensileStrength::parse(s)
+                            .map_err(|m| invalid(format!("predict.tensile_strength[{k}]"), m))
+                    })
+                    .collect::<std::result::Result<_, _>>()?,
             },
             profile: raw.profile,
             run: cli.run.clone(),
@@ -1185,12 +1203,14 @@ impl RunConfig {
                 ));
             }
         }
-        for &s in &self.interrupted {
-            if !(s.is_finite() && s > 0.0) {
-                return Err(invalid(
-                    "interrupted",
-                    format!("stresses must be positive and finite (got {s})"),
-                ));
+        for (k, e) in self.interrupted.iter().enumerate() {
+            if let data::Interrupted::Stress(s) = *e {
+                if !(s.is_finite() && s > 0.0) {
+                    return Err(invalid(
+                        format!("interrupted[{k}]"),
+                        format!("stresses must be positive and finite (got {s})"),
+                    ));
+                }
             }
         }
         validate_objective(&self.objective)?;
@@ -1199,6 +1219,17 @@ impl RunConfig {
         }
         validate_solver(&self.solver)?;
         self.diagnose.validate()?;
+        for (k, e) in self.predict.tensile_strength.iter().enumerate() {
+            if self.predict.tensile_strength[..k]
+                .iter()
+                .any(|o| o.temperature_c == e.temperature_c)
+            {
+                return Err(invalid(
+                    format!("predict.tensile_strength[{k}]"),
+                    format!("{} °C is given twice", e.temperature_c),
+                ));
+            }
+        }
         if self.predict.lmp_degree > 4 {
             return Err(invalid(
                 "predict.lmp_degree",
@@ -1230,8 +1261,18 @@ impl RunConfig {
         LoadOptions {
             temperature_c: self.temperature_c,
             interrupted: self.interrupted.clone(),
+            interrupted_source: Some((self.path.clone(), self.interrupted_line())),
             several_temperatures: self.has_laws(),
         }
+    }
+
+    /// The line of `interrupted` in the configuration file, for the errors its entries raise
+    /// once the data are loaded (0: no entries, or the file cannot be read again).
+    fn interrupted_line(&self) -> usize {
+        if self.interrupted.is_empty() {
+            return 0;
+        }
+        std::fs::read_to_string(&self.path).map_or(0, |t| field_line(&t, "interrupted"))
     }
 
     /// Whether some constant follows a temperature law other than `constant`.
@@ -1637,7 +1678,7 @@ rtol = 1e-8
         assert_eq!(c.curves, Path::new("cfg/../data/c.csv"));
         assert_eq!(c.ruptures, Path::new("cfg/r.csv"));
         assert_eq!(c.temperature_c, Some(560.0));
-        assert_eq!(c.interrupted, vec![70.0]);
+        assert_eq!(c.interrupted, vec![data::Interrupted::Stress(70.0)]);
         assert_eq!(c.constant_names(), ["A", "B", "Hstar", "h", "Kc", "C"]);
         assert_eq!(c.constants[0].scale, Scale::Log);
         assert_eq!(c.constants[1].scale, Scale::Linear);
@@ -1660,7 +1701,10 @@ rtol = 1e-8
         assert_eq!(w[0], vec![0.5; 3]);
         assert_eq!(w[2], vec![0.12, 0.12, 1.0]);
         assert!(c.objective.weight_vectors(2, &c.path).is_err());
-        assert_eq!(c.load_options().interrupted, vec![70.0]);
+        assert_eq!(
+            c.load_options().interrupted,
+            vec![data::Interrupted::Stress(70.0)]
+        );
         assert!(c.warnings.is_empty());
         assert_eq!(c.model_name(), "khd");
         assert_eq!(c.out_dir("fit"), Path::new("results/t/fit"));
@@ -1899,6 +1943,26 @@ rtol = 1e-8
                 "cfg/run.toml:3: name: '../../x' must not contain",
             ),
             ("name = \"a/b\"\n", "name: 'a/b' must not contain"),
+            (
+                "interrupted = [\"920\"]\n",
+                "cfg/run.toml:3: interrupted: '920': expected \"T:stress\"",
+            ),
+            (
+                "interrupted = [85, \"920:x\"]\n",
+                "cfg/run.toml:3: interrupted: '920:x': cannot parse the stress 'x'",
+            ),
+            (
+                "[predict]\ntensile_strength = [\"850:260\", \"850:250\"]\n",
+                "cfg/run.toml:4: predict.tensile_strength[1]: 850 °C is given twice",
+            ),
+            (
+                "[predict]\ntensile_strength = [\"850\"]\n",
+                "cfg/run.toml:4: predict.tensile_strength[0]: '850': expected T:strength",
+            ),
+            (
+                "interrupted = [85, -1]\n",
+                "cfg/run.toml:3: interrupted[1]: stresses must be positive",
+            ),
             ("name = \" \"\n", "name: must not be empty"),
         ];
         for (extra, want) in cases {
@@ -1913,5 +1977,50 @@ rtol = 1e-8
         }
         let e = err_of("ruptures = \"b.csv\"\n");
         assert!(e.contains("missing field `curves`"), "{e}");
+    }
+    /// Keyed `interrupted` entries through a configuration: the data's two temperatures share
+    /// a stress, one test declared; an entry matching no curve names the file and line.
+    #[test]
+    fn interrupted_keyed_through_the_configuration() {
+        let dir = tempfile::tempdir().unwrap();
+        let w = |n: &str, t: &str| std::fs::write(dir.path().join(n), t).unwrap();
+        w(
+            "c.csv",
+            "temperature_C,stress_MPa,time_h,strain_pct\n\
+             720,80,0,0\n720,80,5,1\n720,80,10,2\n720,90,0,0\n720,90,3,1\n720,90,6,2\n\
+             920,80,0,0\n920,80,2,1\n920,80,4,2\n",
+        );
+        w(
+            "r.csv",
+            "temperature_C,stress_MPa,rupture_time_h\n720,80,10\n720,90,6\n920,80,4\n",
+        );
+        let cfg = |interrupted: &str| {
+            let p = dir.path().join("run.toml");
+            w(
+                "run.toml",
+                &format!(
+                    "curves = \"c.csv\"\nruptures = \"r.csv\"\n{interrupted}\n{}\
+                     A = {{ lb = 1e-10, ub = 1e-9, scale = \"log\", law = \"arrhenius\", Q = {{ lb = 0, ub = 500 }} }}\n",
+                    CONSTANTS.replace("A     = { lb = 1e-10, ub = 1e-9, scale = \"log\" }\n", "")
+                ),
+            );
+            RunConfig::resolve(&p, &Overrides::default())
+        };
+        let (_, data) = cfg("interrupted = [\"920:80\"]").unwrap();
+        let lives: Vec<Option<f64>> = data.curves.iter().map(|c| c.rupture_time_h).collect();
+        assert_eq!(lives, [Some(10.0), Some(6.0), None]);
+        let e = cfg("\ninterrupted = [\"920:80\", \"920:90\"]")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.ends_with("run.toml:4: interrupted[1] = 920:90: matches no curve"),
+            "{e}"
+        );
+        let e = cfg("interrupted = [80]").unwrap_err().to_string();
+        assert!(
+            e.contains("run.toml:3: interrupted[0] = 80: a bare stress is ambiguous")
+                && e.contains("\"720:80\""),
+            "{e}"
+        );
     }
 }

@@ -89,13 +89,200 @@ pub struct Dataset {
     pub warnings: Vec<String>,
 }
 
+/// A test declared interrupted (it did not rupture: no rupture time, no lifetime term): a
+/// configuration's `interrupted` entry.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Interrupted {
+    /// A bare stress (MPa): every curve at that stress. Accepted only when the loaded curves
+    /// are at one temperature (the form from before several temperatures).
+    Stress(f64),
+    /// `"T:σ"` (°C, MPa): every replicate at that temperature and stress; `"T:σ:specimen"`:
+    /// the one curve of that specimen.
+    At {
+        /// Temperature, °C.
+        temperature_c: f64,
+        /// Stress, MPa.
+        stress_mpa: f64,
+        /// Specimen label, if given.
+        specimen: Option<String>,
+    },
+}
+
+impl From<f64> for Interrupted {
+    fn from(stress_mpa: f64) -> Self {
+        Interrupted::Stress(stress_mpa)
+    }
+}
+
+impl Interrupted {
+    /// Parse `"T:σ"` or `"T:σ:specimen"` (°C, MPa; the specimen as in the curves file).
+    pub fn parse(s: &str) -> std::result::Result<Interrupted, String> {
+        let mut parts = s.splitn(3, ':');
+        let (t, sig) = match (parts.next(), parts.next()) {
+            (Some(t), Some(sig)) => (t.trim(), sig.trim()),
+            _ => {
+                return Err(format!(
+                "'{s}': expected \"T:stress\" or \"T:stress:specimen\" (°C:MPa), e.g. \"920:80\""
+            ))
+            }
+        };
+        let t: f64 = t
+            .parse()
+            .map_err(|_| format!("'{s}': cannot parse the temperature '{t}'"))?;
+        let sig: f64 = sig
+            .parse()
+            .map_err(|_| format!("'{s}': cannot parse the stress '{sig}'"))?;
+        if !(t.is_finite() && t > -crate::model::ZERO_CELSIUS_K) {
+            return Err(format!(
+                "'{s}': the temperature must be above absolute zero (°C)"
+            ));
+        }
+        if !(sig.is_finite() && sig > 0.0) {
+            return Err(format!("'{s}': the stress must be positive (MPa)"));
+        }
+        let specimen = match parts.next().map(str::trim) {
+            None => None,
+            Some("") => return Err(format!("'{s}': empty specimen after the second ':'")),
+            Some(sp) => Some(sp.to_string()),
+        };
+        Ok(Interrupted::At {
+            temperature_c: t,
+            stress_mpa: sig,
+            specimen,
+        })
+    }
+
+    /// As written in the configuration: `80`, `920:80` or `920:80:S3`.
+    pub fn label(&self) -> String {
+        match self {
+            Interrupted::Stress(s) => format!("{s}"),
+            Interrupted::At {
+                temperature_c,
+                stress_mpa,
+                specimen: None,
+            } => format!("{temperature_c}:{stress_mpa}"),
+            Interrupted::At {
+                temperature_c,
+                stress_mpa,
+                specimen: Some(sp),
+            } => format!("{temperature_c}:{stress_mpa}:{sp}"),
+        }
+    }
+}
+
+/// A bare stress serialises as the number (the run identity of a configuration written
+/// before keyed entries is unchanged), a keyed entry as its string.
+impl serde::Serialize for Interrupted {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        match self {
+            Interrupted::Stress(v) => s.serialize_f64(*v),
+            _ => s.serialize_str(&self.label()),
+        }
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for Interrupted {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        struct V;
+        impl serde::de::Visitor<'_> for V {
+            type Value = Interrupted;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a stress (MPa) or a string \"T:stress\" / \"T:stress:specimen\"")
+            }
+            fn visit_f64<E: serde::de::Error>(self, v: f64) -> std::result::Result<Interrupted, E> {
+                Ok(Interrupted::Stress(v))
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> std::result::Result<Interrupted, E> {
+                Ok(Interrupted::Stress(v as f64))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> std::result::Result<Interrupted, E> {
+                Ok(Interrupted::Stress(v as f64))
+            }
+            fn visit_str<E: serde::de::Error>(
+                self,
+                v: &str,
+            ) -> std::result::Result<Interrupted, E> {
+                Interrupted::parse(v).map_err(E::custom)
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+/// Which curves the `interrupted` entries declare interrupted (one flag per curve), or the
+/// first entry that is ambiguous or matches no curve: (its index, what is wrong). `filter`:
+/// the temperature filter the curves were loaded with (named in the message).
+///
+/// A bare stress is accepted only when the curves are at one temperature (as before keyed
+/// entries, values compared to 1e-9 relative); a keyed entry matches the curves at its
+/// temperature and stress, and its specimen when it gives one.
+pub fn interrupted_flags(
+    entries: &[Interrupted],
+    curves: &[RawCurve],
+    filter: Option<f64>,
+) -> std::result::Result<Vec<bool>, (usize, String)> {
+    let mut temps: Vec<f64> = curves.iter().map(|c| c.temperature_c).collect();
+    temps.sort_by(f64::total_cmp);
+    temps.dedup();
+    let mut flags = vec![false; curves.len()];
+    for (k, e) in entries.iter().enumerate() {
+        let hit: Vec<usize> = match e {
+            Interrupted::Stress(s) => {
+                if temps.len() > 1 {
+                    let list: Vec<String> = temps.iter().map(|t| t.to_string()).collect();
+                    return Err((
+                        k,
+                        format!(
+                            "a bare stress is ambiguous: the curves are at {} temperatures ({} °C); write \"T:σ\" (°C:MPa), e.g. \"{}:{s}\"",
+                            temps.len(),
+                            list.join(", "),
+                            list[0]
+                        ),
+                    ));
+                }
+                (0..curves.len())
+                    .filter(|&i| close(*s, curves[i].stress_mpa))
+                    .collect()
+            }
+            Interrupted::At {
+                temperature_c,
+                stress_mpa,
+                specimen,
+            } => (0..curves.len())
+                .filter(|&i| {
+                    let c = &curves[i];
+                    close(*temperature_c, c.temperature_c)
+                        && close(*stress_mpa, c.stress_mpa)
+                        && specimen
+                            .as_ref()
+                            .is_none_or(|sp| c.specimen.as_ref() == Some(sp))
+                })
+                .collect(),
+        };
+        if hit.is_empty() {
+            let filtered = match filter {
+                Some(t) => format!(" (the configuration keeps temperature_C = {t} only)"),
+                None => String::new(),
+            };
+            return Err((k, format!("matches no curve{filtered}")));
+        }
+        for i in hit {
+            flags[i] = true;
+        }
+    }
+    Ok(flags)
+}
+
 /// What [`load`] keeps and what it tolerates.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct LoadOptions {
     /// Keep only curves at this temperature (°C).
     pub temperature_c: Option<f64>,
-    /// Stresses (MPa) of tests declared interrupted: they need no rupture record.
-    pub interrupted: Vec<f64>,
+    /// Tests declared interrupted: they need no rupture record (see [`interrupted_flags`]).
+    pub interrupted: Vec<Interrupted>,
+    /// The configuration file and line that declare `interrupted`, named in its errors
+    /// (`None`: the errors name the field alone).
+    pub interrupted_source: Option<(std::path::PathBuf, usize)>,
     /// Accept curves at several temperatures without a `temperature_c` filter. Off (the
     /// default), that is an error: one set of constants does not fit several temperatures.
     /// A configuration that declares how constants depend on temperature (temperature laws,
@@ -174,11 +361,18 @@ pub fn load(curves: &Path, ruptures: &Path, opts: &LoadOptions) -> Result<Datase
         check_one_temperature(&raw, curves)?;
     }
 
+    let flags =
+        interrupted_flags(&opts.interrupted, &raw, opts.temperature_c).map_err(|(k, m)| {
+            let m = format!("interrupted[{k}] = {}: {m}", opts.interrupted[k].label());
+            match &opts.interrupted_source {
+                Some((path, line)) => Error::config_at(path, *line, m),
+                None => Error::Invalid(m),
+            }
+        })?;
     let mut used = vec![false; records.len()];
     let mut out = Vec::with_capacity(raw.len());
-    for c in raw {
+    for (c, interrupted) in raw.into_iter().zip(flags) {
         warnings.extend(negative_strain_warning(&c, curves));
-        let interrupted = opts.interrupted.iter().any(|&s| close(s, c.stress_mpa));
         let rec = match_record(&c, &records, ruptures)?;
         if let Some(i) = rec {
             used[i] = true;
@@ -186,11 +380,15 @@ pub fn load(curves: &Path, ruptures: &Path, opts: &LoadOptions) -> Result<Datase
         let rec = match (rec, interrupted) {
             (Some(i), true) => {
                 warnings.push(format!(
-                    "{}:{}: rupture record ignored: the test at {} °C, {} MPa is declared interrupted",
+                    "{}:{}: rupture record ignored: the test at {} °C, {} MPa{} is declared interrupted",
                     ruptures.display(),
                     records[i].line,
                     c.temperature_c,
-                    c.stress_mpa
+                    c.stress_mpa,
+                    c.specimen
+                        .as_ref()
+                        .map(|s| format!(", specimen {s}"))
+                        .unwrap_or_default()
                 ));
                 None
             }
@@ -277,7 +475,7 @@ fn check_one_temperature(raw: &[RawCurve], path: &Path) -> Result<()> {
     ))
 }
 
-/// Relative closeness for values typed by people (temperature filter, interrupted stresses).
+/// Relative closeness for values typed by people (temperature filter, interrupted entries).
 fn close(a: f64, b: f64) -> bool {
     (a - b).abs() <= 1e-9 * a.abs().max(b.abs()).max(1.0)
 }
@@ -1008,7 +1206,7 @@ mod tests {
         );
         let opts = LoadOptions {
             temperature_c: Some(600.0),
-            interrupted: vec![80.0],
+            interrupted: vec![80.0.into()],
             ..Default::default()
         };
         let ds = load(&c, &r, &opts).unwrap();
@@ -1044,6 +1242,170 @@ mod tests {
             err.contains("c.csv:5:") && err.contains("no rupture record"),
             "{err}"
         );
+    }
+
+    /// Two temperatures with the same stress (80 MPa) at both, replicates at 920 °C.
+    fn two_temperatures(dir: &Path) -> (PathBuf, PathBuf) {
+        let c = write(
+            dir,
+            "c.csv",
+            "temperature_C,stress_MPa,time_h,strain_pct,specimen\n\
+             720,80,0,0,A\n720,80,5,1,A\n720,80,10,2,A\n\
+             920,80,0,0,S1\n920,80,5,1,S1\n920,80,9,2,S1\n\
+             920,80,0,0,S2\n920,80,5,1,S2\n920,80,8,2,S2\n\
+             920,100,0,0,S1\n920,100,2,1,S1\n920,100,4,2,S1\n",
+        );
+        let r = write(
+            dir,
+            "r.csv",
+            "temperature_C,stress_MPa,rupture_time_h,specimen\n\
+             720,80,10,A\n920,80,9,S1\n920,80,8,S2\n920,100,4,S1\n",
+        );
+        (c, r)
+    }
+
+    fn keyed(entries: &[&str]) -> LoadOptions {
+        LoadOptions {
+            interrupted: entries
+                .iter()
+                .map(|e| Interrupted::parse(e).unwrap())
+                .collect(),
+            several_temperatures: true,
+            ..Default::default()
+        }
+    }
+
+    /// Rupture times by (temperature, stress, specimen).
+    fn lives(ds: &Dataset) -> Vec<(f64, f64, String, Option<f64>)> {
+        ds.curves
+            .iter()
+            .map(|c| {
+                (
+                    c.temperature_c,
+                    c.stress_mpa,
+                    c.specimen.clone().unwrap_or_default(),
+                    c.rupture_time_h,
+                )
+            })
+            .collect()
+    }
+
+    #[test]
+    fn interrupted_is_keyed_by_temperature_and_stress() {
+        let dir = tempfile::tempdir().unwrap();
+        let (c, r) = two_temperatures(dir.path());
+        let s = |x: &str| x.to_string();
+        // Nothing interrupted: every test ruptured.
+        let all = load(&c, &r, &keyed(&[])).unwrap();
+        assert!(all.curves.iter().all(|c| c.rupture_time_h.is_some()));
+        // "920:80:S1": that one curve only; the 720 °C test at the same stress keeps its life.
+        let one = load(&c, &r, &keyed(&["920:80:S1"])).unwrap();
+        assert_eq!(
+            lives(&one),
+            [
+                (720.0, 80.0, s("A"), Some(10.0)),
+                (920.0, 80.0, s("S1"), None),
+                (920.0, 80.0, s("S2"), Some(8.0)),
+                (920.0, 100.0, s("S1"), Some(4.0)),
+            ]
+        );
+        assert!(
+            one.warnings.iter().any(
+                |w| w.contains("r.csv:3:") && w.contains("specimen S1 is declared interrupted")
+            ),
+            "{:?}",
+            one.warnings
+        );
+        // "920:80" (no specimen): both replicates at 920 °C, still not 720 °C. Typed as
+        // 920.0 and 8e1: compared as values.
+        let both = load(&c, &r, &keyed(&["920.0:8e1"])).unwrap();
+        assert_eq!(
+            lives(&both).iter().map(|l| l.3).collect::<Vec<_>>(),
+            [Some(10.0), None, None, Some(4.0)]
+        );
+        // A bare stress with two temperatures: refused, asking for "T:σ".
+        let bare = LoadOptions {
+            interrupted: vec![80.0.into()],
+            several_temperatures: true,
+            ..Default::default()
+        };
+        let e = load(&c, &r, &bare).unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "interrupted[0] = 80: a bare stress is ambiguous: the curves are at 2 temperatures (720, 920 °C); write \"T:σ\" (°C:MPa), e.g. \"720:80\""
+        );
+        // … but accepted at one temperature (the temperature filter): both 920 °C replicates,
+        // as before keyed entries.
+        let filtered = LoadOptions {
+            temperature_c: Some(920.0),
+            interrupted: vec![80.0.into()],
+            ..Default::default()
+        };
+        let ds = load(&c, &r, &filtered).unwrap();
+        assert_eq!(
+            lives(&ds).iter().map(|l| l.3).collect::<Vec<_>>(),
+            [None, None, Some(4.0)]
+        );
+        // An entry that matches no curve: an error naming it (the file and line when known).
+        for (entries, want) in [
+            (
+                &["920:80:S1", "900:80"][..],
+                "interrupted[1] = 900:80: matches no curve",
+            ),
+            (
+                &["720:80:S9"][..],
+                "interrupted[0] = 720:80:S9: matches no curve",
+            ),
+            (&["920:90"][..], "interrupted[0] = 920:90: matches no curve"),
+        ] {
+            let mut o = keyed(entries);
+            o.interrupted_source = Some((PathBuf::from("run.toml"), 7));
+            let e = load(&c, &r, &o).unwrap_err().to_string();
+            assert_eq!(e, format!("run.toml:7: {want}"));
+        }
+        let mut o = keyed(&["720:80"]);
+        o.temperature_c = Some(920.0);
+        o.several_temperatures = false;
+        let e = load(&c, &r, &o).unwrap_err().to_string();
+        assert!(
+            e.contains("matches no curve (the configuration keeps temperature_C = 920 only)"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn interrupted_entries_parse_and_serialise() {
+        let at = |t: f64, s: f64, sp: Option<&str>| Interrupted::At {
+            temperature_c: t,
+            stress_mpa: s,
+            specimen: sp.map(str::to_string),
+        };
+        for (text, want) in [
+            ("920:80", at(920.0, 80.0, None)),
+            (" 920 : 80.5 ", at(920.0, 80.5, None)),
+            ("920:80:INL2-a", at(920.0, 80.0, Some("INL2-a"))),
+            ("920:80: S:3 ", at(920.0, 80.0, Some("S:3"))),
+        ] {
+            assert_eq!(Interrupted::parse(text).unwrap(), want, "{text}");
+        }
+        for bad in ["80", "x:80", "920:y", "920:-5", "920:80:", "-300:80"] {
+            assert!(Interrupted::parse(bad).is_err(), "{bad}");
+        }
+        // A bare stress serialises as the number it always was (the run identity), keyed
+        // entries as strings; both read back.
+        let v = vec![
+            Interrupted::Stress(70.0),
+            at(920.0, 80.0, None),
+            at(920.0, 80.0, Some("S1")),
+        ];
+        let j = serde_json::to_string(&v).unwrap();
+        assert_eq!(j, r#"[70.0,"920:80","920:80:S1"]"#);
+        assert_eq!(serde_json::to_string(&vec![70.0f64]).unwrap(), "[70.0]");
+        let back: Vec<Interrupted> = serde_json::from_str(&j).unwrap();
+        assert_eq!(back, v);
+        let t: std::collections::BTreeMap<String, Vec<Interrupted>> =
+            toml::from_str("i = [70, 85.5, \"920:80\"]").unwrap();
+        assert_eq!(t["i"], [70.0.into(), 85.5.into(), at(920.0, 80.0, None)]);
     }
 
     #[test]

@@ -2,20 +2,30 @@
 //! seen? `creepfit holdout CONFIG --temperature T` fits the configuration on every curve not
 //! at T (`fit`'s procedure from the configured start, the guess and `[sweep] starts`
 //! Latin-hypercube starts: the held-out data choose nothing, not even the basin), predicts the rupture time and the curve of
-//! every test at T, and fits the Larson–Miller baseline to the same training rupture times.
-//! Both are scored by the mean |log10(t_predicted / t_measured)| over the held-out tests.
+//! every test at T, and fits the classical baselines ([`crate::baseline`]: Larson–Miller,
+//! Orr–Sherby–Dorn, Manson–Haferd, Wilshire where tensile strengths are given) to the same
+//! training rupture times. All are scored by the mean |log10(t_predicted / t_measured)| over
+//! the held-out tests; the best baseline is "the one to beat".
+//!
+//! The curve error of a held-out test compares the measured points up to the predicted
+//! rupture only ([`curve_error`]): after it the model has no curve (the objective's linear
+//! continuation is a device of the fit, not a prediction), and how early it ruptured is
+//! reported beside it (predicted life as % of the measured one, [`CurveOutcome`]).
 
 use std::path::Path;
 
+use serde::Serialize;
 use serde_json::json;
 
+use crate::baseline::{self, Baseline, BaselineKind, BaselineSettings};
 use crate::config::{Overrides, RunConfig};
 use crate::data::{Curve, Dataset};
 use crate::error::{Error, Result};
 use crate::fit::{run_fit_multistart, FitRun};
 use crate::lmp::LarsonMiller;
 use crate::model::Load;
-use crate::objective::{mean_abs, Objective};
+use crate::objective::{mean_abs, CurvePrediction, Objective};
+use crate::ode::Outcome;
 use crate::output::lock_folder;
 use crate::report::plot::{plot_creep_curves, plot_xy, AxisScale, XyAxes, XyGroup};
 use crate::report::tables::{self, jnum, num, write_csv, write_text};
@@ -33,8 +43,17 @@ pub struct HeldOut {
     pub model_rupture_time_h: f64,
     /// The Larson–Miller baseline's, h (NaN without a baseline).
     pub lmp_rupture_time_h: f64,
-    /// RMS of (predicted − measured strain) / rupture strain over the measured points, %.
+    /// Every baseline's, h, in [`BaselineKind::ALL`]'s order (NaN where it is absent).
+    pub baseline_rupture_time_h: Vec<f64>,
+    /// RMS of (predicted − measured strain) / rupture strain over the measured points up to
+    /// the predicted rupture, % ([`curve_error`]).
     pub curve_rms_pct: f64,
+    /// Measured points that RMS is over.
+    pub curve_points: usize,
+    /// How far the prediction reaches along the measured curve.
+    pub curve_outcome: CurveOutcome,
+    /// creepfit's rupture time as % of the measured one (NaN if it did not rupture).
+    pub predicted_life_pct: f64,
     /// Under `--intervals`: the rupture time's 95 % intervals at this test's load from the
     /// training data ([`crate::uncertainty::predict::intervals_at`]), or none.
     pub interval: Option<RuptureInterval>,
@@ -67,6 +86,134 @@ impl HeldOut {
     pub fn lmp_log10_err(&self) -> f64 {
         (self.lmp_rupture_time_h / self.rupture_time_h).log10()
     }
+    /// log10(t / t_measured) of baseline `k` of [`BaselineKind::ALL`].
+    pub fn baseline_log10_err(&self, k: usize) -> f64 {
+        (self.baseline_rupture_time_h[k] / self.rupture_time_h).log10()
+    }
+}
+
+/// How far a held-out prediction reaches along the measured curve.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CurveOutcome {
+    /// It ruptures at or after the last measured point: every point is compared.
+    Complete,
+    /// It ruptures before the last measured point: only the points up to its rupture are
+    /// compared (see the predicted life in %).
+    RupturedEarly,
+    /// It does not rupture within the integration horizon: every point is compared.
+    NoRupture,
+    /// The simulation failed: no curve error.
+    Failed,
+}
+
+impl CurveOutcome {
+    /// The file form (`complete`, `ruptured_early`, `no_rupture`, `failed`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            CurveOutcome::Complete => "complete",
+            CurveOutcome::RupturedEarly => "ruptured_early",
+            CurveOutcome::NoRupture => "no_rupture",
+            CurveOutcome::Failed => "failed",
+        }
+    }
+}
+
+/// The curve error of one held-out test.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CurveError {
+    /// RMS of (predicted − measured strain)/ε_f over the compared points, % (NaN: none).
+    pub rms_pct: f64,
+    /// Measured points compared.
+    pub points: usize,
+    /// How far the prediction reaches.
+    pub outcome: CurveOutcome,
+}
+
+/// Curve error of a prediction `p` of the measured curve `c`: the RMS of (ε_pred − ε)/ε_f (ε_f
+/// the measured rupture strain) over the measured points at times up to the predicted rupture
+/// (all of them when it ruptures later or not at all), in %. The points after an early
+/// rupture are not compared: the model has no strain there (the objective's linear
+/// continuation is a device of the fit), and a prediction's lateness or earliness is the
+/// life error's to report, not the curve's.
+pub fn curve_error(c: &Curve, p: &CurvePrediction) -> CurveError {
+    let t_r = p.rupture_time_h;
+    let (outcome, upto) = match p.outcome {
+        Outcome::Ruptured if t_r.is_finite() => {
+            let last = c.times_h.last().copied().unwrap_or(0.0);
+            if t_r >= last {
+                (CurveOutcome::Complete, f64::INFINITY)
+            } else {
+                (CurveOutcome::RupturedEarly, t_r)
+            }
+        }
+        Outcome::Horizon => (CurveOutcome::NoRupture, f64::INFINITY),
+        _ => {
+            return CurveError {
+                rms_pct: f64::NAN,
+                points: 0,
+                outcome: CurveOutcome::Failed,
+            }
+        }
+    };
+    let r: Vec<f64> = c
+        .times_h
+        .iter()
+        .zip(&c.strains)
+        .zip(&p.strain)
+        .filter(|((t, _), _)| **t <= upto)
+        .map(|((_, e), pe)| (pe - e) / c.rupture_strain)
+        .collect();
+    if r.iter().any(|v| !v.is_finite()) {
+        return CurveError {
+            rms_pct: f64::NAN,
+            points: 0,
+            outcome: CurveOutcome::Failed,
+        };
+    }
+    let rms = if r.is_empty() {
+        f64::NAN
+    } else {
+        100.0 * (r.iter().map(|v| v * v).sum::<f64>() / r.len() as f64).sqrt()
+    };
+    CurveError {
+        rms_pct: rms,
+        points: r.len(),
+        outcome,
+    }
+}
+
+/// Whether creepfit beats the one to beat.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Verdict {
+    /// Its mean |log10 error| over every held-out test is below the best baseline's.
+    Beats,
+    /// It is not (or it did not predict every held-out test's life).
+    DoesNotBeat,
+    /// No baseline predicted every held-out test: nothing to compare with.
+    NotComparable,
+}
+
+/// The one to beat: the index of the smallest mean |log10 error| among the baselines that
+/// predicted every one of the `n_tests` held-out tests (`scores`: mean and tests predicted,
+/// per baseline); `None` when none did. Ties go to the first.
+pub fn one_to_beat(scores: &[(f64, usize)], n_tests: usize) -> Option<usize> {
+    (0..scores.len())
+        .filter(|&k| n_tests > 0 && scores[k].1 == n_tests && scores[k].0.is_finite())
+        .fold(None, |best: Option<usize>, k| match best {
+            Some(b) if scores[b].0 <= scores[k].0 => Some(b),
+            _ => Some(k),
+        })
+}
+
+/// creepfit's `model` score (mean, tests predicted) against the one to beat's.
+pub fn verdict(model: (f64, usize), best: Option<(f64, usize)>, n_tests: usize) -> Verdict {
+    match best {
+        None => Verdict::NotComparable,
+        Some((b, _)) if model.1 == n_tests && model.0 < b => Verdict::Beats,
+        Some(_) => Verdict::DoesNotBeat,
+    }
 }
 
 /// What a hold-out run computed.
@@ -77,10 +224,14 @@ pub struct Holdout {
     pub fit: FitRun,
     /// The baseline on the same training data, or why there is none.
     pub lmp: std::result::Result<LarsonMiller, String>,
+    /// Every baseline on the same training data ([`BaselineKind::ALL`]'s order).
+    pub baselines: Vec<Baseline>,
     /// The held-out tests (with a measured rupture time).
     pub tests: Vec<HeldOut>,
     /// The held-out curves.
     pub curves: Vec<Curve>,
+    /// The temperatures fitted on, °C, ascending.
+    pub training_temperatures_c: Vec<f64>,
 }
 
 impl Holdout {
@@ -113,6 +264,41 @@ impl Holdout {
                 .map(|t| t.lmp_log10_err())
                 .collect::<Vec<_>>(),
         )
+    }
+    /// creepfit's (mean |log10 error|, held-out tests it predicted a life for).
+    pub fn model_score(&self) -> (f64, usize) {
+        let e: Vec<f64> = self.tests.iter().map(|t| t.model_log10_err()).collect();
+        (mean_abs(&e), e.iter().filter(|v| v.is_finite()).count())
+    }
+    /// Baseline `k`'s (mean |log10 error|, held-out tests it predicted).
+    pub fn baseline_score(&self, k: usize) -> (f64, usize) {
+        let e: Vec<f64> = self.tests.iter().map(|t| t.baseline_log10_err(k)).collect();
+        (mean_abs(&e), e.iter().filter(|v| v.is_finite()).count())
+    }
+    /// The one to beat ([`one_to_beat`]).
+    pub fn one_to_beat(&self) -> Option<usize> {
+        let scores: Vec<(f64, usize)> = (0..self.baselines.len())
+            .map(|k| self.baseline_score(k))
+            .collect();
+        one_to_beat(&scores, self.tests.len())
+    }
+    /// Whether creepfit beats it ([`verdict`]).
+    pub fn verdict(&self) -> Verdict {
+        verdict(
+            self.model_score(),
+            self.one_to_beat().map(|k| self.baseline_score(k)),
+            self.tests.len(),
+        )
+    }
+    /// Held-out tests per [`CurveOutcome`]: complete, ruptured early, no rupture, failed.
+    pub fn curve_outcomes(&self) -> [usize; 4] {
+        let n = |o: CurveOutcome| self.tests.iter().filter(|t| t.curve_outcome == o).count();
+        [
+            n(CurveOutcome::Complete),
+            n(CurveOutcome::RupturedEarly),
+            n(CurveOutcome::NoRupture),
+            n(CurveOutcome::Failed),
+        ]
     }
 }
 
@@ -157,6 +343,13 @@ pub fn holdout(
     let best = &fit.fits[fit.best];
     let lmp = LarsonMiller::fit_curves(&train_data.curves, cfg.predict.lmp_degree)
         .map_err(|e| e.to_string());
+    let baselines = baseline::fit_all(
+        &baseline::rupture_tests(&train_data.curves),
+        &BaselineSettings {
+            degree: cfg.predict.lmp_degree,
+            tensile: &cfg.predict.tensile_strength,
+        },
+    );
     let settings = crate::fit::FitSettings::from_config(cfg);
     let eval = Objective::new(
         fit.model.as_ref(),
@@ -202,10 +395,8 @@ pub fn holdout(
         .zip(&eval.curves)
         .filter(|(c, _)| c.rupture_time_h.is_some())
         .map(|(c, p)| {
-            let n = c.times_h.len();
-            let ss: f64 = (0..n)
-                .map(|k| ((p.strain[k] - c.strains[k]) / c.rupture_strain).powi(2))
-                .sum();
+            let ce = curve_error(c, p);
+            let measured = c.rupture_time_h.unwrap_or(f64::NAN);
             HeldOut {
                 stress_mpa: c.stress_mpa,
                 specimen: c.specimen.clone(),
@@ -214,7 +405,14 @@ pub fn holdout(
                 lmp_rupture_time_h: lmp
                     .as_ref()
                     .map_or(f64::NAN, |l| l.rupture_time(c.temperature_c, c.stress_mpa)),
-                curve_rms_pct: 100.0 * (ss / n as f64).sqrt(),
+                baseline_rupture_time_h: baselines
+                    .iter()
+                    .map(|b| b.predict(c.temperature_c, c.stress_mpa))
+                    .collect(),
+                curve_rms_pct: ce.rms_pct,
+                curve_points: ce.points,
+                curve_outcome: ce.outcome,
+                predicted_life_pct: 100.0 * p.rupture_time_h / measured,
                 interval: stresses
                     .iter()
                     .position(|&s| s == c.stress_mpa)
@@ -226,8 +424,10 @@ pub fn holdout(
         temperature_c,
         fit,
         lmp,
+        baselines,
         tests,
         curves: test,
+        training_temperatures_c: temps,
     })
 }
 
@@ -240,7 +440,7 @@ pub fn table(h: &Holdout) -> String {
     );
     for t in &h.tests {
         s.push_str(&format!(
-            "{:>6} {:>9} | {:>11.1} {:>11.1} {:>9.1} | {:>18.3} {:>6.3} | {:>8.2}\n",
+            "{:>6} {:>9} | {:>11.1} {:>11.1} {:>9.1} | {:>18.3} {:>6.3} | {:>8.2}{}\n",
             t.stress_mpa,
             t.specimen.as_deref().unwrap_or("-"),
             t.rupture_time_h,
@@ -248,7 +448,15 @@ pub fn table(h: &Holdout) -> String {
             t.lmp_rupture_time_h,
             t.model_log10_err(),
             t.lmp_log10_err(),
-            t.curve_rms_pct
+            t.curve_rms_pct,
+            match t.curve_outcome {
+                CurveOutcome::Complete => String::new(),
+                CurveOutcome::RupturedEarly => format!(
+                    "  ruptured early at {:.1} % of the measured life: rms over the first {} points",
+                    t.predicted_life_pct, t.curve_points
+                ),
+                o => format!("  {}", o.as_str()),
+            }
         ));
     }
     s.push_str(&format!(
@@ -256,6 +464,7 @@ pub fn table(h: &Holdout) -> String {
         h.model_mean_abs_log10(),
         h.lmp_mean_abs_log10()
     ));
+    s.push_str(&baselines_table(h));
     let (inside, with) = h.inside_pred95();
     if with > 0 {
         s.push_str("95 % intervals of the rupture time from the training data (maximum-likelihood fit, error model of README \"How sure\"): prediction interval of a NEW TEST | confidence interval of the model's prediction\n");
@@ -285,6 +494,59 @@ pub fn table(h: &Holdout) -> String {
     s
 }
 
+/// The printed comparison with the classical baselines: each one's mean |log10 error| over the
+/// held-out tests beside creepfit's, its constants or why it is absent, and the one to beat.
+pub fn baselines_table(h: &Holdout) -> String {
+    let n = h.tests.len();
+    let (m, m_n) = h.model_score();
+    let mut s = format!(
+        "mean |log10 error| of the rupture time over the {n} held-out tests, classical baselines fitted to the same training rupture times:\n  {:<16} {:>6.3}{}\n",
+        "creepfit",
+        m,
+        if m_n < n {
+            format!("  (a life for {m_n} of {n} tests)")
+        } else {
+            String::new()
+        }
+    );
+    for (k, b) in h.baselines.iter().enumerate() {
+        match &b.fit {
+            Ok(_) => {
+                let (v, c) = h.baseline_score(k);
+                s.push_str(&format!(
+                    "  {:<16} {:>6.3}{}  [{}]\n",
+                    b.kind.name(),
+                    v,
+                    if c < n {
+                        format!("  (a life for {c} of {n} tests)")
+                    } else {
+                        String::new()
+                    },
+                    b.describe()
+                ));
+            }
+            Err(e) => s.push_str(&format!("  {:<16} absent: {e}\n", b.kind.name())),
+        }
+    }
+    match h.one_to_beat() {
+        Some(k) => {
+            let v = h.baseline_score(k).0;
+            s.push_str(&format!(
+                "the one to beat: {} {:.3}; creepfit {:.3} {}\n",
+                h.baselines[k].kind.name(),
+                v,
+                m,
+                match h.verdict() {
+                    Verdict::Beats => "beats it",
+                    _ => "does NOT beat it",
+                }
+            ));
+        }
+        None => s.push_str("the one to beat: none (no baseline predicted every held-out test)\n"),
+    }
+    s
+}
+
 /// `holdout.csv`'s columns under `--intervals` (after `curve_rms_pct`): the 95 % prediction
 /// interval of a new test, the 95 % confidence interval of the model's prediction, and the
 /// prediction at the maximum-likelihood constants both were computed from (h).
@@ -295,6 +557,25 @@ pub const INTERVAL_COLUMNS: [&str; 5] = [
     "rupture_time_conf_hi95_h",
     "ml_rupture_time_h",
 ];
+
+/// `holdout.csv`'s baseline columns, after the contract columns (and `specimen`): the
+/// rupture time and log10 error of each baseline besides Larson–Miller (whose columns come
+/// earlier), in [`BaselineKind::ALL`]'s order: `osd_rupture_time_h,osd_log10_err,mh_…,wilshire_…`.
+pub fn baseline_columns() -> Vec<String> {
+    BaselineKind::ALL[1..]
+        .iter()
+        .flat_map(|k| {
+            [
+                format!("{}_rupture_time_h", k.key()),
+                format!("{}_log10_err", k.key()),
+            ]
+        })
+        .collect()
+}
+
+/// `holdout.csv`'s last columns: creepfit's rupture time as % of the measured one, the
+/// [`CurveOutcome`] and the number of measured points `curve_rms_pct` is over.
+pub const CURVE_COLUMNS: [&str; 3] = ["predicted_life_pct", "curve_outcome", "curve_points"];
 
 /// `creepfit holdout`: run, print, write `holdout.csv`, `constants.csv`, `summary.json`,
 /// `curves.png` and `parity.png`.
@@ -334,6 +615,15 @@ pub fn holdout_cmd(config: &Path, temperature_c: f64, cli: &Overrides) -> Result
             if specimens {
                 r.push(t.specimen.clone().unwrap_or_default());
             }
+            for k in 1..BaselineKind::ALL.len() {
+                r.push(num(t.baseline_rupture_time_h[k]));
+                r.push(num(t.baseline_log10_err(k)));
+            }
+            r.extend([
+                num(t.predicted_life_pct),
+                t.curve_outcome.as_str().to_string(),
+                t.curve_points.to_string(),
+            ]);
             r
         })
         .collect();
@@ -350,11 +640,11 @@ pub fn holdout_cmd(config: &Path, temperature_c: f64, cli: &Overrides) -> Result
     if with_intervals {
         header.extend(INTERVAL_COLUMNS);
     }
-    write_csv(
-        &out.join("holdout.csv"),
-        &tables::with_specimen(&header, specimens),
-        &rows,
-    )?;
+    let mut header = tables::with_specimen(&header, specimens);
+    let baseline_columns = baseline_columns();
+    header.extend(baseline_columns.iter().map(String::as_str));
+    header.extend(CURVE_COLUMNS);
+    write_csv(&out.join("holdout.csv"), &header, &rows)?;
     tables::write_constants(
         &out.join("constants.csv"),
         h.fit.model.as_ref(),
@@ -366,6 +656,28 @@ pub fn holdout_cmd(config: &Path, temperature_c: f64, cli: &Overrides) -> Result
         let (inside, with) = h.inside_pred95();
         json!({"inside": inside, "tests": with})
     };
+    let baselines: Vec<serde_json::Value> = h
+        .baselines
+        .iter()
+        .enumerate()
+        .map(|(k, b)| {
+            let (v, c) = h.baseline_score(k);
+            let mut j = b.to_json();
+            if b.fit.is_ok() {
+                j["mean_abs_log10_err"] = jnum(v);
+                j["tests_predicted"] = json!(c);
+            }
+            j
+        })
+        .collect();
+    let one_to_beat = h.one_to_beat().map(|k| {
+        json!({
+            "kind": h.baselines[k].kind,
+            "name": h.baselines[k].kind.name(),
+            "mean_abs_log10_err": jnum(h.baseline_score(k).0),
+        })
+    });
+    let [complete, early, no_rupture, failed] = h.curve_outcomes();
     let summary = json!({
         "held_out_temperature_C": h.temperature_c,
         "model": h.fit.model.name(),
@@ -385,6 +697,19 @@ pub fn holdout_cmd(config: &Path, temperature_c: f64, cli: &Overrides) -> Result
             Err(e) => json!({"error": e}),
         },
         "wall_s": h.fit.wall_s,
+        "model_tests_predicted": h.model_score().1,
+        "baselines": baselines,
+        "one_to_beat": one_to_beat,
+        "creepfit_vs_one_to_beat": h.verdict(),
+        "curve_outcomes": {
+            "complete": complete,
+            "ruptured_early": early,
+            "no_rupture": no_rupture,
+            "failed": failed,
+        },
+        "training_temperatures_C": h.training_temperatures_c,
+        "temperature_extrapolation": !(h.training_temperatures_c.first().is_some_and(|t| *t <= h.temperature_c)
+            && h.training_temperatures_c.last().is_some_and(|t| h.temperature_c <= *t)),
     });
     write_text(
         &out.join("summary.json"),
@@ -418,12 +743,13 @@ pub fn holdout_cmd(config: &Path, temperature_c: f64, cli: &Overrides) -> Result
         .iter()
         .chain(h.tests.iter().map(|t| &t.model_rupture_time_h))
         .chain(h.tests.iter().map(|t| &t.lmp_rupture_time_h))
+        .chain(h.tests.iter().flat_map(|t| &t.baseline_rupture_time_h))
         .filter(|v| v.is_finite() && **v > 0.0)
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
             (a.min(*v), b.max(*v))
         });
     let diag = |f: f64| vec![(lo / 1.2, f * lo / 1.2), (hi * 1.2, f * hi * 1.2)];
-    let groups = vec![
+    let mut groups = vec![
         XyGroup {
             label: format!("creepfit: mean |log10 err| {:.3}", h.model_mean_abs_log10()),
             line: vec![],
@@ -476,6 +802,31 @@ pub fn holdout_cmd(config: &Path, temperature_c: f64, cli: &Overrides) -> Result
             triangles: false,
         },
     ];
+    // The other baselines' points after Larson–Miller's, before the lines.
+    for (k, b) in h.baselines.iter().enumerate().skip(1) {
+        if b.fit.is_ok() {
+            groups.insert(
+                groups.len() - 3,
+                XyGroup {
+                    label: format!(
+                        "{}: mean |log10 err| {:.3}",
+                        b.kind.name(),
+                        h.baseline_score(k).0
+                    ),
+                    line: vec![],
+                    points: h
+                        .tests
+                        .iter()
+                        .map(|t| (t.rupture_time_h, t.baseline_rupture_time_h[k]))
+                        .filter(|p| p.1.is_finite())
+                        .collect(),
+                    dashed: false,
+                    color: Some(k + 1),
+                    triangles: true,
+                },
+            );
+        }
+    }
     if let Err(e) = plot_xy(
         &out.join("parity.png"),
         &format!(
@@ -500,5 +851,165 @@ pub fn holdout_cmd(config: &Path, temperature_c: f64, cli: &Overrides) -> Result
             out: out.to_path_buf(),
             failures,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::LifetimeTerm;
+    use crate::model::build;
+    use crate::objective::ObjectiveSettings;
+    use crate::ode::OdeOptions;
+
+    /// A measured curve of the KHD model at `truth` (100 MPa, 30 points to rupture) and the
+    /// objective's prediction of it at `params` (with its continuation after rupture).
+    fn measured_and_predicted(params: &[f64]) -> (Curve, CurvePrediction) {
+        let truth = [1.2e-9, 0.12, 0.55, 6e4, 1.5e-5, 5.0];
+        let model = build("khd", &[]).unwrap();
+        let ode = OdeOptions {
+            rtol: 1e-10,
+            atol: 1e-14,
+            ..OdeOptions::default()
+        };
+        let load = Load::new(100.0, 575.0, 1.0 / 3.0);
+        let r = model.simulate(&truth, &load, &[], &mut [], &ode);
+        let times: Vec<f64> = (0..=30).map(|k| r.t_end * k as f64 / 30.0).collect();
+        let mut e = vec![0.0; times.len()];
+        model.simulate(&truth, &load, &times, &mut e, &ode);
+        let c = Curve {
+            temperature_c: 575.0,
+            stress_mpa: 100.0,
+            specimen: None,
+            rupture_strain: *e.last().unwrap(),
+            strains: e,
+            times_h: times,
+            rupture_time_h: Some(r.t_end),
+            min_rate_measured: None,
+            min_rate_estimated: r.min_rate,
+        };
+        let settings = ObjectiveSettings {
+            lifetime: LifetimeTerm::Both,
+            omega_f: 1.0 / 3.0,
+            ode,
+        };
+        let curves = [c.clone()];
+        let p = Objective::new(model.as_ref(), &curves, vec![1.0], settings)
+            .evaluate(params)
+            .curves
+            .remove(0);
+        (c, p)
+    }
+
+    /// A prediction that ruptures at about a third of the measured life: only the points up
+    /// to its rupture are compared, the RMS is finite and bounded by the data (no compared
+    /// strain exceeds the larger rupture strain), while the old all-points RMS, with the
+    /// linear continuation after rupture, is not.
+    #[test]
+    fn curve_error_of_an_early_rupture() {
+        let (c, p) = measured_and_predicted(&[3.6e-9, 0.12, 0.55, 6e4, 1.5e-5, 5.0]);
+        let t_meas = c.rupture_time_h.unwrap();
+        assert_eq!(p.outcome, Outcome::Ruptured);
+        assert!(
+            p.rupture_time_h < 0.6 * t_meas,
+            "{} of {t_meas}",
+            p.rupture_time_h
+        );
+        let ce = curve_error(&c, &p);
+        assert_eq!(ce.outcome, CurveOutcome::RupturedEarly);
+        let upto = c.times_h.iter().filter(|t| **t <= p.rupture_time_h).count();
+        assert!(upto >= 2 && upto < c.times_h.len(), "{upto}");
+        assert_eq!(ce.points, upto);
+        // By hand, over those points.
+        let ss: f64 = (0..upto)
+            .map(|k| ((p.strain[k] - c.strains[k]) / c.rupture_strain).powi(2))
+            .sum();
+        assert_eq!(ce.rms_pct, 100.0 * (ss / upto as f64).sqrt());
+        let bound = 100.0 * p.rupture_strain.max(c.rupture_strain) / c.rupture_strain;
+        assert!(
+            ce.rms_pct.is_finite() && ce.rms_pct <= bound,
+            "{} > {bound}",
+            ce.rms_pct
+        );
+        let n = c.times_h.len();
+        let all: f64 = (0..n)
+            .map(|k| ((p.strain[k] - c.strains[k]) / c.rupture_strain).powi(2))
+            .sum();
+        let old = 100.0 * (all / n as f64).sqrt();
+        assert!(
+            old > bound,
+            "the continuation stays within the data: {old} <= {bound}"
+        );
+    }
+
+    #[test]
+    fn curve_error_of_a_late_rupture_failure_and_no_rupture() {
+        let (c, p) = measured_and_predicted(&[0.6e-9, 0.12, 0.55, 6e4, 1.5e-5, 5.0]);
+        assert!(p.rupture_time_h > c.rupture_time_h.unwrap());
+        let ce = curve_error(&c, &p);
+        assert_eq!(ce.outcome, CurveOutcome::Complete);
+        assert_eq!(ce.points, c.times_h.len());
+        assert!(ce.rms_pct > 0.0 && ce.rms_pct.is_finite());
+        // Same prediction as if it had not ruptured within the horizon: every point.
+        let horizon = CurvePrediction {
+            outcome: Outcome::Horizon,
+            rupture_time_h: f64::NAN,
+            ..p.clone()
+        };
+        let h = curve_error(&c, &horizon);
+        assert_eq!(
+            (h.outcome, h.points, h.rms_pct),
+            (CurveOutcome::NoRupture, ce.points, ce.rms_pct)
+        );
+        for o in [
+            Outcome::StepUnderflow,
+            Outcome::MaxSteps,
+            Outcome::InvalidStart,
+        ] {
+            let f = curve_error(
+                &c,
+                &CurvePrediction {
+                    outcome: o,
+                    ..p.clone()
+                },
+            );
+            assert_eq!((f.outcome, f.points), (CurveOutcome::Failed, 0));
+            assert!(f.rms_pct.is_nan());
+        }
+        assert_eq!(CurveOutcome::RupturedEarly.as_str(), "ruptured_early");
+        assert_eq!(
+            serde_json::to_value(CurveOutcome::NoRupture).unwrap(),
+            "no_rupture"
+        );
+    }
+
+    #[test]
+    fn one_to_beat_and_verdict_tables() {
+        let nan = f64::NAN;
+        // (scores per baseline (mean, tests predicted), tests) → the one to beat.
+        for (scores, n, want) in [
+            (vec![(0.24, 13), (0.22, 13), (0.25, 13)], 13, Some(1)),
+            (vec![(0.24, 13), (0.10, 12), (0.25, 13)], 13, Some(0)),
+            (vec![(0.24, 13), (0.24, 13)], 13, Some(0)),
+            (vec![(nan, 0), (0.3, 13)], 13, Some(1)),
+            (vec![(nan, 0), (0.1, 5)], 13, None),
+            (vec![], 13, None),
+            (vec![(nan, 0)], 0, None),
+        ] {
+            assert_eq!(one_to_beat(&scores, n), want, "{scores:?}");
+        }
+        use Verdict::*;
+        for (model, best, n, want) in [
+            ((0.20, 13), Some((0.22, 13)), 13, Beats),
+            ((0.22, 13), Some((0.22, 13)), 13, DoesNotBeat),
+            ((0.25, 13), Some((0.22, 13)), 13, DoesNotBeat),
+            // A life missing for one test: does not beat a baseline that predicted all.
+            ((0.10, 12), Some((0.22, 13)), 13, DoesNotBeat),
+            ((nan, 0), Some((0.22, 13)), 13, DoesNotBeat),
+            ((0.10, 13), None, 13, NotComparable),
+        ] {
+            assert_eq!(verdict(model, best, n), want, "{model:?} {best:?}");
+        }
+        assert_eq!(serde_json::to_value(DoesNotBeat).unwrap(), "does_not_beat");
     }
 }

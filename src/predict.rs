@@ -2,9 +2,10 @@
 //!
 //! At each asked (temperature, stress) the calibrated model (with its temperature laws) is
 //! integrated to rupture: the predicted curve, rupture time, rupture strain and minimum creep
-//! rate. Beside each, the Larson–Miller baseline ([`crate::lmp`]) fitted to the rupture times
-//! of the configuration's data, so that the model's life is always shown next to the
-//! standard one. The plots a creep engineer reads: the predicted curves, a stress–rupture
+//! rate. Beside each, the Larson–Miller baseline ([`crate::lmp`]) and the other classical
+//! baselines ([`crate::baseline`]) fitted to the rupture times of the configuration's data,
+//! each marked where the condition lies outside the temperatures or stresses it was fitted
+//! on, so that the model's life is always shown next to the standard ones. The plots a creep engineer reads: the predicted curves, a stress–rupture
 //! diagram (log rupture time against stress, one line per temperature, measured points on
 //! it) and a Larson–Miller diagram of the data with the model's lines.
 
@@ -13,6 +14,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 
+use crate::baseline::{self, Baseline, BaselineKind, BaselineSettings, Extrapolation};
 use crate::config::RunConfig;
 use crate::data::{Curve, Dataset};
 use crate::error::{Error, Result};
@@ -95,6 +97,11 @@ pub struct Prediction {
     pub curve: Vec<(f64, f64, Vec<f64>)>,
     /// The Larson–Miller baseline's rupture time, h (NaN without a baseline).
     pub lmp_rupture_time_h: f64,
+    /// Every baseline's rupture time, h, in [`BaselineKind::ALL`]'s order (NaN where absent
+    /// or where it cannot predict).
+    pub baseline_rupture_time_h: Vec<f64>,
+    /// Where the condition lies against each baseline's fitted ranges (`None`: absent).
+    pub baseline_extrapolation: Vec<Option<Extrapolation>>,
 }
 
 /// Everything `predict` computed.
@@ -103,6 +110,8 @@ pub struct PredictRun {
     pub predictions: Vec<Prediction>,
     /// The Larson–Miller baseline, or why there is none.
     pub lmp: std::result::Result<LarsonMiller, String>,
+    /// Every baseline ([`BaselineKind::ALL`]'s order), each fitted or why it is absent.
+    pub baselines: Vec<Baseline>,
     /// Names of the model's output columns (H, Phi, omega for KHD).
     pub output_names: Vec<&'static str>,
     /// Intervals per condition under `--intervals` ([`crate::uncertainty::predict::intervals_at`]).
@@ -212,6 +221,13 @@ pub fn predict(
     let omega_f = cfg.objective.omega_f;
     let lmp =
         LarsonMiller::fit_curves(&data.curves, cfg.predict.lmp_degree).map_err(|e| e.to_string());
+    let baselines = baseline::fit_all(
+        &baseline::rupture_tests(&data.curves),
+        &BaselineSettings {
+            degree: cfg.predict.lmp_degree,
+            tensile: &cfg.predict.tensile_strength,
+        },
+    );
     let predictions = conditions
         .iter()
         .map(|&c| {
@@ -232,12 +248,26 @@ pub fn predict(
                 min_rate: res.min_rate,
                 curve,
                 lmp_rupture_time_h: lmp_life,
+                baseline_rupture_time_h: baselines
+                    .iter()
+                    .map(|b| b.predict(c.temperature_c, c.stress_mpa))
+                    .collect(),
+                baseline_extrapolation: baselines
+                    .iter()
+                    .map(|b| {
+                        b.fit
+                            .as_ref()
+                            .ok()
+                            .map(|f| f.extrapolation(c.temperature_c, c.stress_mpa))
+                    })
+                    .collect(),
             }
         })
         .collect();
     PredictRun {
         predictions,
         lmp,
+        baselines,
         output_names: model.output_names(),
         intervals: None,
     }
@@ -305,7 +335,58 @@ pub fn table(run: &PredictRun) -> String {
         )),
         Err(e) => s.push_str(&format!("no Larson–Miller baseline: {e}\n")),
     }
+    s.push_str(&baselines_table(run));
     s
+}
+
+/// The printed baselines: each one's rupture time at every condition (marked `*` outside its
+/// fitted ranges), then its constants or why it is absent.
+pub fn baselines_table(run: &PredictRun) -> String {
+    let mut s = String::from(
+        "classical baselines fitted to the same rupture times (h; * = outside the temperatures or stresses fitted on):\n  T(C)      MPa |",
+    );
+    for b in &run.baselines {
+        s.push_str(&format!(" {:>16}", b.kind.name()));
+    }
+    s.push('\n');
+    for p in &run.predictions {
+        s.push_str(&format!(
+            "{:>6} {:>8} |",
+            p.condition.temperature_c, p.condition.stress_mpa
+        ));
+        for (v, x) in p
+            .baseline_rupture_time_h
+            .iter()
+            .zip(&p.baseline_extrapolation)
+        {
+            let mark = match x {
+                Some(Extrapolation::No) | None => " ",
+                Some(_) => "*",
+            };
+            if v.is_finite() {
+                s.push_str(&format!(" {v:>15.0}{mark}"));
+            } else {
+                s.push_str(&format!(" {:>15}{mark}", "-"));
+            }
+        }
+        s.push('\n');
+    }
+    for b in &run.baselines {
+        s.push_str(&format!("  {}\n", b.describe()));
+    }
+    s
+}
+
+/// `larson_miller.csv`'s columns after the contract four: the Larson–Miller extrapolation
+/// mark, then the rupture time and extrapolation mark of each other baseline in
+/// [`BaselineKind::ALL`]'s order (`lmp_extrapolation,osd_rupture_time_h,osd_extrapolation,…`).
+pub fn baseline_columns() -> Vec<String> {
+    let mut v = vec!["lmp_extrapolation".to_string()];
+    for k in &BaselineKind::ALL[1..] {
+        v.push(format!("{}_rupture_time_h", k.key()));
+        v.push(format!("{}_extrapolation", k.key()));
+    }
+    v
 }
 
 /// Warnings about conditions outside the tested ranges (extrapolation).
@@ -397,18 +478,28 @@ pub fn write_outputs(
                     Err(_) => String::new(),
                 },
             ]
+            .into_iter()
+            .chain((0..BaselineKind::ALL.len()).flat_map(|k| {
+                let mark =
+                    p.baseline_extrapolation[k].map_or(String::new(), |x| x.as_str().to_string());
+                if k == 0 {
+                    vec![mark]
+                } else {
+                    vec![num(p.baseline_rupture_time_h[k]), mark]
+                }
+            }))
+            .collect()
         })
         .collect();
-    write_csv(
-        &out.join("larson_miller.csv"),
-        &[
-            "temperature_C",
-            "stress_MPa",
-            "rupture_time_h",
-            "larson_miller_parameter_K",
-        ],
-        &lmp_rows,
-    )?;
+    let mut header = vec![
+        "temperature_C",
+        "stress_MPa",
+        "rupture_time_h",
+        "larson_miller_parameter_K",
+    ];
+    let extra = baseline_columns();
+    header.extend(extra.iter().map(String::as_str));
+    write_csv(&out.join("larson_miller.csv"), &header, &lmp_rows)?;
     let mut header = vec!["temperature_C", "stress_MPa", "time_h", "strain_pct"];
     header.extend(run.output_names.iter().copied());
     let curve_rows = run.predictions.iter().flat_map(|p| {
@@ -459,6 +550,12 @@ pub fn write_outputs(
                 "rupture_strain_pct": jnum(100.0 * p.rupture_strain),
                 "min_rate_pct_per_h": jnum(100.0 * p.min_rate),
                 "larson_miller_rupture_time_h": jnum(p.lmp_rupture_time_h),
+                "baselines": BaselineKind::ALL.iter().enumerate().map(|(k, b)| {
+                    (b.key().to_string(), json!({
+                        "rupture_time_h": jnum(p.baseline_rupture_time_h[k]),
+                        "extrapolation": p.baseline_extrapolation[k],
+                    }))
+                }).collect::<serde_json::Map<_, _>>(),
                 "constants_at_temperature": names.iter().zip(&at).map(|(n, v)| (n.to_string(), json!(v))).collect::<serde_json::Map<_, _>>(),
             })
         }).collect::<Vec<_>>(),
@@ -466,6 +563,7 @@ pub fn write_outputs(
             Ok(l) => json!(l),
             Err(e) => json!({"error": e}),
         },
+        "baselines": run.baselines.iter().map(Baseline::to_json).collect::<Vec<_>>(),
         "extrapolation": extrapolation_notes(data, &run.predictions.iter().map(|p| p.condition).collect::<Vec<_>>()),
     });
     write_text(

@@ -403,7 +403,7 @@ fn ruptures_file() {
             let r = write(&d, "ruptures.csv", &bytes);
             let opts = LoadOptions {
                 temperature_c: Some(560.0),
-                interrupted: vec![85.0],
+                interrupted: vec![85.0.into()],
                 ..Default::default()
             };
             data::load(&c, &r, &opts)

@@ -146,7 +146,7 @@ fn curve_without_rupture_record() {
     // Declared interrupted: fine.
     let opts = LoadOptions {
         temperature_c: None,
-        interrupted: vec![120.0],
+        interrupted: vec![120.0.into()],
         ..Default::default()
     };
     let ds = data::load(&c, &r, &opts).unwrap();

@@ -6,6 +6,9 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use creepfit::baseline::{
+    BaselineSettings, MansonHaferd, OrrSherbyDorn, RuptureParameter, TensileStrength, Wilshire,
+};
 use creepfit::data::estimate_min_rate;
 use creepfit::model::{build, with_laws, LawKind, Load};
 use creepfit::ode::OdeOptions;
@@ -169,7 +172,7 @@ fn predict_at_tested_conditions_equals_simulate_and_keeps_the_contract() {
     let l = csv(&pred2.join("larson_miller.csv"));
     assert_eq!(p.len(), 3);
     assert_eq!(
-        l[0],
+        l[0][..4],
         [
             "temperature_C",
             "stress_MPa",
@@ -177,11 +180,48 @@ fn predict_at_tested_conditions_equals_simulate_and_keeps_the_contract() {
             "larson_miller_parameter_K"
         ]
     );
+    // The other baselines after the contract columns, each with its extrapolation mark.
+    assert_eq!(
+        l[0][4..],
+        [
+            "lmp_extrapolation",
+            "osd_rupture_time_h",
+            "osd_extrapolation",
+            "mh_rupture_time_h",
+            "mh_extrapolation",
+            "wilshire_rupture_time_h",
+            "wilshire_extrapolation"
+        ]
+    );
     for (a, b) in p[1..].iter().zip(&l[1..]) {
         assert_eq!(a[..2], b[..2]);
         let (m, lm): (f64, f64) = (a[2].parse().unwrap(), b[2].parse().unwrap());
         assert!(m > 0.0 && lm > 0.0);
+        let osd: f64 = b[5].parse().unwrap();
+        assert!(osd > 0.0);
+        // No tensile strengths in cmv-joint.toml: no Wilshire, the cells empty.
+        assert_eq!(b[9..], ["", ""]);
     }
+    // 575 °C, 100 MPa lies inside the tested 560–590 °C and 85–120 MPa; 70 MPa does not: the
+    // file says so for each baseline.
+    assert_eq!([&l[1][4], &l[1][6]], ["no", "no"]);
+    assert_eq!([&l[2][4], &l[2][6]], ["stress", "stress"]);
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(pred2.join("summary.json")).unwrap())
+            .unwrap();
+    let b = &summary["predictions"][1]["baselines"];
+    assert_eq!(b["osd"]["extrapolation"], "stress");
+    assert_eq!(
+        b["osd"]["rupture_time_h"].as_f64(),
+        Some(l[2][5].parse().unwrap())
+    );
+    assert!(b["wilshire"]["rupture_time_h"].is_null());
+    let w = &summary["baselines"][3];
+    assert_eq!(w["kind"], "wilshire");
+    assert!(
+        w["error"].as_str().unwrap().contains("no tensile strength"),
+        "{w}"
+    );
 
     // Constants about another reference temperature are refused, naming T_ref.
     let other = tmp.path().join("other.csv");
@@ -386,6 +426,8 @@ w_grid = [1.0]
 lifetime_term = "both"
 [sweep]
 starts = 2
+[predict]
+tensile_strength = ["560:420", "575:400", "590:380"]
 "#,
     )
     .unwrap();
@@ -414,17 +456,111 @@ starts = 2
             "lmp_rupture_time_h",
             "model_log10_err",
             "lmp_log10_err",
-            "curve_rms_pct"
+            "curve_rms_pct",
+            "osd_rupture_time_h",
+            "osd_log10_err",
+            "mh_rupture_time_h",
+            "mh_log10_err",
+            "wilshire_rupture_time_h",
+            "wilshire_log10_err",
+            "predicted_life_pct",
+            "curve_outcome",
+            "curve_points"
         ]
     );
     assert_eq!(h.len(), 3);
+    // The baselines as fitted to the training rupture times alone (560 and 590 °C), to the
+    // last digit; Wilshire with the configured tensile strengths.
+    let training: Vec<(f64, f64, f64)> = std::fs::read_to_string(tmp.path().join("r.csv"))
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let v: Vec<f64> = l.split(',').map(|x| x.parse().unwrap()).collect();
+            (v[0], v[1], v[2])
+        })
+        .filter(|t| t.0 != 575.0)
+        .collect();
+    let tensile = [
+        TensileStrength::parse("560:420").unwrap(),
+        TensileStrength::parse("575:400").unwrap(),
+        TensileStrength::parse("590:380").unwrap(),
+    ];
+    let bs = BaselineSettings {
+        degree: 2,
+        tensile: &tensile,
+    };
+    let osd = OrrSherbyDorn::fit(&training, &bs).unwrap();
+    let wil = Wilshire::fit(&training, &bs).unwrap();
+    let mh = MansonHaferd::fit(&training, &bs);
     for r in &h[1..] {
-        let err: f64 = r[5].parse().unwrap();
+        let v = |i: usize| -> f64 { r[i].parse().unwrap() };
+        let err = v(5);
         assert!(err.abs() < 1e-3, "held-out log10 error {err}");
+        let (t, sig, meas) = (v(0), v(1), v(2));
+        assert_eq!(v(8), osd.predict(t, sig));
+        assert_eq!(v(9), (osd.predict(t, sig) / meas).log10());
+        assert_eq!(v(12), wil.predict(t, sig));
+        match &mh {
+            Ok(m) => assert_eq!(v(10), m.predict(t, sig)),
+            Err(_) => assert_eq!(r[10], ""),
+        }
+        // The life as % of the measured one, and the curve compared up to its rupture.
+        assert!((v(14) - 100.0 * v(3) / meas).abs() < 1e-9 * v(14));
+        let outcome = if v(3) >= meas {
+            "complete"
+        } else {
+            "ruptured_early"
+        };
+        assert_eq!(r[15], outcome, "{r:?}");
+        assert!(r[16].parse::<usize>().unwrap() >= 2);
     }
     assert_eq!(s["tests"], 2);
     assert!(s["model_mean_abs_log10_err"].as_f64().unwrap() < 1e-3);
     assert!(s["lmp_mean_abs_log10_err"].as_f64().is_some());
+    // Every baseline's mean beside creepfit's, the best named, the verdict consistent.
+    let b = s["baselines"].as_array().unwrap();
+    assert_eq!(
+        b.iter()
+            .map(|x| x["kind"].as_str().unwrap())
+            .collect::<Vec<_>>(),
+        [
+            "larson_miller",
+            "orr_sherby_dorn",
+            "manson_haferd",
+            "wilshire"
+        ]
+    );
+    assert_eq!(b[0]["mean_abs_log10_err"], s["lmp_mean_abs_log10_err"]);
+    assert_eq!(b[1]["q_kj_per_mol"].as_f64(), Some(osd.q_kj_per_mol));
+    let best = b
+        .iter()
+        .filter(|x| x["tests_predicted"] == 2)
+        .min_by(|x, y| {
+            let f = |z: &serde_json::Value| z["mean_abs_log10_err"].as_f64().unwrap();
+            f(x).total_cmp(&f(y))
+        })
+        .unwrap();
+    assert_eq!(s["one_to_beat"]["kind"], best["kind"]);
+    let beats = s["model_mean_abs_log10_err"].as_f64().unwrap()
+        < best["mean_abs_log10_err"].as_f64().unwrap();
+    assert_eq!(
+        s["creepfit_vs_one_to_beat"],
+        if beats { "beats" } else { "does_not_beat" }
+    );
+    assert!(stdout.contains(&format!(
+        "the one to beat: {}",
+        best["name"].as_str().unwrap()
+    )));
+    let co = &s["curve_outcomes"];
+    assert_eq!(
+        ["complete", "ruptured_early", "no_rupture", "failed"]
+            .iter()
+            .map(|k| co[k].as_u64().unwrap())
+            .sum::<u64>(),
+        2
+    );
+    assert_eq!(s["temperature_extrapolation"], false);
     for f in ["constants.csv", "curves.png", "parity.png"] {
         assert!(out.join(f).exists(), "{f}");
     }
@@ -438,7 +574,7 @@ starts = 2
     );
     let hi = csv(&out_i.join("holdout.csv"));
     assert_eq!(
-        hi[0][8..],
+        hi[0][8..13],
         [
             "rupture_time_lo95_h",
             "rupture_time_hi95_h",
