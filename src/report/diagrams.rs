@@ -420,3 +420,235 @@ impl Diagrams<'_> {
         )
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::Overrides;
+    use crate::model::ZERO_CELSIUS_K;
+
+    /// The joint seed configuration (560 and 590 °C, three curves each) at its start values.
+    fn joint() -> (RunConfig, Dataset, Box<dyn Model>, Vec<f64>) {
+        let (cfg, data) =
+            RunConfig::resolve(Path::new("configs/cmv-joint.toml"), &Overrides::default()).unwrap();
+        let model = cfg.build_model().unwrap();
+        let params = cfg.starts_all_given().unwrap();
+        (cfg, data, model, params)
+    }
+
+    fn keys(groups: &[XyGroup]) -> Vec<&str> {
+        groups
+            .iter()
+            .filter(|g| !g.label.is_empty())
+            .map(|g| g.label.as_str())
+            .collect()
+    }
+
+    #[test]
+    fn model_lines_span_the_stresses_and_fall_with_stress() {
+        let (cfg, data, model, params) = joint();
+        let asked = [Asked {
+            temperature_c: 575.0,
+            stress_mpa: 70.0,
+            rupture_time_h: f64::NAN,
+            min_rate: f64::NAN,
+        }];
+        let d = Diagrams {
+            cfg: &cfg,
+            data: &data,
+            model: model.as_ref(),
+            params: &params,
+            lmp: None,
+            asked: &asked,
+            held_out_c: None,
+        };
+        assert_eq!(d.temperatures(), [560.0, 575.0, 590.0]);
+        let lines = d.model_lines();
+        assert_eq!(lines.len(), 3);
+        for l in &lines {
+            assert_eq!(l.points.len(), 40);
+            let tested: Vec<f64> = data
+                .curves
+                .iter()
+                .filter(|c| c.temperature_c == l.temperature_c)
+                .map(|c| c.stress_mpa)
+                .chain(
+                    asked
+                        .iter()
+                        .filter(|a| a.temperature_c == l.temperature_c)
+                        .map(|a| a.stress_mpa),
+                )
+                .collect();
+            let lo = tested.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = tested.iter().copied().fold(0.0, f64::max);
+            assert!((l.points[0].0 - lo / 1.1).abs() < 1e-9 * lo);
+            assert!((l.points[39].0 - hi * 1.1).abs() < 1e-9 * hi);
+            // Higher stress: shorter life, faster minimum rate (KHD at fixed temperature).
+            for w in l.points.windows(2) {
+                assert!(w[1].0 > w[0].0);
+                assert!(w[1].1 < w[0].1, "{}: {:?}", l.temperature_c, w);
+                assert!(w[1].2 > w[0].2, "{}: {:?}", l.temperature_c, w);
+            }
+        }
+        // Hotter: shorter life at the same stress (measured: 51,900 h at 560 °C and 5,100 h at
+        // 590 °C, 100 MPa).
+        let at = |l: &ModelLine, s: f64| {
+            l.points
+                .windows(2)
+                .find(|w| w[0].0 <= s && s <= w[1].0)
+                .map(|w| w[0].1)
+                .unwrap()
+        };
+        assert!(at(&lines[0], 105.0) > 3.0 * at(&lines[2], 105.0));
+    }
+
+    #[test]
+    fn diagram_groups_name_every_temperature_and_style() {
+        let (cfg, data, model, params) = joint();
+        let lmp = LarsonMiller::fit_curves(&data.curves, 1).unwrap();
+        let d = Diagrams {
+            cfg: &cfg,
+            data: &data,
+            model: model.as_ref(),
+            params: &params,
+            lmp: Some(&lmp),
+            asked: &[],
+            held_out_c: Some(590.0),
+        };
+        let lines = d.model_lines();
+        let sr = d.stress_rupture(&lines);
+        let c = format!("{:.2}", lmp.c);
+        assert_eq!(
+            keys(&sr),
+            [
+                "560 °C",
+                "590 °C (held out)",
+                "measured",
+                "measured at 590 °C, held out of the fit",
+                "creepfit (model)",
+                &format!("Larson–Miller baseline (C = {c})"),
+            ]
+        );
+        let lm_key = sr.iter().find(|g| g.label.starts_with("Larson")).unwrap();
+        assert_eq!(lm_key.stroke, Some(Dash::Dashed));
+        // Measured tests at (rupture time, stress); the held-out ones as open circles.
+        let measured: Vec<&XyGroup> = sr
+            .iter()
+            .filter(|g| {
+                g.label.is_empty() && g.marker.is_some() && g.marker != Some(MarkerShape::Triangle)
+            })
+            .collect();
+        assert_eq!(measured.len(), 2);
+        assert_eq!(measured[0].marker, Some(MarkerShape::Circle));
+        assert_eq!(measured[1].marker, Some(MarkerShape::OpenCircle));
+        let mut pts: Vec<(f64, f64)> = measured.iter().flat_map(|g| g.points.clone()).collect();
+        let mut want: Vec<(f64, f64)> = data
+            .curves
+            .iter()
+            .map(|c| (c.rupture_time_h.unwrap(), c.stress_mpa))
+            .collect();
+        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        want.sort_by(|a, b| a.0.total_cmp(&b.0));
+        assert_eq!(pts, want);
+        // The dashed baseline lines: the baseline's rupture time at each grid stress.
+        let dashed: Vec<&XyGroup> = sr
+            .iter()
+            .filter(|g| g.label.is_empty() && g.stroke == Some(Dash::Dashed))
+            .collect();
+        assert_eq!(dashed.len(), 2);
+        for (g, t) in dashed.iter().zip([560.0, 590.0]) {
+            for &(tr, s) in &g.line {
+                assert!((tr / lmp.rupture_time(t, s) - 1.0).abs() < 1e-12);
+            }
+        }
+
+        // Larson–Miller: T·(C + log10 t_r) in K for each measured test, and the master curve.
+        let lm = d.larson_miller(&lmp, &lines);
+        let measured: Vec<(f64, f64)> = lm
+            .iter()
+            .filter(|g| {
+                g.label.is_empty() && g.marker.is_some() && g.marker != Some(MarkerShape::Triangle)
+            })
+            .flat_map(|g| g.points.clone())
+            .collect();
+        assert_eq!(measured.len(), data.curves.len());
+        for c in &data.curves {
+            let p =
+                (c.temperature_c + ZERO_CELSIUS_K) * (lmp.c + c.rupture_time_h.unwrap().log10());
+            assert!(
+                measured
+                    .iter()
+                    .any(|m| (m.0 - p).abs() < 1e-9 * p && m.1 == c.stress_mpa),
+                "{} °C, {} MPa: LMP {p}",
+                c.temperature_c,
+                c.stress_mpa
+            );
+        }
+        let master = lm
+            .iter()
+            .find(|g| g.label.is_empty() && g.color == Rgb::BLACK)
+            .unwrap();
+        assert_eq!(master.stroke, Some(Dash::Dashed));
+        assert!(master
+            .line
+            .iter()
+            .all(|&(x, s)| (x - lmp.lmp(s)).abs() < 1e-9 * x));
+        assert!(keys(&lm)
+            .iter()
+            .any(|k| k.starts_with("Larson–Miller master curve")));
+
+        // Norton: every measured minimum rate, in %/h; the data give no measured rates.
+        let n = d.norton(&lines);
+        assert!(keys(&n).contains(&"measured (estimated from the curve)"));
+        let rates: Vec<(f64, f64)> = n
+            .iter()
+            .filter(|g| {
+                g.label.is_empty() && g.marker.is_some() && g.marker != Some(MarkerShape::Triangle)
+            })
+            .flat_map(|g| g.points.clone())
+            .collect();
+        for c in &data.curves {
+            assert!(rates.contains(&(c.stress_mpa, 100.0 * c.min_rate())));
+        }
+        // Two temperatures: two colours, cool before hot.
+        let colours: Vec<Rgb> = sr
+            .iter()
+            .filter(|g| g.label.contains("°C") && !g.label.starts_with("measured"))
+            .map(|g| g.color)
+            .collect();
+        assert_eq!(colours, temperature_colors(&[560.0, 590.0]));
+    }
+
+    #[test]
+    fn writes_the_three_diagrams() {
+        let (cfg, data, model, params) = joint();
+        let lmp = LarsonMiller::fit_curves(&data.curves, 1).unwrap();
+        let dir = tempfile::TempDir::new().unwrap();
+        let asked = [Asked {
+            temperature_c: 575.0,
+            stress_mpa: 100.0,
+            rupture_time_h: 1.7e4,
+            min_rate: 1.08e-6,
+        }];
+        let mut d = Diagrams {
+            cfg: &cfg,
+            data: &data,
+            model: model.as_ref(),
+            params: &params,
+            lmp: Some(&lmp),
+            asked: &asked,
+            held_out_c: None,
+        };
+        assert!(d.write(dir.path()).is_empty());
+        for f in FILES {
+            let len = std::fs::metadata(dir.path().join(f)).unwrap().len();
+            assert!(len > 5_000, "{f}: {len} bytes");
+        }
+        // Without a baseline: no Larson–Miller diagram.
+        let bare = tempfile::TempDir::new().unwrap();
+        d.lmp = None;
+        assert!(d.write(bare.path()).is_empty());
+        assert!(bare.path().join(FILES[0]).exists() && bare.path().join(FILES[1]).exists());
+        assert!(!bare.path().join(FILES[2]).exists());
+    }
+}

@@ -191,8 +191,8 @@ pub fn layout(n: usize, legend_h: i32, titled: bool) -> Layout {
     }
 }
 
-/// Draws `panels` (at least one; none draws an empty "no data" figure is the caller's
-/// business) into a PNG at `path` under `title`, laid out by [`layout`].
+/// Draws `panels` (the exporters always give at least one) into a PNG at `path` under
+/// `title`, laid out by [`layout`].
 pub fn draw_figure(path: &Path, title: &str, panels: &[PanelSpec]) -> Result<Drawn> {
     ensure_font().map_err(|m| Error::plot(path, m))?;
     let lw = legend_width(panels.len());
@@ -307,6 +307,7 @@ fn draw_panel(
         area.clone()
     } else {
         let (band, body) = area.split_vertically(CAPTION_BAND);
+        // Centred over the plotting area (right of the ~90 px of y labels).
         band.draw(&Text::new(
             spec.caption.clone(),
             (chart_w as i32 / 2 + 40, CAPTION_BAND as i32 / 2 + 2),

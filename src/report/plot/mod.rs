@@ -2,18 +2,18 @@
 //! engineering diagrams (stress–rupture, Norton, Larson–Miller; [`crate::report::diagrams`]),
 //! the multistart "waterfall", the spread of the best constants and profile likelihoods.
 //!
-//! Every exporter builds [`canvas::PanelSpec`]s (pure: axes, series, legend entries) and
-//! draws them with [`canvas::draw_figure`]:
-//! - Many curves are split into panels ([`facet`]): one per temperature, a temperature with
+//! Every exporter builds `canvas::PanelSpec`s (pure: axes, series, legend entries) and draws
+//! them with `canvas::draw_figure`:
+//! - Many curves are split into panels (`facet.rs`): one per temperature, a temperature with
 //!   more than [`MAX_PER_PANEL`] curves split into groups of neighbouring stresses; each panel
 //!   has its own legend naming temperature, stress and specimen of every curve in it.
 //! - A legend never leaves an entry out and never covers data: it sits beside its chart and
-//!   the image (or each panel) grows taller when the entries need it ([`canvas::layout`]).
-//! - A legend swatch is the series' own style ([`style::Swatch`]): a dashed line gets a
+//!   the image (or each panel) grows taller when the entries need it (`canvas::layout`).
+//! - A legend swatch is the series' own style (`style::Swatch`): a dashed line gets a
 //!   dashed swatch, points a point.
-//! - The axes cover everything drawn ([`geom`]); a predicted creep curve running far beyond
+//! - The axes cover everything drawn (`geom.rs`); a predicted creep curve running far beyond
 //!   the measured ones is cut at [`PREDICTED_EXTENT`] × their extent and marked with an arrow.
-//! - Tick labels ([`ticks`]) use one format per axis: plain numbers while every tick lies
+//! - Tick labels (`ticks.rs`) use one format per axis: plain numbers while every tick lies
 //!   within 1e-3…1e4 in magnitude, powers of ten (`10⁵`, `2×10⁴`) otherwise.
 //!
 //! A one-panel image is 1200 px wide and at least 700 px high; a grid has panels of 900 ×

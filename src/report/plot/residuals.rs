@@ -7,7 +7,7 @@ use std::path::Path;
 use super::canvas::{draw_figure, Axis, Drawn, Layer, PanelSpec};
 use super::facet::{facets, MAX_PER_PANEL};
 use super::geom::{data_range, padded, plottable, thin_markers};
-use super::style::{Entry, Line, MarkerShape, Rgb, Style};
+use super::style::{Dash, Entry, Line, Marker, MarkerShape, Rgb, Style};
 use super::ticks::Ticks;
 use super::{AxisScale, CurveId};
 use crate::error::Result;
@@ -132,10 +132,10 @@ fn residual_panel(
             color,
             line: Some(Line {
                 width: 1,
-                dash: super::style::Dash::Solid,
+                dash: Dash::Solid,
                 opacity: 0.45,
             }),
-            marker: Some(super::style::Marker {
+            marker: Some(Marker {
                 shape: MarkerShape::Circle,
                 size: 3,
             }),
