@@ -274,7 +274,7 @@ where
     };
     let tmp = output::temp_beside(path, ".png").map_err(plot_err)?;
     let mut file = std::io::BufWriter::new(tmp.as_file());
-    PngEncoder::new_with_quality(&mut file, CompressionType::Best, FilterType::Adaptive)
+    PngEncoder::new_with_quality(&mut file, CompressionType::Default, FilterType::Adaptive)
         .write_image(&buffer, w, h, ColorType::Rgb8)
         .map_err(|e| Error::plot(path, e.to_string()))?;
     file.flush().map_err(|e| Error::plot(path, e.to_string()))?;
