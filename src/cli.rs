@@ -15,7 +15,10 @@ use crate::model::Load;
 use crate::objective::Objective;
 use crate::ode::OdeOptions;
 use crate::output::lock_folder;
-use crate::report::plot::{plot_creep_curves, plot_residuals, CurvePlot, Series};
+use crate::report::diagrams::Diagrams;
+use crate::report::plot::{
+    plot_creep_curves, plot_curve_residuals, CurveId, CurvePlot, CurveSeries,
+};
 use crate::report::tables::{self, num, write_csv, write_text};
 use crate::sweep;
 
@@ -506,11 +509,11 @@ fn diagnose_cmd(config: &Path, cli: &Overrides) -> Result<()> {
         let settings = FitSettings::from_config(&cfg);
         let obj = crate::likelihood::raw_objective(model.as_ref(), &curves, &settings);
         let ev = obj.evaluate(&x);
-        let series: Vec<Series> = curves
+        let series: Vec<CurveSeries> = curves
             .iter()
             .zip(&ev.curves)
-            .map(|(cu, p)| Series {
-                label: cu.label(),
+            .map(|(cu, p)| CurveSeries {
+                id: CurveId::of(cu),
                 points: tables::thin(
                     (0..cu.times_h.len())
                         .map(|k| {
@@ -525,7 +528,7 @@ fn diagnose_cmd(config: &Path, cli: &Overrides) -> Result<()> {
             })
             .collect();
         let path = out.join(format!("residuals_{}.png", c.name));
-        if let Err(e) = plot_residuals(
+        if let Err(e) = plot_curve_residuals(
             &path,
             &format!("{}: residuals of {}", cfg.name, c.name),
             &series,
@@ -850,11 +853,24 @@ fn fit(config: &Path, cli: &Overrides) -> Result<()> {
         &format!("{} — measured (points) and fitted (lines)", cfg.name),
         &plots,
     );
+    let mut failures: Vec<String> = plotted.err().map(|e| e.to_string()).into_iter().collect();
+    // The diagrams beside the Larson–Miller baseline of the same rupture times (none at one
+    // temperature).
+    let lmp = crate::lmp::LarsonMiller::fit_curves(&data.curves, cfg.predict.lmp_degree).ok();
+    failures.extend(
+        Diagrams {
+            cfg: &cfg,
+            data: &data,
+            model: run.model.as_ref(),
+            params: &best.params,
+            lmp: lmp.as_ref(),
+            asked: &[],
+            held_out_c: None,
+        }
+        .write(&out),
+    );
     println!("wrote {}", out.display());
-    plots_done(
-        &out,
-        plotted.err().map(|e| e.to_string()).into_iter().collect(),
-    )
+    plots_done(&out, failures)
 }
 
 /// Most measured points a plot draws per curve ([`tables::thin`]).
@@ -884,10 +900,7 @@ pub(crate) fn curve_plots(
             let grid = crate::predict::dense_grid(res.t_end, 400);
             let (_, traj) = model.trajectory(params, &load, &grid, &o);
             CurvePlot {
-                label: match &c.specimen {
-                    Some(sp) => format!("{} MPa, {sp}", c.stress_mpa),
-                    None => format!("{} MPa", c.stress_mpa),
-                },
+                id: CurveId::of(c),
                 measured: tables::thin(
                     c.times_h
                         .iter()

@@ -27,7 +27,10 @@ use crate::model::Load;
 use crate::objective::{mean_abs, CurvePrediction, Objective};
 use crate::ode::Outcome;
 use crate::output::lock_folder;
-use crate::report::plot::{plot_creep_curves, plot_xy, AxisScale, XyAxes, XyGroup};
+use crate::report::diagrams::Diagrams;
+use crate::report::plot::{
+    plot_creep_curves, plot_xy, AxisScale, Dash, MarkerShape, Rgb, XyAxes, XyGroup,
+};
 use crate::report::tables::{self, jnum, num, write_csv, write_text};
 
 /// One held-out test and its predictions.
@@ -578,7 +581,8 @@ pub fn baseline_columns() -> Vec<String> {
 pub const CURVE_COLUMNS: [&str; 3] = ["predicted_life_pct", "curve_outcome", "curve_points"];
 
 /// `creepfit holdout`: run, print, write `holdout.csv`, `constants.csv`, `summary.json`,
-/// `curves.png` and `parity.png`.
+/// `curves.png`, `parity.png` and the diagrams of the training fit with every test
+/// ([`crate::report::diagrams`]: the held-out temperature's tests as open circles).
 pub fn holdout_cmd(config: &Path, temperature_c: f64, cli: &Overrides) -> Result<()> {
     let (cfg, data) = crate::cli::load(config, cli)?;
     let out = cfg.out_dir(&format!("holdout-{temperature_c}C"));
@@ -750,80 +754,50 @@ pub fn holdout_cmd(config: &Path, temperature_c: f64, cli: &Overrides) -> Result
         });
     let diag = |f: f64| vec![(lo / 1.2, f * lo / 1.2), (hi * 1.2, f * hi * 1.2)];
     let mut groups = vec![
-        XyGroup {
-            label: format!("creepfit: mean |log10 err| {:.3}", h.model_mean_abs_log10()),
-            line: vec![],
-            points: h
-                .tests
+        XyGroup::points(
+            format!("creepfit: mean |log10 err| {:.3}", h.model_mean_abs_log10()),
+            h.tests
                 .iter()
                 .map(|t| (t.rupture_time_h, t.model_rupture_time_h))
                 .collect(),
-            dashed: false,
-            color: Some(0),
-            triangles: false,
-        },
-        XyGroup {
-            label: format!(
+            Rgb::palette(0),
+            MarkerShape::Circle,
+        ),
+        XyGroup::points(
+            format!(
                 "Larson–Miller: mean |log10 err| {:.3}",
                 h.lmp_mean_abs_log10()
             ),
-            line: vec![],
-            points: h
-                .tests
+            h.tests
                 .iter()
                 .map(|t| (t.rupture_time_h, t.lmp_rupture_time_h))
                 .collect(),
-            dashed: false,
-            color: Some(1),
-            triangles: false,
-        },
-        XyGroup {
-            label: "predicted = measured".into(),
-            line: diag(1.0),
-            points: vec![],
-            dashed: false,
-            color: None,
-            triangles: false,
-        },
-        XyGroup {
-            label: "factor 2".into(),
-            line: diag(2.0),
-            points: vec![],
-            dashed: true,
-            color: None,
-            triangles: false,
-        },
-        XyGroup {
-            label: String::new(),
-            line: diag(0.5),
-            points: vec![],
-            dashed: true,
-            color: None,
-            triangles: false,
-        },
+            Rgb::palette(1),
+            MarkerShape::Circle,
+        ),
+        XyGroup::line("predicted = measured", diag(1.0), Rgb::BLACK, Dash::Solid),
+        XyGroup::line("factor 2", diag(2.0), Rgb::BLACK, Dash::Dashed),
+        XyGroup::line("", diag(0.5), Rgb::BLACK, Dash::Dashed),
     ];
     // The other baselines' points after Larson–Miller's, before the lines.
     for (k, b) in h.baselines.iter().enumerate().skip(1) {
         if b.fit.is_ok() {
             groups.insert(
                 groups.len() - 3,
-                XyGroup {
-                    label: format!(
+                XyGroup::points(
+                    format!(
                         "{}: mean |log10 err| {:.3}",
                         b.kind.name(),
                         h.baseline_score(k).0
                     ),
-                    line: vec![],
-                    points: h
-                        .tests
+                    h.tests
                         .iter()
                         .map(|t| (t.rupture_time_h, t.baseline_rupture_time_h[k]))
                         .filter(|p| p.1.is_finite())
                         .collect(),
-                    dashed: false,
-                    color: Some(k + 1),
-                    triangles: true,
-                },
+                    Rgb::palette(k + 1),
+                    MarkerShape::Triangle,
+                ),
             );
         }
     }
@@ -843,6 +817,18 @@ pub fn holdout_cmd(config: &Path, temperature_c: f64, cli: &Overrides) -> Result
     ) {
         failures.push(e.to_string());
     }
+    failures.extend(
+        Diagrams {
+            cfg: &cfg,
+            data: &data,
+            model: h.fit.model.as_ref(),
+            params: &best.params,
+            lmp: h.lmp.as_ref().ok(),
+            asked: &[],
+            held_out_c: Some(h.temperature_c),
+        }
+        .write(&out),
+    );
     println!("wrote {}", out.display());
     if failures.is_empty() {
         Ok(())

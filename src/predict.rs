@@ -5,9 +5,9 @@
 //! rate. Beside each, the Larson–Miller baseline ([`crate::lmp`]) and the other classical
 //! baselines ([`crate::baseline`]) fitted to the rupture times of the configuration's data,
 //! each marked where the condition lies outside the temperatures or stresses it was fitted
-//! on, so that the model's life is always shown next to the standard ones. The plots a creep engineer reads: the predicted curves, a stress–rupture
-//! diagram (log rupture time against stress, one line per temperature, measured points on
-//! it) and a Larson–Miller diagram of the data with the model's lines.
+//! on, so that the model's life is always shown next to the standard ones. The plots a creep
+//! engineer reads: the predicted curves and the diagrams of [`crate::report::diagrams`]
+//! (stress–rupture, Norton, Larson–Miller) with the asked conditions on them.
 
 use std::path::Path;
 
@@ -18,11 +18,14 @@ use crate::baseline::{self, Baseline, BaselineKind, BaselineSettings, Extrapolat
 use crate::config::RunConfig;
 use crate::data::{Curve, Dataset};
 use crate::error::{Error, Result};
-use crate::lmp::{self, LarsonMiller};
+use crate::lmp::LarsonMiller;
 use crate::model::{Load, Model};
 use crate::objective::HORIZON_FACTOR;
 use crate::ode::{OdeOptions, Outcome};
-use crate::report::plot::{plot_creep_curves, plot_xy, AxisScale, CurvePlot, XyAxes, XyGroup};
+use crate::report::diagrams::{Asked, Diagrams};
+use crate::report::plot::{
+    plot_creep_curves, plot_xy, AxisScale, CurveId, CurvePlot, Dash, Rgb, XyAxes, XyGroup,
+};
 use crate::report::tables::{self, jnum, num, write_csv, write_csv_rows, write_text};
 
 /// One condition to predict: temperature (°C) and stress (MPa).
@@ -180,7 +183,7 @@ pub fn dense_grid(t_end: f64, n: usize) -> Vec<f64> {
 
 /// Integration horizon of a prediction: [`HORIZON_FACTOR`] × the longer of the longest
 /// measured life of the data and the baseline's life at the condition.
-fn horizon(data: &Dataset, lmp_life: f64) -> f64 {
+pub(crate) fn horizon(data: &Dataset, lmp_life: f64) -> f64 {
     let longest = data
         .curves
         .iter()
@@ -588,15 +591,6 @@ pub const BAND_COLUMNS: [&str; 6] = [
 /// Most measured points a plot draws per curve.
 const PLOT_POINTS: usize = 2000;
 
-/// The stresses at which a temperature's line of the diagrams is drawn: 40 values evenly in
-/// log stress over the data's and the asked stresses at that temperature, widened by 10 %.
-fn stress_grid(lo: f64, hi: f64) -> Vec<f64> {
-    let (a, b) = ((lo / 1.1).ln(), (hi * 1.1).ln());
-    (0..40)
-        .map(|i| (a + (b - a) * i as f64 / 39.0).exp())
-        .collect()
-}
-
 fn plots(
     out: &Path,
     cfg: &RunConfig,
@@ -628,7 +622,11 @@ fn plots(
                 })
                 .collect();
             CurvePlot {
-                label: c.label(),
+                id: CurveId {
+                    temperature_c: c.temperature_c,
+                    stress_mpa: c.stress_mpa,
+                    specimen: None,
+                },
                 measured,
                 predicted: p.curve.iter().map(|(t, e, _)| (*t, 100.0 * e)).collect(),
             }
@@ -651,30 +649,25 @@ fn plots(
             if ci.band.is_empty() {
                 continue;
             }
-            groups.push(XyGroup {
-                label: p.condition.label(),
-                line: p.curve.iter().map(|(t, e, _)| (*t, 100.0 * e)).collect(),
-                points: vec![],
-                dashed: false,
-                color: Some(k),
-                triangles: false,
-            });
+            groups.push(XyGroup::line(
+                p.condition.label(),
+                p.curve.iter().map(|(t, e, _)| (*t, 100.0 * e)).collect(),
+                Rgb::palette(k),
+                Dash::Solid,
+            ));
             for (label, side) in [
                 (format!("{}: 95 % band", p.condition.label()), true),
                 (String::new(), false),
             ] {
-                groups.push(XyGroup {
+                groups.push(XyGroup::line(
                     label,
-                    line: ci
-                        .band
+                    ci.band
                         .iter()
                         .map(|b| (b.time_h, if side { b.hi95_pct } else { b.lo95_pct }))
                         .collect(),
-                    points: vec![],
-                    dashed: true,
-                    color: Some(k),
-                    triangles: false,
-                });
+                    Rgb::palette(k),
+                    Dash::Dashed,
+                ));
             }
         }
         if !groups.is_empty() {
@@ -697,157 +690,29 @@ fn plots(
         }
     }
 
-    // Temperatures of the diagrams: the data's and the asked ones.
-    let mut temps: Vec<f64> = data
-        .curves
+    // The engineering diagrams: stress–rupture, Norton, Larson–Miller.
+    let asked: Vec<Asked> = run
+        .predictions
         .iter()
-        .map(|c| c.temperature_c)
-        .chain(run.predictions.iter().map(|p| p.condition.temperature_c))
+        .map(|p| Asked {
+            temperature_c: p.condition.temperature_c,
+            stress_mpa: p.condition.stress_mpa,
+            rupture_time_h: p.rupture_time_h,
+            min_rate: p.min_rate,
+        })
         .collect();
-    temps.sort_by(f64::total_cmp);
-    temps.dedup();
-    let ode = cfg.solver.ode_options();
-    let lmp = run.lmp.as_ref().ok();
-    let mut sr = Vec::new();
-    let mut lm = Vec::new();
-    for (i, &t) in temps.iter().enumerate() {
-        let stresses = data
-            .curves
-            .iter()
-            .filter(|c| c.temperature_c == t)
-            .map(|c| c.stress_mpa)
-            .chain(
-                run.predictions
-                    .iter()
-                    .filter(|p| p.condition.temperature_c == t)
-                    .map(|p| p.condition.stress_mpa),
-            );
-        let (lo, hi) = stresses.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), s| {
-            (a.min(s), b.max(s))
-        });
-        let model_line: Vec<(f64, f64)> = stress_grid(lo, hi)
-            .into_iter()
-            .map(|s| {
-                let c = Condition {
-                    temperature_c: t,
-                    stress_mpa: s,
-                };
-                let l = lmp.map_or(f64::NAN, |l| l.rupture_time(t, s));
-                let r = simulate_at(
-                    model,
-                    params,
-                    c,
-                    cfg.objective.omega_f,
-                    &ode,
-                    horizon(data, l),
-                );
-                (s, if r.ruptured() { r.t_end } else { f64::NAN })
-            })
-            .collect();
-        let measured: Vec<(f64, f64)> = data
-            .curves
-            .iter()
-            .filter(|c| c.temperature_c == t)
-            .filter_map(|c| c.rupture_time_h.map(|r| (c.stress_mpa, r)))
-            .collect();
-        let asked: Vec<(f64, f64)> = run
-            .predictions
-            .iter()
-            .filter(|p| p.condition.temperature_c == t)
-            .map(|p| (p.condition.stress_mpa, p.rupture_time_h))
-            .collect();
-        let color = Some(i);
-        sr.push(XyGroup {
-            label: format!("{t} °C: creepfit (line), measured (points)"),
-            line: model_line.clone(),
-            points: measured.clone(),
-            dashed: false,
-            color,
-            triangles: false,
-        });
-        if !asked.is_empty() {
-            sr.push(XyGroup {
-                label: format!("{t} °C: asked condition(s)"),
-                line: vec![],
-                points: asked,
-                dashed: false,
-                color,
-                triangles: true,
-            });
+    failures.extend(
+        Diagrams {
+            cfg,
+            data,
+            model,
+            params,
+            lmp: run.lmp.as_ref().ok(),
+            asked: &asked,
+            held_out_c: None,
         }
-        if let Some(l) = lmp {
-            sr.push(XyGroup {
-                label: format!("{t} °C: Larson–Miller"),
-                line: model_line
-                    .iter()
-                    .map(|&(s, _)| (s, l.rupture_time(t, s)))
-                    .collect(),
-                points: vec![],
-                dashed: true,
-                color,
-                triangles: false,
-            });
-            lm.push(XyGroup {
-                label: format!("{t} °C: measured (points), creepfit (line)"),
-                line: model_line
-                    .iter()
-                    .map(|&(s, tr)| (lmp::parameter(t, tr, l.c), s))
-                    .collect(),
-                points: measured
-                    .iter()
-                    .map(|&(s, tr)| (lmp::parameter(t, tr, l.c), s))
-                    .collect(),
-                dashed: false,
-                color,
-                triangles: false,
-            });
-        }
-    }
-    let sr_axes = XyAxes {
-        x_label: "stress (MPa)",
-        y_label: "rupture time (h)",
-        x_scale: AxisScale::Linear,
-        y_scale: AxisScale::Log,
-    };
-    if let Err(e) = plot_xy(
-        &out.join("stress_rupture.png"),
-        &format!("{} — stress–rupture", cfg.name),
-        sr_axes,
-        &sr,
-    ) {
-        failures.push(e.to_string());
-    }
-    if let Some(l) = lmp {
-        let (s0, s1) = l.stress_range_mpa;
-        lm.push(XyGroup {
-            label: format!("Larson–Miller fit, C = {:.2}", l.c),
-            line: stress_grid(s0, s1)
-                .into_iter()
-                .map(|s| (l.lmp(s), s))
-                .collect(),
-            points: vec![],
-            dashed: true,
-            color: None,
-            triangles: false,
-        });
-        let axes = XyAxes {
-            x_label: &format!(
-                "Larson–Miller parameter T·(C + log10 t_r), K (C = {:.2})",
-                l.c
-            ),
-            y_label: "stress (MPa)",
-            x_scale: AxisScale::Linear,
-            y_scale: AxisScale::Log,
-        };
-        if let Err(e) = plot_xy(
-            &out.join("larson_miller.png"),
-            &format!("{} — Larson–Miller diagram", cfg.name),
-            axes,
-            &lm,
-        ) {
-            failures.push(e.to_string());
-        }
-    }
+        .write(out),
+    );
     failures
 }
 

@@ -53,9 +53,17 @@ fn fit_reproduces_paper(config: &str, paper_mean_lifetime_err: f64) {
         "curves.csv",
         "summary.json",
         "fit.png",
+        "stress_rupture.png",
+        "norton.png",
     ] {
         assert!(out.path().join(file).is_file(), "{file} missing");
     }
+    for png in ["fit.png", "stress_rupture.png", "norton.png"] {
+        let bytes = std::fs::read(out.path().join(png)).unwrap();
+        assert!(bytes.len() > 5_000 && &bytes[1..4] == b"PNG", "{png}");
+    }
+    // One temperature: no Larson–Miller baseline, so no master curve.
+    assert!(!out.path().join("larson_miller.png").exists());
     let errors = read_csv(&out.path().join("errors.csv"));
     assert_eq!(errors.len(), 3);
     let mean = errors

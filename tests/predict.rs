@@ -44,7 +44,19 @@ fn csv(path: &Path) -> Vec<Vec<String>> {
         .collect()
 }
 
-/// The joint seed calibration fitted once into `dir`: its constants.csv.
+/// Each of `files` in `dir` is a whole, non-empty PNG (signature, IHDR, IEND).
+fn assert_pngs(dir: &Path, files: &[&str]) {
+    for f in files {
+        let bytes = std::fs::read(dir.join(f)).unwrap_or_else(|e| panic!("{f}: {e}"));
+        assert!(bytes.len() > 5_000, "{f}: {} bytes", bytes.len());
+        assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "{f}");
+        assert_eq!(&bytes[12..16], b"IHDR", "{f}");
+        assert_eq!(&bytes[bytes.len() - 8..bytes.len() - 4], b"IEND", "{f}");
+    }
+}
+
+/// The joint seed calibration fitted once into `dir`: its constants.csv. `fit` draws the
+/// curves and the three diagrams (two temperatures: the Larson–Miller one too).
 fn joint_constants(dir: &Path) -> PathBuf {
     let out = dir.join("fit");
     ok(&[
@@ -53,6 +65,15 @@ fn joint_constants(dir: &Path) -> PathBuf {
         "--out",
         out.to_str().unwrap(),
     ]);
+    assert_pngs(
+        &out,
+        &[
+            "fit.png",
+            "stress_rupture.png",
+            "norton.png",
+            "larson_miller.png",
+        ],
+    );
     out.join("constants.csv")
 }
 
@@ -146,15 +167,18 @@ fn predict_at_tested_conditions_equals_simulate_and_keeps_the_contract() {
         }
     }
     assert!(common >= 6 * 150, "only {common} common rows");
-    for f in [
-        "larson_miller.csv",
-        "summary.json",
-        "curves.png",
-        "stress_rupture.png",
-        "larson_miller.png",
-    ] {
+    for f in ["larson_miller.csv", "summary.json"] {
         assert!(pred.join(f).exists(), "{f}");
     }
+    assert_pngs(
+        &pred,
+        &[
+            "curves.png",
+            "stress_rupture.png",
+            "norton.png",
+            "larson_miller.png",
+        ],
+    );
 
     // Untested conditions: a row each, the Larson–Miller prediction beside.
     let pred2 = tmp.path().join("pred2");
@@ -561,9 +585,17 @@ tensile_strength = ["560:420", "575:400", "590:380"]
         2
     );
     assert_eq!(s["temperature_extrapolation"], false);
-    for f in ["constants.csv", "curves.png", "parity.png"] {
-        assert!(out.join(f).exists(), "{f}");
-    }
+    assert!(out.join("constants.csv").exists());
+    assert_pngs(
+        &out,
+        &[
+            "curves.png",
+            "parity.png",
+            "stress_rupture.png",
+            "norton.png",
+            "larson_miller.png",
+        ],
+    );
     // With --intervals: the 95 % intervals of each held-out life from the training data, the
     // model's inside the new test's, and the count of measured lives inside.
     let out_i = tmp.path().join("hoi");
