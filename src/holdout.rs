@@ -16,7 +16,7 @@ use crate::fit::{run_fit_multistart, FitRun};
 use crate::lmp::LarsonMiller;
 use crate::model::Load;
 use crate::objective::{mean_abs, Objective};
-use crate::output::lock_folder;
+use crate::output::RunFolder;
 use crate::report::plot::{plot_creep_curves, plot_xy, AxisScale, XyAxes, XyGroup};
 use crate::report::tables::{self, jnum, num, write_csv, write_text};
 
@@ -81,6 +81,9 @@ pub struct Holdout {
     pub tests: Vec<HeldOut>,
     /// The held-out curves.
     pub curves: Vec<Curve>,
+    /// Under `--intervals`: the maximum-likelihood refit of the training fit's constants the
+    /// intervals (and `ml_rupture_time_h`) come from.
+    pub intervals_refit: Option<crate::uncertainty::predict::Refit>,
 }
 
 impl Holdout {
@@ -152,6 +155,7 @@ pub fn holdout(
     let train_data = Dataset {
         curves: train,
         warnings: Vec::new(),
+        dropped: Vec::new(),
     };
     let fit = run_fit_multistart(cfg, &train_data, cfg.sweep.starts)?;
     let best = &fit.fits[fit.best];
@@ -173,27 +177,30 @@ pub fn holdout(
         .collect();
     stresses.sort_by(f64::total_cmp);
     stresses.dedup();
+    let mut intervals_refit = None;
     let by_stress: Vec<Option<RuptureInterval>> = if intervals {
         let loads: Vec<Load> = stresses
             .iter()
             .map(|&s| Load::new(s, temperature_c, cfg.objective.omega_f))
             .collect();
-        crate::uncertainty::predict::intervals_at(
+        let iv = crate::uncertainty::predict::intervals_at(
             cfg,
             fit.model.as_ref(),
             &train_data,
             &best.params,
             &loads,
-        )?
-        .iter()
-        .map(|ci| {
-            ci.get("rupture_time_h").map(|q| RuptureInterval {
-                value_h: q.value,
-                pred95: (q.pred_lo95, q.pred_hi95),
-                conf95: (q.conf_lo95, q.conf_hi95),
+        )?;
+        intervals_refit = Some(iv.refit);
+        iv.conditions
+            .iter()
+            .map(|ci| {
+                ci.get("rupture_time_h").map(|q| RuptureInterval {
+                    value_h: q.value,
+                    pred95: (q.pred_lo95, q.pred_hi95),
+                    conf95: (q.conf_lo95, q.conf_hi95),
+                })
             })
-        })
-        .collect()
+            .collect()
     } else {
         vec![None; stresses.len()]
     };
@@ -228,6 +235,7 @@ pub fn holdout(
         lmp,
         tests,
         curves: test,
+        intervals_refit,
     })
 }
 
@@ -278,6 +286,14 @@ pub fn table(h: &Holdout) -> String {
         s.push_str(&format!(
             "measured lives inside the 95 % prediction interval of a new test: {inside} of {with}\n"
         ));
+        if let Some(r) = &h.intervals_refit {
+            s.push_str(&format!(
+                "the intervals are centred on the maximum-likelihood refit of the training fit's constants (holdout.csv: ml_rupture_time_h; −2 ln L {:.3} there, {:.3} at the training fit: difference {:.3}; summary.json: intervals_refit)\n",
+                r.neg2ll,
+                r.given_neg2ll,
+                r.delta_neg2ll()
+            ));
+        }
     }
     if let Err(e) = &h.lmp {
         s.push_str(&format!("no Larson–Miller baseline: {e}\n"));
@@ -301,8 +317,14 @@ pub const INTERVAL_COLUMNS: [&str; 5] = [
 pub fn holdout_cmd(config: &Path, temperature_c: f64, cli: &Overrides) -> Result<()> {
     let (cfg, data) = crate::cli::load(config, cli)?;
     let out = cfg.out_dir(&format!("holdout-{temperature_c}C"));
-    let _lock = lock_folder(&out)?;
-    let h = holdout(&cfg, &data, temperature_c, cfg.predict.intervals)?;
+    let mut folder = RunFolder::begin(&out, "holdout")?;
+    crate::cli::note_data(&mut folder, &data);
+    folder.finish(holdout_into(&cfg, &data, temperature_c, &out))
+}
+
+/// `holdout`'s computation and outputs into `out`.
+fn holdout_into(cfg: &RunConfig, data: &Dataset, temperature_c: f64, out: &Path) -> Result<()> {
+    let h = holdout(cfg, data, temperature_c, cfg.predict.intervals)?;
     let with_intervals = h.tests.iter().any(|t| t.interval.is_some());
     let best = &h.fit.fits[h.fit.best];
     let specimens = h.tests.iter().any(|t| t.specimen.is_some());
@@ -379,6 +401,15 @@ pub fn holdout_cmd(config: &Path, temperature_c: f64, cli: &Overrides) -> Result
         "model_mean_abs_log10_err": jnum(h.model_mean_abs_log10()),
         "lmp_mean_abs_log10_err": jnum(h.lmp_mean_abs_log10()),
         "inside_pred95": inside_pred95,
+        "intervals_refit": h.intervals_refit.as_ref().map(|r| json!({
+            "what": "the intervals and ml_rupture_time_h come from the maximum-likelihood refit of the training fit's constants",
+            "neg2ll": jnum(r.neg2ll),
+            "training_fit_neg2ll": jnum(r.given_neg2ll),
+            "delta_neg2ll": jnum(r.delta_neg2ll()),
+            "constants": h.fit.model.constants().iter().zip(r.given.iter().zip(&r.params)).map(|(c, (g, v))| json!({
+                "name": c.name, "training_fit": g, "refit": v, "difference": v - g,
+            })).collect::<Vec<_>>(),
+        })),
         "mean_curve_rms_pct": jnum(mean_abs(&h.tests.iter().map(|t| t.curve_rms_pct).collect::<Vec<_>>())),
         "larson_miller": match &h.lmp {
             Ok(l) => json!(l),
@@ -395,9 +426,10 @@ pub fn holdout_cmd(config: &Path, temperature_c: f64, cli: &Overrides) -> Result
     let held = Dataset {
         curves: h.curves.clone(),
         warnings: Vec::new(),
+        dropped: Vec::new(),
     };
     let plots = crate::cli::curve_plots(
-        &cfg,
+        cfg,
         &held,
         &best.params,
         &h.fit.settings.ode,

@@ -87,6 +87,8 @@ fn predict_at_tested_conditions_equals_simulate_and_keeps_the_contract() {
     ]);
     assert!(stdout.contains("Larson–Miller baseline: C = "), "{stdout}");
     let p = csv(&pred.join("predictions.csv"));
+    // The contract's five columns, then where each condition lies, how its simulation ended
+    // and which constants the numbers come from.
     assert_eq!(
         p[0],
         [
@@ -94,7 +96,10 @@ fn predict_at_tested_conditions_equals_simulate_and_keeps_the_contract() {
             "stress_MPa",
             "rupture_time_h",
             "rupture_strain_pct",
-            "min_rate_pct_per_h"
+            "min_rate_pct_per_h",
+            "extrapolation",
+            "outcome",
+            "constants"
         ]
     );
     let asked: Vec<(String, String)> = at
@@ -235,7 +240,7 @@ fn predict_intervals_add_their_columns() {
         ok(&args);
         out.join("predictions.csv")
     });
-    assert_eq!(plain[0].len(), 5);
+    assert_eq!(plain[0][5..], ["extrapolation", "outcome", "constants"]);
     let mut with = args.to_vec();
     with.push("--intervals");
     let stdout = ok(&with);
@@ -244,7 +249,7 @@ fn predict_intervals_add_their_columns() {
         "{stdout}"
     );
     let rows = csv(&out.join("predictions.csv"));
-    let mut want: Vec<&str> = plain[0].iter().map(String::as_str).collect();
+    let mut want: Vec<&str> = plain[0][..5].iter().map(String::as_str).collect();
     want.extend([
         "rupture_time_lo95_h",
         "rupture_time_hi95_h",
@@ -258,6 +263,13 @@ fn predict_intervals_add_their_columns() {
         "rupture_strain_conf_hi95_pct",
         "min_rate_conf_lo95_pct_per_h",
         "min_rate_conf_hi95_pct_per_h",
+        "extrapolation",
+        "outcome",
+        "constants",
+        "given_rupture_time_h",
+        "given_rupture_strain_pct",
+        "given_min_rate_pct_per_h",
+        "given_outcome",
     ]);
     assert_eq!(rows[0], want);
     assert_eq!(rows.len(), 3);
@@ -428,6 +440,25 @@ starts = 2
     for f in ["constants.csv", "curves.png", "parity.png"] {
         assert!(out.join(f).exists(), "{f}");
     }
+    // The folder's manifest: this holdout's files, complete.
+    let m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("manifest.json")).unwrap()).unwrap();
+    assert_eq!(
+        (&m["command"], &m["complete"]),
+        (&serde_json::json!("holdout"), &serde_json::json!(true))
+    );
+    for f in [
+        "holdout.csv",
+        "constants.csv",
+        "summary.json",
+        "curves.png",
+        "parity.png",
+    ] {
+        assert!(
+            m["files"].as_array().unwrap().iter().any(|x| x == f),
+            "{f}: {m}"
+        );
+    }
     // With --intervals: the 95 % intervals of each held-out life from the training data, the
     // model's inside the new test's, and the count of measured lives inside.
     let out_i = tmp.path().join("hoi");
@@ -461,6 +492,14 @@ starts = 2
             "{r:?}"
         );
     }
+    // The intervals' refit of the training constants, said in the printout and the summary.
+    assert!(
+        stdout.contains("centred on the maximum-likelihood refit"),
+        "{stdout}"
+    );
+    let r = &s["intervals_refit"];
+    assert!(r["delta_neg2ll"].as_f64().is_some(), "{r}");
+    assert_eq!(r["constants"].as_array().unwrap().len(), 8);
     assert_eq!(s["inside_pred95"]["inside"], 2);
     assert_eq!(s["inside_pred95"]["tests"], 2);
     // Leaving out a temperature that leaves one to fit is refused.
