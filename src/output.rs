@@ -358,8 +358,15 @@ impl RunFolder {
             });
         // The manifest first: a failure here leaves the previous run's files and manifest.
         run.write_manifest(false, Some("the run has not finished"))?;
-        for f in previous.iter().filter(|f| inside(f) && !keep(f)) {
+        for f in previous
+            .iter()
+            .filter(|f| inside(f) && !keep(f) && *f != MANIFEST_FILE && *f != LOCK_FILE)
+        {
             let p = dir.join(f);
+            // Only files (a manifest edited by hand may name a folder: left alone).
+            if std::fs::symlink_metadata(&p).is_ok_and(|m| m.is_dir()) {
+                continue;
+            }
             match std::fs::remove_file(&p) {
                 Ok(()) => run.removed.push(f.clone()),
                 Err(e) if e.kind() == io::ErrorKind::NotFound => {}
@@ -508,7 +515,15 @@ mod tests {
         // A file put there by hand, and a manifest entry that would leave the folder.
         std::fs::write(dir.join("mine.txt"), "mine").unwrap();
         let mut m2 = m.clone();
-        m2["files"] = json!(["a.csv", "sub/b.csv", "../outside.csv", "/etc/hostname"]);
+        m2["files"] = json!([
+            "a.csv",
+            "sub/b.csv",
+            "../outside.csv",
+            "/etc/hostname",
+            "manifest.json",
+            ".creepfit.lock",
+            "sub"
+        ]);
         std::fs::write(dir.join(MANIFEST_FILE), m2.to_string()).unwrap();
         // Second run: keeps a.csv (what it resumes from), writes c.csv, fails.
         let run =

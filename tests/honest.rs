@@ -1179,3 +1179,36 @@ fn predict_never_writes_a_non_finite_number() {
     eprintln!("{} runs refused, {} written", errors.get(), written.get());
     assert!(errors.get() > 0 && written.get() > 0);
 }
+
+/// The generated data `battery` diagnoses load under the default (refuse): 140 sets, every
+/// scenario (a mid-life step and a primary transient included), none near the limit.
+#[test]
+fn generated_sets_have_no_gross_outlier() {
+    use creepfit::config::RunConfig;
+    use creepfit::data::{outlier_z, OUTLIER_Z};
+    let tmp = TempDir::new().unwrap();
+    let mut worst = (0.0f64, String::new());
+    for i in 0..140usize {
+        let seed = 90_001 + i as u64;
+        let scenario = creepfit::synth::scenario_of(i);
+        let name = format!("set-{seed}");
+        let set = creepfit::synth::generate(&name, scenario, seed).unwrap();
+        let dir = tmp.path().join(&name);
+        creepfit::synth::write_set(&set, &dir).unwrap();
+        let cfg = RunConfig::load(&dir.join("config.toml")).unwrap();
+        let data = cfg
+            .load_data()
+            .unwrap_or_else(|e| panic!("{name} ({scenario}): {e}"));
+        for c in &data.curves {
+            let m = outlier_z(&c.strains).into_iter().fold(0.0, f64::max);
+            if m > worst.0 {
+                worst = (m, format!("{name} ({scenario}), {}", c.label()));
+            }
+        }
+    }
+    eprintln!(
+        "largest robust z of 140 generated sets: {:.3} ({})",
+        worst.0, worst.1
+    );
+    assert!(worst.0 < OUTLIER_Z / 5.0, "{worst:?}");
+}
