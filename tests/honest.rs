@@ -565,7 +565,12 @@ fn impossible_requests_are_refused_and_extrapolations_marked() {
         ("-5", "between 0 and 2000 °C"),
     ] {
         let d = tmp.path().join(format!("c{t}.csv"));
-        std::fs::write(&d, format!("{curves}{t},85,500,0.06\n")).unwrap();
+        // A whole curve at that temperature (the configuration keeps only 560 °C).
+        std::fs::write(
+            &d,
+            format!("{curves}{t},85,0,0\n{t},85,500,0.06\n{t},85,1000,0.1\n"),
+        )
+        .unwrap();
         let cfg = config_560(
             tmp.path(),
             "d.toml",
