@@ -270,7 +270,9 @@ pub struct PredictRun {
     pub source: ConstantsSource,
     /// One prediction per condition, in the order asked.
     pub predictions: Vec<Prediction>,
-    /// Per condition, where it lies against the tested conditions.
+    /// Per condition, where it lies against the tested conditions ([`Tested::classify`]; a
+    /// condition beyond the limits is marked `both` here — `creepfit predict` refuses it
+    /// before predicting).
     pub extrapolation: Vec<Extrapolation>,
     /// Under `--intervals`: the predictions at the given constants (beside the refit's) and
     /// the refit itself.
