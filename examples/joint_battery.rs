@@ -30,6 +30,7 @@ fn main() -> anyhow::Result<()> {
         let data = Dataset {
             curves,
             warnings: Vec::new(),
+            dropped: Vec::new(),
         };
         let cfg = RunConfig::from_str(TWO_TEMPERATURE_CONFIG, Path::new("joint-battery.toml"))?
             .with_data(&data);

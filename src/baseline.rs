@@ -162,17 +162,17 @@ pub struct FittedOn {
 }
 
 /// Where a condition lies against the temperatures and stresses a baseline was fitted on.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Extrapolation {
     /// Inside both ranges.
-    No,
+    None,
     /// Temperature outside the fitted temperatures.
     Temperature,
     /// Stress outside the fitted stresses.
     Stress,
     /// Both outside.
-    TemperatureAndStress,
+    Both,
 }
 
 impl Extrapolation {
@@ -188,20 +188,20 @@ impl Extrapolation {
         let (s0, s1) = on.stress_range_mpa;
         let s_out = !(s0 <= stress_mpa && stress_mpa <= s1);
         match (t_out, s_out) {
-            (false, false) => Extrapolation::No,
+            (false, false) => Extrapolation::None,
             (true, false) => Extrapolation::Temperature,
             (false, true) => Extrapolation::Stress,
-            (true, true) => Extrapolation::TemperatureAndStress,
+            (true, true) => Extrapolation::Both,
         }
     }
 
-    /// The file form (`no`, `temperature`, `stress`, `temperature_and_stress`).
+    /// The file form (`none`, `temperature`, `stress`, `both`), as `predict`'s own column.
     pub fn as_str(self) -> &'static str {
         match self {
-            Extrapolation::No => "no",
+            Extrapolation::None => "none",
             Extrapolation::Temperature => "temperature",
             Extrapolation::Stress => "stress",
-            Extrapolation::TemperatureAndStress => "temperature_and_stress",
+            Extrapolation::Both => "both",
         }
     }
 }
@@ -1163,20 +1163,20 @@ mod tests {
         };
         use Extrapolation::*;
         for (t, s, want) in [
-            (850.0, 40.0, No),
-            (750.0, 18.0, No),
-            (950.0, 137.0, No),
+            (850.0, 40.0, Extrapolation::None),
+            (750.0, 18.0, Extrapolation::None),
+            (950.0, 137.0, Extrapolation::None),
             (700.0, 40.0, Temperature),
             (1000.0, 40.0, Temperature),
             (850.0, 10.0, Stress),
             (850.0, 200.0, Stress),
-            (700.0, 200.0, TemperatureAndStress),
+            (700.0, 200.0, Both),
             (f64::NAN, 40.0, Temperature),
         ] {
             assert_eq!(Extrapolation::of(&on, t, s), want, "{t} °C {s} MPa");
         }
-        assert_eq!(TemperatureAndStress.as_str(), "temperature_and_stress");
-        assert_eq!(serde_json::to_value(No).unwrap(), "no");
+        assert_eq!(Both.as_str(), "both");
+        assert_eq!(serde_json::to_value(Extrapolation::None).unwrap(), "none");
     }
 
     #[test]

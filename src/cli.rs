@@ -14,7 +14,7 @@ use crate::fit::{run_fit, FitSettings};
 use crate::model::Load;
 use crate::objective::Objective;
 use crate::ode::OdeOptions;
-use crate::output::lock_folder;
+use crate::output::RunFolder;
 use crate::report::diagrams::Diagrams;
 use crate::report::plot::{
     plot_creep_curves, plot_curve_residuals, CurveId, CurvePlot, CurveSeries,
@@ -256,6 +256,16 @@ fn plots_done(out: &Path, failures: Vec<String>) -> Result<()> {
     }
 }
 
+/// Record in the run's manifest the data points the loader dropped (`outliers = "drop"`).
+pub(crate) fn note_data(folder: &mut RunFolder, data: &Dataset) {
+    if !data.dropped.is_empty() {
+        folder.note(
+            "dropped_points",
+            serde_json::to_value(&data.dropped).expect("JSON of plain values"),
+        );
+    }
+}
+
 /// Run a parsed command line.
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
@@ -415,25 +425,67 @@ pub fn run(cli: Cli) -> Result<()> {
             threads,
             world,
         } => with_threads(threads, || {
-            let results = crate::battery::run_battery(&out, seed, sets, world, true)?;
-            let r = crate::battery::write_reports(&out, &results, seed)?;
-            println!(
-                "{} sets: false alarms {} of {} no-effect sets; named correctly (detectable): {}; outside the catalogue with an extension verdict: {} of {}",
-                results.len(),
-                r.false_alarms,
-                r.null_sets,
-                r.named
-                    .iter()
-                    .map(|(e, _, d, k)| format!("{e} {k}/{d}"))
-                    .collect::<Vec<_>>()
-                    .join(", "),
-                r.outside_extension,
-                r.outside_sets
-            );
-            println!("wrote {}", out.display());
-            Ok(())
+            // One writer, one battery per folder: the lock, then the identity (refused before
+            // anything changes), then the folder is this run's (what it resumes from kept).
+            let lock = crate::output::lock_folder(&out)?;
+            let id = serde_json::json!({
+                "command": "battery",
+                "seed": seed,
+                "world": world,
+                "scenarios": crate::synth::SCENARIOS,
+                "version": env!("CARGO_PKG_VERSION"),
+            });
+            crate::identity::bind_folder(&out, BATTERY_IDENTITY, "results.jsonl", &id)?;
+            let folder = RunFolder::take_over(lock, "battery", &|f| {
+                f == BATTERY_IDENTITY || f == "results.jsonl" || f.starts_with("sets/")
+            })?;
+            crate::output::record(&out.join(BATTERY_IDENTITY));
+            let outcome = battery_into(&out, sets, seed, world);
+            folder.finish(outcome)
         }),
     }
+}
+
+/// File of a battery folder that holds its run identity (first seed, scenarios, version).
+pub const BATTERY_IDENTITY: &str = "battery.json";
+
+/// `battery`'s computation and outputs into `out` (its generated sets and the appended
+/// `results.jsonl` are recorded in the manifest as written by the run).
+fn battery_into(out: &Path, sets: usize, seed: u64, world: crate::synth::World) -> Result<()> {
+    let out = out.to_path_buf();
+    let record_all = |out: &Path| {
+        crate::output::record(&out.join("results.jsonl"));
+        fn walk(d: &Path) {
+            for e in std::fs::read_dir(d).into_iter().flatten().flatten() {
+                let p = e.path();
+                if p.is_dir() {
+                    walk(&p);
+                } else {
+                    crate::output::record(&p);
+                }
+            }
+        }
+        walk(&out.join("sets"));
+    };
+    let results = crate::battery::run_battery(&out, seed, sets, world, true);
+    record_all(&out);
+    let results = results?;
+    let r = crate::battery::write_reports(&out, &results, seed)?;
+    println!(
+        "{} sets: false alarms {} of {} no-effect sets; named correctly (detectable): {}; outside the catalogue with an extension verdict: {} of {}",
+        results.len(),
+        r.false_alarms,
+        r.null_sets,
+        r.named
+            .iter()
+            .map(|(e, _, d, k)| format!("{e} {k}/{d}"))
+            .collect::<Vec<_>>()
+            .join(", "),
+        r.outside_extension,
+        r.outside_sets
+    );
+    println!("wrote {}", out.display());
+    Ok(())
 }
 
 /// The distinct test temperatures of the data, °C, ascending.
@@ -473,13 +525,19 @@ fn diagnose_cmd(config: &Path, cli: &Overrides) -> Result<()> {
         ));
     }
     let out = cfg.out_dir("diagnose");
-    let _lock = lock_folder(&out)?;
-    let d = with_threads(cfg.run.threads, || diagnose(&cfg, &data))?;
+    let mut folder = RunFolder::begin(&out, "diagnose")?;
+    note_data(&mut folder, &data);
+    folder.finish(diagnose_into(&cfg, &data, &out))
+}
+
+/// `diagnose`'s computation and outputs into `out`.
+fn diagnose_into(cfg: &RunConfig, data: &Dataset, out: &Path) -> Result<()> {
+    let d = with_threads(cfg.run.threads, || diagnose(cfg, data))?;
     write_text(
         &out.join("diagnosis.json"),
         &serde_json::to_string_pretty(&d).expect("JSON of plain values"),
     )?;
-    let md = crate::diagnose::report::report_md(&cfg, &d);
+    let md = crate::diagnose::report::report_md(cfg, &d);
     write_text(&out.join("report.md"), &md)?;
     // Residual plots of the base model and of the chosen (else lowest-AIC) extension, on
     // the curves diagnose worked on.
@@ -506,7 +564,7 @@ fn diagnose_cmd(config: &Path, cli: &Overrides) -> Result<()> {
         }
         let model = cfg.build_model_with(&exts)?;
         let x: Vec<f64> = c.constants.iter().map(|p| p.1).collect();
-        let settings = FitSettings::from_config(&cfg);
+        let settings = FitSettings::from_config(cfg);
         let obj = crate::likelihood::raw_objective(model.as_ref(), &curves, &settings);
         let ev = obj.evaluate(&x);
         let series: Vec<CurveSeries> = curves
@@ -540,7 +598,7 @@ fn diagnose_cmd(config: &Path, cli: &Overrides) -> Result<()> {
     }
     print!("{md}");
     println!("wrote {}", out.display());
-    plots_done(&out, failures)
+    plots_done(out, failures)
 }
 
 fn synth_cmd(
@@ -598,7 +656,20 @@ fn parse_shard(s: &str) -> std::result::Result<sweep::ShardArg, String> {
 fn sweep_cmd(cfg: &RunConfig, data: &Dataset) -> Result<()> {
     sweep::install_sigint_handler();
     let out = cfg.out_dir("sweep");
-    let (plan, run) = sweep::run_sweep(cfg, data)?;
+    let (plan, mut run) = sweep::run_sweep(cfg, data)?;
+    note_data(&mut run.folder, data);
+    let outcome = sweep_outputs(cfg, &plan, &run, &out);
+    run.folder.finish(outcome)
+}
+
+/// A sweep's outputs into `out`; an interrupted sweep is an error after them.
+fn sweep_outputs(
+    cfg: &RunConfig,
+    plan: &sweep::Plan,
+    run: &sweep::SweepRun,
+    out: &Path,
+) -> Result<()> {
+    let out = out.to_path_buf();
     let mut header = plan.header.clone();
     header.shard = cfg.run.shard.unwrap_or((1, 1));
     let coverage = sweep::part_coverage(&header, header.shard, run.solutions.len(), &out);
@@ -666,7 +737,19 @@ fn merge_cmd(dirs: &[PathBuf], out: &Path, require_all: bool) -> Result<()> {
             list(m.coverage.missing.iter().map(|s| s.shard).collect())
         )));
     }
-    let _lock = lock_folder(out)?;
+    let folder = RunFolder::begin(out, "merge")?;
+    folder.finish(merge_into(&m, out))
+}
+
+/// `merge`'s outputs into `out`.
+fn merge_into(m: &sweep::Merged, out: &Path) -> Result<()> {
+    let n = m.merged.len() + m.coverage.missing.len();
+    let list = |v: Vec<usize>| {
+        v.iter()
+            .map(|i| i.to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
     let (a, failures) = sweep::write_outputs(&m.header, &m.solutions, out, 0.0, 0, &m.coverage)?;
     print_sweep(&m.header, &a);
     if m.coverage.complete {
@@ -745,8 +828,15 @@ fn print_sweep(h: &sweep::Header, a: &sweep::Analysis) {
 fn fit(config: &Path, cli: &Overrides) -> Result<()> {
     let (cfg, data) = load(config, cli)?;
     let out = cfg.out_dir("fit");
-    let _lock = lock_folder(&out)?;
-    let run = run_fit(&cfg, &data)?;
+    let mut folder = RunFolder::begin(&out, "fit")?;
+    note_data(&mut folder, &data);
+    folder.finish(fit_into(&cfg, &data, &out))
+}
+
+/// `fit`'s computation and outputs into `out`.
+fn fit_into(cfg: &RunConfig, data: &Dataset, out: &Path) -> Result<()> {
+    let out = out.to_path_buf();
+    let run = run_fit(cfg, data)?;
     let best = &run.fits[run.best];
     let curves = &data.curves;
     tables::write_constants(
@@ -759,7 +849,7 @@ fn fit(config: &Path, cli: &Overrides) -> Result<()> {
     let rows = tables::error_rows(best, curves);
     tables::write_errors(&out.join("errors.csv"), &rows)?;
     tables::write_fit_curves(&out.join("curves.csv"), best, curves)?;
-    let summary = tables::fit_summary(&cfg, &run, curves);
+    let summary = tables::fit_summary(cfg, &run, curves);
     write_text(
         &out.join("summary.json"),
         &serde_json::to_string_pretty(&summary).expect("JSON of plain values"),
@@ -842,8 +932,8 @@ fn fit(config: &Path, cli: &Overrides) -> Result<()> {
     // Plot last: a plotting failure never loses the numeric outputs above.
     let plot_path = out.join("fit.png");
     let plots = curve_plots(
-        &cfg,
-        &data,
+        cfg,
+        data,
         &best.params,
         &run.settings.ode,
         run.model.as_ref(),
@@ -859,8 +949,8 @@ fn fit(config: &Path, cli: &Overrides) -> Result<()> {
     let lmp = crate::lmp::LarsonMiller::fit_curves(&data.curves, cfg.predict.lmp_degree).ok();
     failures.extend(
         Diagrams {
-            cfg: &cfg,
-            data: &data,
+            cfg,
+            data,
             model: run.model.as_ref(),
             params: &best.params,
             lmp: lmp.as_ref(),
@@ -924,34 +1014,60 @@ fn predict_cmd(config: &Path, constants: &Path, cli: &Overrides) -> Result<()> {
         ));
     }
     let model = cfg.build_model()?;
-    crate::predict::check_t_ref(constants, &cfg)?;
-    let params = tables::read_constants(constants, model.as_ref())?;
+    let params = tables::read_constants_for(constants, &cfg, model.as_ref())?;
+    // What the configuration can predict: refused before anything is written.
+    let tested = crate::predict::Tested::of(&data, cfg.has_laws());
+    let from_cli = cli.predict_at.is_some();
+    for (k, c) in cfg.predict.at.iter().enumerate() {
+        if let Err(why) = tested.classify(*c) {
+            let at = format!("{}:{}", c.temperature_c, c.stress_mpa);
+            return Err(if from_cli {
+                Error::Invalid(format!("--at {at}: {why}"))
+            } else {
+                cfg.error_at(&format!("predict.at[{k}]"), format!("\"{at}\": {why}"))
+            });
+        }
+    }
     let out = cfg.out_dir("predict");
-    let _lock = lock_folder(&out)?;
-    let mut run = crate::predict::predict(&cfg, &data, model.as_ref(), &params, &cfg.predict.at);
-    for n in crate::predict::extrapolation_notes(&data, &cfg.predict.at) {
+    let mut folder = RunFolder::begin(&out, "predict")?;
+    note_data(&mut folder, &data);
+    folder.finish(predict_into(&cfg, &data, model.as_ref(), &params, &out))
+}
+
+/// `predict`'s computation and outputs into `out`: at the given constants, or under
+/// `--intervals` at the maximum-likelihood refit the intervals are centred on (the given
+/// constants' predictions beside).
+fn predict_into(
+    cfg: &RunConfig,
+    data: &Dataset,
+    model: &dyn crate::model::Model,
+    params: &[f64],
+    out: &Path,
+) -> Result<()> {
+    let tested = crate::predict::Tested::of(data, cfg.has_laws());
+    for n in crate::predict::extrapolation_notes(&tested, &cfg.predict.at) {
         eprintln!("warning: {n}");
     }
-    if cfg.predict.intervals {
+    let given = crate::predict::predict(cfg, data, model, params, &cfg.predict.at);
+    let run = if cfg.predict.intervals {
         let loads: Vec<crate::model::Load> = cfg
             .predict
             .at
             .iter()
             .map(|c| crate::model::Load::new(c.stress_mpa, c.temperature_c, cfg.objective.omega_f))
             .collect();
-        run.intervals = Some(crate::uncertainty::predict::intervals_at(
-            &cfg,
-            model.as_ref(),
-            &data,
-            &params,
-            &loads,
-        )?);
-    }
+        let iv = crate::uncertainty::predict::intervals_at(cfg, model, data, params, &loads)?;
+        let centre = crate::predict::predict(cfg, data, model, &iv.refit.params, &cfg.predict.at);
+        crate::predict::centre_on_intervals(centre, iv, given.predictions)
+    } else {
+        given
+    };
     println!("{}: model {}", cfg.name, model.name());
-    print!("{}", crate::predict::table(&run));
-    let failures = crate::predict::write_outputs(&out, &cfg, &data, model.as_ref(), &params, &run)?;
+    let names: Vec<&str> = model.constants().iter().map(|c| c.name).collect();
+    print!("{}", crate::predict::table(&run, &names));
+    let failures = crate::predict::write_outputs(out, cfg, data, model, &run)?;
     println!("wrote {}", out.display());
-    plots_done(&out, failures)
+    plots_done(out, failures)
 }
 
 fn simulate(
@@ -970,10 +1086,7 @@ fn simulate(
     let (cfg, data) = load(config, cli)?;
     let model = cfg.build_model()?;
     let params = match constants {
-        Some(path) => {
-            crate::predict::check_t_ref(&path, &cfg)?;
-            tables::read_constants(&path, model.as_ref())?
-        }
+        Some(path) => tables::read_constants_for(&path, &cfg, model.as_ref())?,
         None => cfg.starts_all_given().ok_or_else(|| {
             Error::config(
                 &cfg.path,
@@ -982,8 +1095,21 @@ fn simulate(
         })?,
     };
     let out = cfg.out_dir("simulate");
-    let _lock = lock_folder(&out)?;
-    let settings = FitSettings::from_config(&cfg);
+    let mut folder = RunFolder::begin(&out, "simulate")?;
+    note_data(&mut folder, &data);
+    folder.finish(simulate_into(&cfg, &data, model.as_ref(), &params, w, &out))
+}
+
+/// `simulate`'s computation and outputs into `out`.
+fn simulate_into(
+    cfg: &RunConfig,
+    data: &Dataset,
+    model: &dyn crate::model::Model,
+    params: &[f64],
+    w: Option<f64>,
+    out: &Path,
+) -> Result<()> {
+    let settings = FitSettings::from_config(cfg);
     let ode = settings.ode;
     let mut trajectories = Vec::new();
     let mut rupture_rows = Vec::new();
@@ -1000,12 +1126,12 @@ fn simulate(
             t_end: crate::objective::HORIZON_FACTOR * span,
             ..ode
         };
-        let res = model.simulate(&params, &load, &[], &mut [], &o);
+        let res = model.simulate(params, &load, &[], &mut [], &o);
         let mut grid = crate::predict::dense_grid(res.t_end, 200);
         grid.extend(c.times_h.iter().copied().filter(|t| *t <= res.t_end));
         grid.sort_by(|a, b| a.total_cmp(b));
         grid.dedup();
-        let (_, traj) = model.trajectory(&params, &load, &grid, &o);
+        let (_, traj) = model.trajectory(params, &load, &grid, &o);
         trajectories.push((c, traj));
         rupture_rows.push(vec![
             num(c.temperature_c),
@@ -1020,7 +1146,13 @@ fn simulate(
             } else {
                 String::new()
             },
-            num(100.0 * res.min_rate),
+            // A failed simulation has no minimum rate (only a rupture or the horizon do).
+            if res.ruptured() || res.outcome == crate::ode::Outcome::Horizon {
+                num(100.0 * res.min_rate)
+            } else {
+                String::new()
+            },
+            res.outcome.as_str().to_string(),
         ]);
         rupture_rows.last_mut().unwrap().extend(specimen(c));
         println!(
@@ -1065,6 +1197,7 @@ fn simulate(
         "rupture_time_h",
         "rupture_strain_pct",
         "min_rate_pct_per_h",
+        "outcome",
     ];
     write_csv(
         &out.join("ruptures.csv"),
@@ -1073,12 +1206,12 @@ fn simulate(
     )?;
     if let Some(w) = w {
         let objective = Objective::new(
-            model.as_ref(),
+            model,
             &data.curves,
             vec![w; data.curves.len()],
             settings.objective(),
         );
-        let e = objective.evaluate(&params);
+        let e = objective.evaluate(params);
         println!(
             "objective {:.12e} at w = {w} (normalised residual {:.12e})",
             e.objective, e.norm_residual
@@ -1094,7 +1227,7 @@ fn simulate(
             &serde_json::to_string_pretty(&json).expect("JSON of plain values"),
         )?;
     }
-    let plots = curve_plots(&cfg, &data, &params, &ode, model.as_ref());
+    let plots = curve_plots(cfg, data, params, &ode, model);
     let plotted = plot_creep_curves(
         &out.join("simulate.png"),
         &format!("{} — simulated", cfg.name),
@@ -1102,7 +1235,7 @@ fn simulate(
     );
     println!("wrote {}", out.display());
     plots_done(
-        &out,
+        out,
         plotted.err().map(|e| e.to_string()).into_iter().collect(),
     )
 }

@@ -37,7 +37,7 @@ pub const EXTENSION_NAMES: &[&str] = model::ext::CATALOGUE;
 /// `diagnose`, `predict` and `profile` are left out too: they keep no journal, and their
 /// settings change no fit or sweep result.
 pub const IDENTITY_EXCLUDED: &[&str] = &[
-    "path", "name", "curves", "ruptures", "run", "diagnose", "predict", "profile",
+    "path", "name", "curves", "ruptures", "run", "diagnose", "predict", "profile", "outliers",
 ];
 
 /// Which side of the lifetime error enters the objective (eq. 8).
@@ -666,6 +666,11 @@ pub struct RunConfig {
     /// Tests declared interrupted: `"T:σ"`, `"T:σ:specimen"`, or a bare stress (MPa) when
     /// the data are at one temperature ([`data::interrupted_flags`]).
     pub interrupted: Vec<data::Interrupted>,
+    /// What loading does with gross outliers of a curve (`refuse`, `drop`, `keep`; see
+    /// [`data::outlier_z`]). Not part of the run identity: the points it drops change the
+    /// data, whose hash is.
+    #[serde(default)]
+    pub outliers: data::OutlierPolicy,
     /// Constants in the model's order (with extension defaults filled in).
     pub constants: Vec<ConstantConfig>,
     /// `[objective]`, with `--w` applied.
@@ -710,6 +715,8 @@ struct RawConfig {
     extensions: Vec<String>,
     #[serde(default)]
     interrupted: Vec<data::Interrupted>,
+    #[serde(default)]
+    outliers: data::OutlierPolicy,
     #[serde(default)]
     constants: BTreeMap<String, RawConstant>,
     #[serde(default)]
@@ -1095,6 +1102,7 @@ impl RunConfig {
             model: raw.model,
             extensions: raw.extensions,
             interrupted: raw.interrupted,
+            outliers: raw.outliers,
             constants,
             objective,
             solver,
@@ -1263,6 +1271,7 @@ impl RunConfig {
             interrupted: self.interrupted.clone(),
             interrupted_source: Some((self.path.clone(), self.interrupted_line())),
             several_temperatures: self.has_laws(),
+            outliers: self.outliers,
         }
     }
 
@@ -1359,6 +1368,15 @@ impl RunConfig {
     /// Constant names, model order.
     pub fn constant_names(&self) -> Vec<&str> {
         self.constants.iter().map(|c| c.name.as_str()).collect()
+    }
+
+    /// A one-line error about the setting `field` (dotted, e.g. `predict.at[1]`) of this
+    /// configuration, at its line in the file where the file can be read and holds it.
+    pub fn error_at(&self, field: &str, what: impl std::fmt::Display) -> Error {
+        let line = std::fs::read_to_string(&self.path)
+            .map(|t| field_line(&t, field))
+            .unwrap_or(0);
+        Error::config_at(&self.path, line, format!("{field}: {what}"))
     }
 }
 

@@ -30,6 +30,154 @@ pub const MIN_RATE_WINDOW_FRACTION: f64 = 0.15;
 pub const MIN_RATE_WINDOW_POINTS: usize = 5;
 /// Fewest points a curve may have (after exact duplicates are dropped).
 pub const MIN_POINTS: usize = 3;
+/// Lowest test temperature a data file may hold, °C: creep tests of the alloys this crate
+/// is for run hot (room temperature is already unusual); a value below 0 °C is taken for a
+/// typo or a unit mix-up, not a test.
+pub const MIN_DATA_TEMPERATURE_C: f64 = 0.0;
+/// Highest test temperature a data file may hold, °C: above any creep test of a metal
+/// (nickel superalloys are tested to about 1200 °C, refractory metals to about 2000 °C); a
+/// larger value is a typo or kelvin where °C is expected.
+pub const MAX_DATA_TEMPERATURE_C: f64 = 2000.0;
+/// Robust z above which a point is a gross outlier of its curve ([`outlier_z`]).
+pub const OUTLIER_Z: f64 = 50.0;
+/// Neighbours on each side of a point that its local fit uses ([`outlier_z`]).
+pub const OUTLIER_NEIGHBOURS: usize = 3;
+/// Floor of the robust spread of a curve's strains in [`outlier_z`] (fraction: 0.01 %
+/// strain, the order of a reading error of a digitised or logged curve).
+pub const OUTLIER_SPREAD_FLOOR: f64 = 1e-4;
+
+/// What [`load`] does with gross outliers of a curve ([`outlier_z`] above [`OUTLIER_Z`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum OutlierPolicy {
+    /// Refuse the data: a one-line error naming the first outlier (file, line, value, z)
+    /// and the configuration switch. The default.
+    #[default]
+    Refuse,
+    /// Drop the outliers, each named in a warning and in [`Dataset::dropped`].
+    Drop,
+    /// Keep them as measured, each named in a warning.
+    Keep,
+}
+
+/// A point of a curves file flagged as a gross outlier ([`outlier_z`]).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Outlier {
+    /// The curves file.
+    pub file: String,
+    /// 1-based line in it.
+    pub line: usize,
+    /// Its curve: temperature (°C), stress (MPa), specimen.
+    #[serde(rename = "temperature_C")]
+    pub temperature_c: f64,
+    #[serde(rename = "stress_MPa")]
+    pub stress_mpa: f64,
+    pub specimen: Option<String>,
+    /// Time (h) and strain (%) as in the file.
+    pub time_h: f64,
+    pub strain_pct: f64,
+    /// Its robust z.
+    pub z: f64,
+}
+
+impl Outlier {
+    /// `FILE:LINE: column 'strain_pct': …` without the leading file and line.
+    fn what(&self) -> String {
+        format!(
+            "column 'strain_pct': {} % at {} h is a gross outlier of the curve at {} °C, {} MPa{} (robust z = {:.3e}, the limit is {OUTLIER_Z})",
+            self.strain_pct,
+            self.time_h,
+            self.temperature_c,
+            self.stress_mpa,
+            self.specimen
+                .as_ref()
+                .map(|s| format!(", specimen {s}"))
+                .unwrap_or_default(),
+            self.z
+        )
+    }
+}
+
+/// Robust z of every point of a curve (strains as fractions, sorted by time): how far the
+/// point lies from the local fit of its neighbours, in units of the curve's robust spread.
+///
+/// The local fit of point i is the median of the strains of its [`OUTLIER_NEIGHBOURS`]
+/// neighbours on each side (at an end, the 2 × [`OUTLIER_NEIGHBOURS`] nearest on the one
+/// side); creep strain is nearly monotone in time, so a measured point lies among its
+/// neighbours. The scale is the larger of the neighbours' own robust spread (1.4826 × their
+/// MAD about that median: a steep part tolerates a larger step) and the curve's robust spread
+/// 1.4826 × MAD of all its strains (floored at [`OUTLIER_SPREAD_FLOOR`]). z = |ε_i − median| / scale, except that the
+/// first point may lie anywhere from zero up to its neighbours (creep strain starts from zero:
+/// a jump on loading is no outlier), only its distance beyond counts. A monotone curve,
+/// a steep tertiary end included, stays at a few (the seed data and the 34 Alloy 617 curves:
+/// at most 3.98); a reading error is a fraction of 1. Median and MAD are robust: up to
+/// [`OUTLIER_NEIGHBOURS`] − 1 neighbouring outliers do not hide each other.
+pub fn outlier_z(strains: &[f64]) -> Vec<f64> {
+    let n = strains.len();
+    let median = |v: &mut Vec<f64>| -> f64 {
+        v.sort_by(f64::total_cmp);
+        let m = v.len();
+        if m == 0 {
+            f64::NAN
+        } else if m % 2 == 1 {
+            v[m / 2]
+        } else {
+            0.5 * (v[m / 2 - 1] + v[m / 2])
+        }
+    };
+    let mut all = strains.to_vec();
+    let med = median(&mut all);
+    let mut dev: Vec<f64> = strains.iter().map(|e| (e - med).abs()).collect();
+    let spread = (1.4826 * median(&mut dev)).max(OUTLIER_SPREAD_FLOOR);
+    let k = OUTLIER_NEIGHBOURS;
+    (0..n)
+        .map(|i| {
+            // k each side, shifted inwards at the ends so that 2k neighbours are used.
+            let lo = i.saturating_sub(k).min(n.saturating_sub(2 * k + 1));
+            let hi = (lo + 2 * k + 1).min(n);
+            let mut nb: Vec<f64> = (lo..hi).filter(|&j| j != i).map(|j| strains[j]).collect();
+            if nb.is_empty() {
+                return 0.0;
+            }
+            let m = median(&mut nb);
+            let mut spread_nb: Vec<f64> = nb.iter().map(|x| (x - m).abs()).collect();
+            let local = 1.4826 * median(&mut spread_nb);
+            let e = strains[i];
+            // Creep strain starts from zero: the first point may lie anywhere between zero
+            // and its neighbours (a jump on loading); only a distance beyond counts.
+            let d = if i == 0 && e < m {
+                (m.min(0.0) - e).max(0.0)
+            } else {
+                (e - m).abs()
+            };
+            d / local.max(spread)
+        })
+        .collect()
+}
+
+/// The gross outliers of a curve read from `path` ([`outlier_z`] above [`OUTLIER_Z`]).
+fn curve_outliers(c: &RawCurve, path: &Path) -> Vec<(usize, Outlier)> {
+    outlier_z(&c.strains)
+        .into_iter()
+        .enumerate()
+        .filter(|(_, z)| *z > OUTLIER_Z)
+        .map(|(k, z)| {
+            (
+                k,
+                Outlier {
+                    file: path.display().to_string(),
+                    line: c.lines[k],
+                    temperature_c: c.temperature_c,
+                    stress_mpa: c.stress_mpa,
+                    specimen: c.specimen.clone(),
+                    time_h: c.times_h[k],
+                    strain_pct: pct(c.strains[k]),
+                    z,
+                },
+            )
+        })
+        .collect()
+}
 
 /// One measured creep curve (one test), ready for fitting.
 #[derive(Debug, Clone, PartialEq)]
@@ -87,6 +235,8 @@ pub struct Dataset {
     pub curves: Vec<Curve>,
     /// Non-fatal findings (dropped duplicate points, unused rupture records, …), one line each.
     pub warnings: Vec<String>,
+    /// Gross outliers dropped on load (`outliers = "drop"`), in file order.
+    pub dropped: Vec<Outlier>,
 }
 
 /// A test declared interrupted (it did not rupture: no rupture time, no lifetime term): a
@@ -288,6 +438,8 @@ pub struct LoadOptions {
     /// A configuration that declares how constants depend on temperature (temperature laws,
     /// DESIGN.md §8) switches it on.
     pub several_temperatures: bool,
+    /// What to do with gross outliers of a curve ([`outlier_z`]); refuse by default.
+    pub outliers: OutlierPolicy,
 }
 
 /// The points of one curve as read from the curves file: grouped, sorted by time (stable)
@@ -360,6 +512,7 @@ pub fn load(curves: &Path, ruptures: &Path, opts: &LoadOptions) -> Result<Datase
     if opts.temperature_c.is_none() && !opts.several_temperatures {
         check_one_temperature(&raw, curves)?;
     }
+    let (raw, dropped) = handle_outliers(raw, curves, opts.outliers, &mut warnings)?;
 
     let flags =
         interrupted_flags(&opts.interrupted, &raw, opts.temperature_c).map_err(|(k, m)| {
@@ -441,7 +594,104 @@ pub fn load(curves: &Path, ruptures: &Path, opts: &LoadOptions) -> Result<Datase
     Ok(Dataset {
         curves: out,
         warnings,
+        dropped,
     })
+}
+
+/// Apply `policy` to the gross outliers of the curves: refuse (the first, by line), drop
+/// (each in a warning and in the returned list; a curve left with too few points is an
+/// error) or keep (each in a warning).
+fn handle_outliers(
+    raw: Vec<RawCurve>,
+    path: &Path,
+    policy: OutlierPolicy,
+    warnings: &mut Vec<String>,
+) -> Result<(Vec<RawCurve>, Vec<Outlier>)> {
+    let found: Vec<Vec<(usize, Outlier)>> = raw.iter().map(|c| curve_outliers(c, path)).collect();
+    if found.iter().all(Vec::is_empty) {
+        return Ok((raw, Vec::new()));
+    }
+    let mut all: Vec<&Outlier> = found.iter().flatten().map(|(_, o)| o).collect();
+    all.sort_by_key(|o| o.line);
+    match policy {
+        OutlierPolicy::Refuse => {
+            let first = all[0];
+            let more = if all.len() > 1 {
+                format!(" ({} such points in all)", all.len())
+            } else {
+                String::new()
+            };
+            Err(Error::data(
+                path,
+                first.line,
+                format!(
+                    "{}{more}; fix the row, or set outliers = \"drop\" in the configuration to drop such points (listed as warnings and in manifest.json)",
+                    first.what()
+                ),
+            ))
+        }
+        OutlierPolicy::Keep => {
+            for o in all {
+                warnings.push(format!(
+                    "{}:{}: {}; kept (outliers = \"keep\")",
+                    o.file,
+                    o.line,
+                    o.what()
+                ));
+            }
+            Ok((raw, Vec::new()))
+        }
+        OutlierPolicy::Drop => {
+            let mut dropped: Vec<Outlier> = Vec::new();
+            let mut out = Vec::with_capacity(raw.len());
+            for (mut c, f) in raw.into_iter().zip(found) {
+                if !f.is_empty() {
+                    let skip: std::collections::HashSet<usize> =
+                        f.iter().map(|(k, _)| *k).collect();
+                    let keep = |v: &[f64]| -> Vec<f64> {
+                        v.iter()
+                            .enumerate()
+                            .filter(|(k, _)| !skip.contains(k))
+                            .map(|(_, x)| *x)
+                            .collect()
+                    };
+                    c.times_h = keep(&c.times_h);
+                    c.strains = keep(&c.strains);
+                    c.lines = c
+                        .lines
+                        .iter()
+                        .enumerate()
+                        .filter(|(k, _)| !skip.contains(k))
+                        .map(|(_, x)| *x)
+                        .collect();
+                    dropped.extend(f.into_iter().map(|(_, o)| o));
+                    if c.times_h.len() < MIN_POINTS || c.times_h[0] == *c.times_h.last().unwrap() {
+                        return Err(Error::data(
+                            path,
+                            c.first_line,
+                            format!(
+                                "the curve at {} °C, {} MPa has too few points left ({}) after its gross outliers were dropped",
+                                c.temperature_c,
+                                c.stress_mpa,
+                                c.times_h.len()
+                            ),
+                        ));
+                    }
+                }
+                out.push(c);
+            }
+            dropped.sort_by_key(|o| o.line);
+            for o in &dropped {
+                warnings.push(format!(
+                    "{}:{}: {}; dropped (outliers = \"drop\")",
+                    o.file,
+                    o.line,
+                    o.what()
+                ));
+            }
+            Ok((out, dropped))
+        }
+    }
 }
 
 /// Curves at more than one temperature are an error naming them and the line where the
@@ -617,6 +867,8 @@ enum Range {
     Any,
     NonNegative,
     Positive,
+    /// A test temperature: [`MIN_DATA_TEMPERATURE_C`] to [`MAX_DATA_TEMPERATURE_C`].
+    Temperature,
 }
 
 impl Field<'_> {
@@ -646,8 +898,16 @@ impl Field<'_> {
         }
         let bad = match range {
             Range::Any => None,
-            Range::NonNegative if v < 0.0 => Some("must not be negative"),
-            Range::Positive if v <= 0.0 => Some("must be positive"),
+            Range::NonNegative if v < 0.0 => Some("must not be negative".to_string()),
+            Range::Positive if v <= 0.0 => Some("must be positive".to_string()),
+            Range::Temperature if v < -crate::model::ZERO_CELSIUS_K => {
+                Some("is below absolute zero (-273.15 °C)".to_string())
+            }
+            Range::Temperature if !(MIN_DATA_TEMPERATURE_C..=MAX_DATA_TEMPERATURE_C).contains(&v) => {
+                Some(format!(
+                    "a creep test temperature must lie between {MIN_DATA_TEMPERATURE_C} and {MAX_DATA_TEMPERATURE_C} °C (a typo, or kelvin?)"
+                ))
+            }
             _ => None,
         };
         if let Some(why) = bad {
@@ -712,7 +972,7 @@ pub fn read_curves(path: &Path) -> Result<(Vec<RawCurve>, Vec<String>)> {
             line,
             rec: &rec,
         };
-        let t = f.num(ct, "temperature_C", Range::Any)?;
+        let t = f.num(ct, "temperature_C", Range::Temperature)?;
         let s = f.num(cs, "stress_MPa", Range::Positive)?;
         let time = f.num(cti, "time_h", Range::NonNegative)?;
         let e = f.num(ce, "strain_pct", Range::Any)?;
@@ -1055,7 +1315,7 @@ pub fn read_ruptures(path: &Path) -> Result<Vec<RuptureRecord>> {
             None => None,
         };
         out.push(RuptureRecord {
-            temperature_c: f.num(ct, "temperature_C", Range::Any)?,
+            temperature_c: f.num(ct, "temperature_C", Range::Temperature)?,
             stress_mpa: f.num(cs, "stress_MPa", Range::Positive)?,
             rupture_time_h: f.num(ctf, "rupture_time_h", Range::Positive)?,
             rupture_strain: rupture_strain.map(|v| v / 100.0),
@@ -1089,6 +1349,77 @@ mod tests {
             self.0 ^= self.0 >> 7;
             self.0 ^= self.0 << 17;
             (self.0 >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
+    #[test]
+    fn outlier_z_of_curves_and_spikes() {
+        // A monotone curve with a steep end: every point within its neighbours (z ≤ 1) but
+        // the ends, which stay small.
+        let tertiary: Vec<f64> = (0..40)
+            .map(|k| {
+                let t = k as f64 / 40.0;
+                0.002 + 0.01 * t + 0.05 * t.powi(8)
+            })
+            .collect();
+        let z = outlier_z(&tertiary);
+        let n = z.len();
+        assert!(z.iter().all(|v| *v < 5.0), "{z:?}");
+        // A loading jump at t = 0 (first point 0, the rest near 0.5 %): small.
+        let mut jump = vec![0.0];
+        jump.extend((0..20).map(|k| 0.01 + 1e-5 * k as f64));
+        let z = outlier_z(&jump);
+        assert!(z.iter().all(|v| *v < 1.0), "{z:?}");
+        // … but a first point far above or below (a typo) is one.
+        jump[0] = 0.5;
+        assert!(outlier_z(&jump)[0] > OUTLIER_Z);
+        jump[0] = -0.5;
+        assert!(outlier_z(&jump)[0] > OUTLIER_Z);
+        // Gross spikes, one or two adjacent, in the middle and at the end.
+        let mut spiky = tertiary.clone();
+        spiky[10] = 1e4;
+        spiky[11] = 1e4;
+        spiky[n - 1] = 1e4;
+        let z = outlier_z(&spiky);
+        let flagged: Vec<usize> = (0..n).filter(|&k| z[k] > OUTLIER_Z).collect();
+        assert_eq!(flagged, [10, 11, n - 1], "{z:?}");
+        // A negative typo far below its neighbours.
+        let mut neg = tertiary.clone();
+        neg[20] = -5.0;
+        let z = outlier_z(&neg);
+        assert!(z[20] > OUTLIER_Z && z.iter().filter(|v| **v > OUTLIER_Z).count() == 1);
+        // Three points: the median of the other two, scale from their range or the spread.
+        let z = outlier_z(&[0.0, 0.01, 100.0]);
+        assert!(z[2] > OUTLIER_Z && z[0] < 1.0 && z[1] < 1.0, "{z:?}");
+    }
+
+    #[test]
+    fn data_temperatures_must_be_those_of_a_creep_test() {
+        let dir = tempfile::tempdir().unwrap();
+        for (t, ok) in [
+            ("0", true),
+            ("2000", true),
+            ("-0.5", false),
+            ("2001", false),
+            ("-300", false),
+        ] {
+            let c = write(
+                dir.path(),
+                "c.csv",
+                &format!("temperature_C,stress_MPa,time_h,strain_pct\n{t},100,0,0\n{t},100,5,1\n{t},100,10,2\n"),
+            );
+            let r = read_curves(&c);
+            assert_eq!(r.is_ok(), ok, "{t}: {r:?}");
+            if !ok {
+                let e = r.unwrap_err().to_string();
+                assert!(e.contains("c.csv:2: column 'temperature_C'"), "{e}");
+            }
+            let r = write(
+                dir.path(),
+                "r.csv",
+                &format!("temperature_C,stress_MPa,rupture_time_h\n{t},100,20\n"),
+            );
+            assert_eq!(read_ruptures(&r).is_ok(), ok, "{t}");
         }
     }
 

@@ -26,7 +26,7 @@ use crate::lmp::LarsonMiller;
 use crate::model::Load;
 use crate::objective::{mean_abs, CurvePrediction, Objective};
 use crate::ode::Outcome;
-use crate::output::lock_folder;
+use crate::output::RunFolder;
 use crate::report::diagrams::Diagrams;
 use crate::report::plot::{
     plot_creep_curves, plot_xy, AxisScale, Dash, MarkerShape, Rgb, XyAxes, XyGroup,
@@ -235,6 +235,9 @@ pub struct Holdout {
     pub curves: Vec<Curve>,
     /// The temperatures fitted on, °C, ascending.
     pub training_temperatures_c: Vec<f64>,
+    /// Under `--intervals`: the maximum-likelihood refit of the training fit's constants the
+    /// intervals (and `ml_rupture_time_h`) come from.
+    pub intervals_refit: Option<crate::uncertainty::predict::Refit>,
 }
 
 impl Holdout {
@@ -341,6 +344,7 @@ pub fn holdout(
     let train_data = Dataset {
         curves: train,
         warnings: Vec::new(),
+        dropped: Vec::new(),
     };
     let fit = run_fit_multistart(cfg, &train_data, cfg.sweep.starts)?;
     let best = &fit.fits[fit.best];
@@ -369,27 +373,30 @@ pub fn holdout(
         .collect();
     stresses.sort_by(f64::total_cmp);
     stresses.dedup();
+    let mut intervals_refit = None;
     let by_stress: Vec<Option<RuptureInterval>> = if intervals {
         let loads: Vec<Load> = stresses
             .iter()
             .map(|&s| Load::new(s, temperature_c, cfg.objective.omega_f))
             .collect();
-        crate::uncertainty::predict::intervals_at(
+        let iv = crate::uncertainty::predict::intervals_at(
             cfg,
             fit.model.as_ref(),
             &train_data,
             &best.params,
             &loads,
-        )?
-        .iter()
-        .map(|ci| {
-            ci.get("rupture_time_h").map(|q| RuptureInterval {
-                value_h: q.value,
-                pred95: (q.pred_lo95, q.pred_hi95),
-                conf95: (q.conf_lo95, q.conf_hi95),
+        )?;
+        intervals_refit = Some(iv.refit);
+        iv.conditions
+            .iter()
+            .map(|ci| {
+                ci.get("rupture_time_h").map(|q| RuptureInterval {
+                    value_h: q.value,
+                    pred95: (q.pred_lo95, q.pred_hi95),
+                    conf95: (q.conf_lo95, q.conf_hi95),
+                })
             })
-        })
-        .collect()
+            .collect()
     } else {
         vec![None; stresses.len()]
     };
@@ -431,6 +438,7 @@ pub fn holdout(
         tests,
         curves: test,
         training_temperatures_c: temps,
+        intervals_refit,
     })
 }
 
@@ -490,6 +498,14 @@ pub fn table(h: &Holdout) -> String {
         s.push_str(&format!(
             "measured lives inside the 95 % prediction interval of a new test: {inside} of {with}\n"
         ));
+        if let Some(r) = &h.intervals_refit {
+            s.push_str(&format!(
+                "the intervals are centred on the maximum-likelihood refit of the training fit's constants (holdout.csv: ml_rupture_time_h; −2 ln L {:.3} there, {:.3} at the training fit: difference {:.3}; summary.json: intervals_refit)\n",
+                r.neg2ll,
+                r.given_neg2ll,
+                r.delta_neg2ll()
+            ));
+        }
     }
     if let Err(e) = &h.lmp {
         s.push_str(&format!("no Larson–Miller baseline: {e}\n"));
@@ -586,8 +602,14 @@ pub const CURVE_COLUMNS: [&str; 3] = ["predicted_life_pct", "curve_outcome", "cu
 pub fn holdout_cmd(config: &Path, temperature_c: f64, cli: &Overrides) -> Result<()> {
     let (cfg, data) = crate::cli::load(config, cli)?;
     let out = cfg.out_dir(&format!("holdout-{temperature_c}C"));
-    let _lock = lock_folder(&out)?;
-    let h = holdout(&cfg, &data, temperature_c, cfg.predict.intervals)?;
+    let mut folder = RunFolder::begin(&out, "holdout")?;
+    crate::cli::note_data(&mut folder, &data);
+    folder.finish(holdout_into(&cfg, &data, temperature_c, &out))
+}
+
+/// `holdout`'s computation and outputs into `out`.
+fn holdout_into(cfg: &RunConfig, data: &Dataset, temperature_c: f64, out: &Path) -> Result<()> {
+    let h = holdout(cfg, data, temperature_c, cfg.predict.intervals)?;
     let with_intervals = h.tests.iter().any(|t| t.interval.is_some());
     let best = &h.fit.fits[h.fit.best];
     let specimens = h.tests.iter().any(|t| t.specimen.is_some());
@@ -695,6 +717,15 @@ pub fn holdout_cmd(config: &Path, temperature_c: f64, cli: &Overrides) -> Result
         "model_mean_abs_log10_err": jnum(h.model_mean_abs_log10()),
         "lmp_mean_abs_log10_err": jnum(h.lmp_mean_abs_log10()),
         "inside_pred95": inside_pred95,
+        "intervals_refit": h.intervals_refit.as_ref().map(|r| json!({
+            "what": "the intervals and ml_rupture_time_h come from the maximum-likelihood refit of the training fit's constants",
+            "neg2ll": jnum(r.neg2ll),
+            "training_fit_neg2ll": jnum(r.given_neg2ll),
+            "delta_neg2ll": jnum(r.delta_neg2ll()),
+            "constants": h.fit.model.constants().iter().zip(r.given.iter().zip(&r.params)).map(|(c, (g, v))| json!({
+                "name": c.name, "training_fit": g, "refit": v, "difference": v - g,
+            })).collect::<Vec<_>>(),
+        })),
         "mean_curve_rms_pct": jnum(mean_abs(&h.tests.iter().map(|t| t.curve_rms_pct).collect::<Vec<_>>())),
         "larson_miller": match &h.lmp {
             Ok(l) => json!(l),
@@ -724,9 +755,10 @@ pub fn holdout_cmd(config: &Path, temperature_c: f64, cli: &Overrides) -> Result
     let held = Dataset {
         curves: h.curves.clone(),
         warnings: Vec::new(),
+        dropped: Vec::new(),
     };
     let plots = crate::cli::curve_plots(
-        &cfg,
+        cfg,
         &held,
         &best.params,
         &h.fit.settings.ode,
@@ -819,15 +851,15 @@ pub fn holdout_cmd(config: &Path, temperature_c: f64, cli: &Overrides) -> Result
     }
     failures.extend(
         Diagrams {
-            cfg: &cfg,
-            data: &data,
+            cfg,
+            data,
             model: h.fit.model.as_ref(),
             params: &best.params,
             lmp: h.lmp.as_ref().ok(),
             asked: &[],
             held_out_c: Some(h.temperature_c),
         }
-        .write(&out),
+        .write(out),
     );
     println!("wrote {}", out.display());
     if failures.is_empty() {

@@ -180,10 +180,87 @@ pub fn first_difference(a: &Value, b: &Value) -> Option<(String, String, String)
     walk(Some(a), Some(b), "")
 }
 
+/// Bind the output folder `dir` to a run identity `id`, kept in `dir/file` as
+/// `{"fingerprint", "identity"}` (written atomically): a folder without that file takes it;
+/// one that holds another identity is refused, naming the first differing field; one that
+/// holds `results` (e.g. `results.jsonl`) but no identity file (an earlier creepfit version)
+/// is refused too, since nothing says whose results they are. Call it under the folder's
+/// lock, before anything in the folder changes.
+pub fn bind_folder(
+    dir: &std::path::Path,
+    file: &str,
+    results: &str,
+    id: &Value,
+) -> crate::Result<()> {
+    use crate::error::Error;
+    let path = dir.join(file);
+    let fingerprint = hash_value(id);
+    let refuse = |what: String| Error::Folder {
+        path: path.clone(),
+        message: format!("this folder holds {what}; use another folder or delete this one"),
+    };
+    match std::fs::read_to_string(&path) {
+        Ok(text) => {
+            let held: Value = serde_json::from_str(&text)
+                .map_err(|e| Error::data(&path, 0, format!("not a run identity: {e}")))?;
+            if held["fingerprint"].as_str() == Some(fingerprint.as_str()) {
+                return Ok(());
+            }
+            let (field, here, asked) = first_difference(&held["identity"], id).unwrap_or((
+                "run identity".into(),
+                held["fingerprint"].to_string(),
+                fingerprint.clone(),
+            ));
+            Err(refuse(format!(
+                "a run with {field} = {here}, this command asks for {asked}"
+            )))
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            let r = dir.join(results);
+            if std::fs::metadata(&r).is_ok_and(|m| m.len() > 0) {
+                return Err(refuse(format!(
+                    "{results} without a run identity ({file}: an earlier creepfit version)"
+                )));
+            }
+            let text = serde_json::to_string_pretty(
+                &serde_json::json!({"fingerprint": fingerprint, "identity": id}),
+            )
+            .expect("JSON of plain values");
+            crate::output::write_atomic(&path, |w| {
+                w.write_all(text.as_bytes())?;
+                w.write_all(b"\n")
+            })
+        }
+        Err(e) => Err(Error::io(&path, e)),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use serde_json::json;
+
+    #[test]
+    fn a_folder_keeps_its_identity() {
+        let d = tempfile::TempDir::new().unwrap();
+        let a = json!({"command": "battery", "seed": 50001, "version": "x"});
+        bind_folder(d.path(), "id.json", "results.jsonl", &a).unwrap();
+        bind_folder(d.path(), "id.json", "results.jsonl", &a).expect("the same run again");
+        let mut b = a.clone();
+        b["seed"] = json!(50002);
+        let e = bind_folder(d.path(), "id.json", "results.jsonl", &b)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("seed = 50001") && e.contains("50002"), "{e}");
+        // Results without an identity (an earlier version) are refused.
+        let d2 = tempfile::TempDir::new().unwrap();
+        std::fs::write(d2.path().join("results.jsonl"), "{}\n").unwrap();
+        let e = bind_folder(d2.path(), "id.json", "results.jsonl", &a)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("without a run identity"), "{e}");
+        assert!(!d2.path().join("id.json").exists());
+    }
 
     #[test]
     fn first_difference_names_the_field() {

@@ -14,9 +14,10 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 
-use crate::baseline::{self, Baseline, BaselineKind, BaselineSettings, Extrapolation};
+pub use crate::baseline::Extrapolation;
+use crate::baseline::{self, Baseline, BaselineKind, BaselineSettings};
 use crate::config::RunConfig;
-use crate::data::{Curve, Dataset};
+use crate::data::Dataset;
 use crate::error::{Error, Result};
 use crate::lmp::LarsonMiller;
 use crate::model::{Load, Model};
@@ -94,7 +95,8 @@ pub struct Prediction {
     pub rupture_time_h: f64,
     /// Rupture strain, fraction (NaN without rupture).
     pub rupture_strain: f64,
-    /// Minimum creep rate, 1/h.
+    /// Minimum creep rate, 1/h (NaN when the simulation failed: only a rupture or the
+    /// horizon reached give one).
     pub min_rate: f64,
     /// Dense predicted curve: (time h, strain fraction, the model's outputs).
     pub curve: Vec<(f64, f64, Vec<f64>)>,
@@ -107,10 +109,163 @@ pub struct Prediction {
     pub baseline_extrapolation: Vec<Option<Extrapolation>>,
 }
 
+/// Which constants a prediction comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ConstantsSource {
+    /// The constants of `--constants FILE`, as given.
+    Given,
+    /// The maximum-likelihood refit from them that `--intervals` centres its intervals on.
+    MlRefit,
+}
+
+impl ConstantsSource {
+    /// The name written in files.
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            ConstantsSource::Given => "given",
+            ConstantsSource::MlRefit => "ml_refit",
+        }
+    }
+}
+
+/// Farthest a prediction may lie outside the tested temperatures, °C (beyond: an error). A
+/// creep mechanism (and the activation energy a temperature law carries) can change within
+/// some tens of kelvin; 25 °C keeps a prediction close to the data.
+pub const TEMPERATURE_MARGIN_C: f64 = 25.0;
+/// Farthest a prediction may lie outside the stresses tested at its temperature, as a factor
+/// (beyond: an error): 1.5 below the lowest or above the highest. With the stress exponents
+/// of these alloys (5–10) a factor 1.5 in stress is already a factor 8–60 in life.
+pub const STRESS_MARGIN_FACTOR: f64 = 1.5;
+
+/// The tested conditions of a data set: each tested temperature with the range of stresses
+/// tested there, and whether the configuration has temperature laws.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Tested {
+    /// (temperature °C, lowest stress MPa, highest stress MPa), ascending temperature.
+    pub temperatures: Vec<(f64, f64, f64)>,
+    /// Whether some constant follows a temperature law: without one the constants describe
+    /// the tested temperature only.
+    pub laws: bool,
+}
+
+/// Relative closeness of two temperatures or stresses typed by people.
+fn same(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-9 * a.abs().max(b.abs()).max(1.0)
+}
+
+impl Tested {
+    /// The tested conditions of `data`.
+    pub fn of(data: &Dataset, laws: bool) -> Tested {
+        let mut temperatures: Vec<(f64, f64, f64)> = Vec::new();
+        for c in &data.curves {
+            match temperatures.iter_mut().find(|t| same(t.0, c.temperature_c)) {
+                Some(t) => {
+                    t.1 = t.1.min(c.stress_mpa);
+                    t.2 = t.2.max(c.stress_mpa);
+                }
+                None => temperatures.push((c.temperature_c, c.stress_mpa, c.stress_mpa)),
+            }
+        }
+        temperatures.sort_by(|a, b| a.0.total_cmp(&b.0));
+        Tested { temperatures, laws }
+    }
+
+    /// The tested temperatures' range, °C.
+    pub fn temperature_range(&self) -> (f64, f64) {
+        (
+            self.temperatures.first().map_or(f64::NAN, |t| t.0),
+            self.temperatures.last().map_or(f64::NAN, |t| t.0),
+        )
+    }
+
+    /// The stresses (MPa) that count as tested at `t` °C: at a tested temperature its own
+    /// range; between two tested temperatures the union of theirs; outside the tested
+    /// temperatures the nearest one's.
+    pub fn stress_range(&self, t: f64) -> (f64, f64) {
+        let ts = &self.temperatures;
+        if ts.is_empty() {
+            return (f64::NAN, f64::NAN);
+        }
+        if let Some(x) = ts.iter().find(|x| same(x.0, t)) {
+            return (x.1, x.2);
+        }
+        if t < ts[0].0 {
+            return (ts[0].1, ts[0].2);
+        }
+        let last = ts[ts.len() - 1];
+        if t > last.0 {
+            return (last.1, last.2);
+        }
+        let k = ts.iter().position(|x| x.0 > t).unwrap_or(ts.len() - 1);
+        let (a, b) = (ts[k - 1], ts[k]);
+        (a.1.min(b.1), a.2.max(b.2))
+    }
+
+    /// Where `c` lies: `Ok` with its extrapolation inside the margins
+    /// ([`TEMPERATURE_MARGIN_C`], [`STRESS_MARGIN_FACTOR`]), `Err` with why the
+    /// configuration cannot predict it (another temperature without a temperature law, or
+    /// beyond a margin).
+    pub fn classify(&self, c: Condition) -> std::result::Result<Extrapolation, String> {
+        let (t0, t1) = self.temperature_range();
+        let (t, s) = (c.temperature_c, c.stress_mpa);
+        if !(t0.is_finite() && t1.is_finite()) {
+            return Err("the data hold no tested condition".into());
+        }
+        if !self.laws && !self.temperatures.iter().any(|x| same(x.0, t)) {
+            return Err(format!(
+                "{t} °C is not a tested temperature and the configuration has no temperature law: its constants describe {} °C only; predict at {}, or give constants a temperature law (e.g. law = \"arrhenius\" on A, docs/FORMATS.md) and fit curves at several temperatures",
+                self.temperatures
+                    .iter()
+                    .map(|x| x.0.to_string())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                self.temperatures
+                    .iter()
+                    .map(|x| format!("{} °C", x.0))
+                    .collect::<Vec<_>>()
+                    .join(" or ")
+            ));
+        }
+        if t < t0 - TEMPERATURE_MARGIN_C || t > t1 + TEMPERATURE_MARGIN_C {
+            return Err(format!(
+                "{t} °C is more than {TEMPERATURE_MARGIN_C} °C outside the tested temperatures ({t0}–{t1} °C): beyond what the configuration can predict (docs/FORMATS.md, \"Limits of a prediction\")"
+            ));
+        }
+        let (s0, s1) = self.stress_range(t);
+        if s < s0 / STRESS_MARGIN_FACTOR || s > s1 * STRESS_MARGIN_FACTOR {
+            return Err(format!(
+                "{s} MPa is more than a factor {STRESS_MARGIN_FACTOR} outside the stresses tested at {t} °C ({s0}–{s1} MPa): beyond what the configuration can predict (docs/FORMATS.md, \"Limits of a prediction\")"
+            ));
+        }
+        let in_t = t >= t0 && t <= t1;
+        let in_s = s >= s0 && s <= s1;
+        Ok(match (in_t, in_s) {
+            (true, true) => Extrapolation::None,
+            (true, false) => Extrapolation::Stress,
+            (false, true) => Extrapolation::Temperature,
+            (false, false) => Extrapolation::Both,
+        })
+    }
+}
+
 /// Everything `predict` computed.
 pub struct PredictRun {
+    /// The constants of the predictions (model order): the given ones, or the
+    /// maximum-likelihood refit from them under `--intervals` (`source` says which).
+    pub params: Vec<f64>,
+    /// Which constants `params` are.
+    pub source: ConstantsSource,
     /// One prediction per condition, in the order asked.
     pub predictions: Vec<Prediction>,
+    /// Per condition, where it lies against the tested conditions ([`Tested::classify`]; a
+    /// condition beyond the limits is marked `both` here — `creepfit predict` refuses it
+    /// before predicting).
+    pub extrapolation: Vec<Extrapolation>,
+    /// Under `--intervals`: the predictions at the given constants (beside the refit's) and
+    /// the refit itself.
+    pub given: Option<Vec<Prediction>>,
+    pub refit: Option<crate::uncertainty::predict::Refit>,
     /// The Larson–Miller baseline, or why there is none.
     pub lmp: std::result::Result<LarsonMiller, String>,
     /// Every baseline ([`BaselineKind::ALL`]'s order), each fitted or why it is absent.
@@ -243,12 +398,17 @@ pub fn predict(
             let grid = dense_grid(res.t_end, 200);
             let (_, curve) = model.trajectory(params, &load, &grid, &OdeOptions { t_end, ..ode });
             let ruptured = res.ruptured();
+            let ran = ruptured || res.outcome == Outcome::Horizon;
             Prediction {
                 condition: c,
                 outcome: res.outcome,
                 rupture_time_h: if ruptured { res.t_end } else { f64::NAN },
                 rupture_strain: if ruptured { res.strain_end } else { f64::NAN },
-                min_rate: res.min_rate,
+                min_rate: if ran && res.min_rate.is_finite() {
+                    res.min_rate
+                } else {
+                    f64::NAN
+                },
                 curve,
                 lmp_rupture_time_h: lmp_life,
                 baseline_rupture_time_h: baselines
@@ -267,8 +427,17 @@ pub fn predict(
             }
         })
         .collect();
+    let tested = Tested::of(data, cfg.has_laws());
     PredictRun {
+        params: params.to_vec(),
+        source: ConstantsSource::Given,
+        extrapolation: conditions
+            .iter()
+            .map(|c| tested.classify(*c).unwrap_or(Extrapolation::Both))
+            .collect(),
         predictions,
+        given: None,
+        refit: None,
         lmp,
         baselines,
         output_names: model.output_names(),
@@ -276,29 +445,81 @@ pub fn predict(
     }
 }
 
-/// The printed table: model and baseline side by side.
-pub fn table(run: &PredictRun) -> String {
+/// `run` (the predictions at the refit of `iv`) centred on its intervals: each predicted
+/// quantity that has an interval takes the interval's own centre (the same constants; the
+/// minimum rate integrated more finely there), so that every row's numbers and intervals
+/// have one centre; `given` holds the predictions at the given constants.
+pub fn centre_on_intervals(
+    mut run: PredictRun,
+    iv: crate::uncertainty::predict::IntervalsRun,
+    given: Vec<Prediction>,
+) -> PredictRun {
+    for (p, c) in run.predictions.iter_mut().zip(&iv.conditions) {
+        if let Some(q) = c.get("rupture_time_h") {
+            p.rupture_time_h = q.value;
+        }
+        if let Some(q) = c.get("rupture_strain_pct") {
+            p.rupture_strain = q.value / 100.0;
+        }
+        if let Some(q) = c.get("min_rate_pct_per_h") {
+            p.min_rate = q.value / 100.0;
+        }
+    }
+    run.source = ConstantsSource::MlRefit;
+    run.given = Some(given);
+    run.refit = Some(iv.refit);
+    run.intervals = Some(iv.conditions);
+    run
+}
+
+/// The printed table: model and baseline side by side, which constants the numbers come
+/// from, and under `--intervals` the refit's distance from the given constants.
+pub fn table(run: &PredictRun, names: &[&str]) -> String {
     let mut s = String::new();
-    s.push_str(
-        "  T(C)      MPa |  t_r model h    t_r LMP h  model/LMP | e_r model % | min rate %/h\n",
-    );
-    for p in &run.predictions {
-        let f = |v: f64, w: usize, d: usize| {
-            if v.is_finite() {
-                format!("{v:>w$.d$}")
-            } else {
-                format!("{:>w$}", "-")
-            }
-        };
+    let f = |v: f64, w: usize, d: usize| {
+        if v.is_finite() {
+            format!("{v:>w$.d$}")
+        } else {
+            format!("{:>w$}", "-")
+        }
+    };
+    let e = |v: f64| {
+        if v.is_finite() {
+            format!("{v:>12.4e}")
+        } else {
+            format!("{:>12}", "-")
+        }
+    };
+    if let Some(r) = &run.refit {
         s.push_str(&format!(
-            "{:>6} {:>8} | {} {} {} | {} | {:>12.4e}{}\n",
+            "constants: the maximum-likelihood refit from the given constants (every number and interval below is centred on it; predictions.csv: constants = ml_refit, the given constants' predictions in given_* columns). −2 ln L {:.3} at the refit, {:.3} at the given constants (difference {:.3}):\n",
+            r.neg2ll,
+            r.given_neg2ll,
+            r.delta_neg2ll()
+        ));
+        for (n, (g, v)) in names.iter().zip(r.given.iter().zip(&r.params)) {
+            s.push_str(&format!(
+                "  {n:>8}: given {g:.6e}, refit {v:.6e} ({:+.2} %)\n",
+                100.0 * (v - g) / g.abs().max(f64::MIN_POSITIVE)
+            ));
+        }
+    } else {
+        s.push_str("constants: as given\n");
+    }
+    s.push_str(
+        "  T(C)      MPa |  t_r model h    t_r LMP h  model/LMP | e_r model % | min rate %/h | extrapolation\n",
+    );
+    for (k, p) in run.predictions.iter().enumerate() {
+        s.push_str(&format!(
+            "{:>6} {:>8} | {} {} {} | {} | {} | {}{}\n",
             p.condition.temperature_c,
             p.condition.stress_mpa,
             f(p.rupture_time_h, 12, 0),
             f(p.lmp_rupture_time_h, 12, 0),
             f(p.rupture_time_h / p.lmp_rupture_time_h, 10, 3),
             f(100.0 * p.rupture_strain, 11, 3),
-            100.0 * p.min_rate,
+            e(100.0 * p.min_rate),
+            run.extrapolation.get(k).map_or("-", |x| x.as_str()),
             if p.outcome == Outcome::Ruptured {
                 String::new()
             } else {
@@ -306,9 +527,29 @@ pub fn table(run: &PredictRun) -> String {
             }
         ));
     }
+    if let Some(given) = &run.given {
+        s.push_str("at the given constants (predictions.csv: given_*):\n");
+        for p in given {
+            s.push_str(&format!(
+                "{:>6} {:>8} | {} {:>12} {:>10} | {} | {}{}\n",
+                p.condition.temperature_c,
+                p.condition.stress_mpa,
+                f(p.rupture_time_h, 12, 0),
+                "",
+                "",
+                f(100.0 * p.rupture_strain, 11, 3),
+                e(100.0 * p.min_rate),
+                if p.outcome == Outcome::Ruptured {
+                    String::new()
+                } else {
+                    format!("  ({})", p.outcome.as_str())
+                }
+            ));
+        }
+    }
     if let Some(iv) = &run.intervals {
         s.push_str(
-            "95 % intervals (maximum-likelihood fit from these constants, error model of README \"How sure\"): \
+            "95 % intervals (centred on the maximum-likelihood refit, error model of README \"How sure\"): \
              prediction interval of a NEW TEST (adds the scatter between specimens) | confidence interval of the model's prediction\n",
         );
         for (p, c) in run.predictions.iter().zip(iv) {
@@ -363,7 +604,7 @@ pub fn baselines_table(run: &PredictRun) -> String {
             .zip(&p.baseline_extrapolation)
         {
             let mark = match x {
-                Some(Extrapolation::No) | None => " ",
+                Some(Extrapolation::None) | None => " ",
                 Some(_) => "*",
             };
             if v.is_finite() {
@@ -392,32 +633,27 @@ pub fn baseline_columns() -> Vec<String> {
     v
 }
 
-/// Warnings about conditions outside the tested ranges (extrapolation).
-pub fn extrapolation_notes(data: &Dataset, conditions: &[Condition]) -> Vec<String> {
-    let range = |f: fn(&Curve) -> f64| {
-        data.curves
-            .iter()
-            .map(f)
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
-                (lo.min(v), hi.max(v))
-            })
-    };
-    let (t0, t1) = range(|c| c.temperature_c);
-    let (s0, s1) = range(|c| c.stress_mpa);
-    let mut out = Vec::new();
-    for c in conditions {
-        let mut what = Vec::new();
-        if c.temperature_c < t0 || c.temperature_c > t1 {
-            what.push(format!("temperature outside the tested {t0}–{t1} °C"));
-        }
-        if c.stress_mpa < s0 || c.stress_mpa > s1 {
-            what.push(format!("stress outside the tested {s0}–{s1} MPa"));
-        }
-        if !what.is_empty() {
-            out.push(format!("{}: extrapolation: {}", c.label(), what.join(", ")));
-        }
-    }
-    out
+/// Warnings about conditions outside the tested ranges (extrapolations within the margins).
+pub fn extrapolation_notes(tested: &Tested, conditions: &[Condition]) -> Vec<String> {
+    let (t0, t1) = tested.temperature_range();
+    conditions
+        .iter()
+        .filter_map(|c| {
+            let x = tested.classify(*c).ok()?;
+            let (s0, s1) = tested.stress_range(c.temperature_c);
+            let mut what = Vec::new();
+            if matches!(x, Extrapolation::Temperature | Extrapolation::Both) {
+                what.push(format!("temperature outside the tested {t0}–{t1} °C"));
+            }
+            if matches!(x, Extrapolation::Stress | Extrapolation::Both) {
+                what.push(format!(
+                    "stress outside the {s0}–{s1} MPa tested at {} °C",
+                    c.temperature_c
+                ));
+            }
+            (!what.is_empty()).then(|| format!("{}: extrapolation: {}", c.label(), what.join(", ")))
+        })
+        .collect()
 }
 
 /// Write `predictions.csv`, `larson_miller.csv`, `curves.csv` and `summary.json` into `out`,
@@ -427,9 +663,9 @@ pub fn write_outputs(
     cfg: &RunConfig,
     data: &Dataset,
     model: &dyn Model,
-    params: &[f64],
     run: &PredictRun,
 ) -> Result<Vec<String>> {
+    let params = &run.params[..];
     let rows: Vec<Vec<String>> = run
         .predictions
         .iter()
@@ -453,6 +689,22 @@ pub fn write_outputs(
                     row.push(num(v));
                 }
             }
+            row.push(
+                run.extrapolation
+                    .get(k)
+                    .map_or("", |x| x.as_str())
+                    .to_string(),
+            );
+            row.push(p.outcome.as_str().to_string());
+            row.push(run.source.as_str().to_string());
+            if let Some(g) = run.given.as_ref().and_then(|g| g.get(k)) {
+                row.extend([
+                    num(g.rupture_time_h),
+                    num(100.0 * g.rupture_strain),
+                    num(100.0 * g.min_rate),
+                    g.outcome.as_str().to_string(),
+                ]);
+            }
             row
         })
         .collect();
@@ -465,6 +717,10 @@ pub fn write_outputs(
     ];
     if run.intervals.is_some() {
         header.extend(INTERVAL_COLUMNS.iter().map(|c| c.0));
+    }
+    header.extend(ROW_COLUMNS);
+    if run.given.is_some() {
+        header.extend(GIVEN_COLUMNS);
     }
     write_csv(&out.join("predictions.csv"), &header, &rows)?;
     let lmp_rows: Vec<Vec<String>> = run
@@ -539,16 +795,44 @@ pub fn write_outputs(
         write_csv(&out.join("band.csv"), &BAND_COLUMNS, &rows)?;
     }
     let names: Vec<&str> = model.inner_constants().iter().map(|c| c.name).collect();
+    let all_names: Vec<&str> = model.constants().iter().map(|c| c.name).collect();
+    let given_row = |p: Option<&Prediction>| {
+        p.map(|g| {
+            json!({
+                "outcome": g.outcome.as_str(),
+                "rupture_time_h": jnum(g.rupture_time_h),
+                "rupture_strain_pct": jnum(100.0 * g.rupture_strain),
+                "min_rate_pct_per_h": jnum(100.0 * g.min_rate),
+            })
+        })
+    };
+    let tested = Tested::of(data, cfg.has_laws());
+    let (t0, t1) = tested.temperature_range();
     let summary = json!({
         "model": model.name(),
         "T_ref_C": cfg.t_ref,
+        "constants_source": run.source,
         "constants": model.constants().iter().zip(params).map(|(c, v)| json!({"name": c.name, "value": v, "unit": c.unit})).collect::<Vec<_>>(),
-        "predictions": run.predictions.iter().map(|p| {
+        "refit": run.refit.as_ref().map(|r| json!({
+            "what": "the maximum-likelihood fit from the given constants under the error model (README, \"How sure\"); every number of predictions.csv but the given_* columns, band.csv and the plots come from it",
+            "neg2ll": jnum(r.neg2ll),
+            "given_neg2ll": jnum(r.given_neg2ll),
+            "delta_neg2ll": jnum(r.delta_neg2ll()),
+            "constants": all_names.iter().zip(r.given.iter().zip(&r.params)).map(|(n, (g, v))| json!({
+                "name": n,
+                "given": g,
+                "refit": v,
+                "difference": v - g,
+                "relative_difference_pct": jnum(100.0 * (v - g) / g.abs()),
+            })).collect::<Vec<_>>(),
+        })),
+        "predictions": run.predictions.iter().enumerate().map(|(k, p)| {
             let at = model.constants_at(params, p.condition.temperature_c);
             json!({
                 "temperature_C": p.condition.temperature_c,
                 "stress_MPa": p.condition.stress_mpa,
-                "outcome": p.outcome,
+                "outcome": p.outcome.as_str(),
+                "extrapolation": run.extrapolation.get(k),
                 "rupture_time_h": jnum(p.rupture_time_h),
                 "rupture_strain_pct": jnum(100.0 * p.rupture_strain),
                 "min_rate_pct_per_h": jnum(100.0 * p.min_rate),
@@ -560,14 +844,22 @@ pub fn write_outputs(
                     }))
                 }).collect::<serde_json::Map<_, _>>(),
                 "constants_at_temperature": names.iter().zip(&at).map(|(n, v)| (n.to_string(), json!(v))).collect::<serde_json::Map<_, _>>(),
+                "given": given_row(run.given.as_ref().and_then(|g| g.get(k))),
             })
         }).collect::<Vec<_>>(),
+        "limits": {
+            "tested_temperatures_C": tested.temperatures.iter().map(|t| json!({"temperature_C": t.0, "stress_MPa": [t.1, t.2]})).collect::<Vec<_>>(),
+            "temperature_range_C": [jnum(t0), jnum(t1)],
+            "temperature_margin_C": TEMPERATURE_MARGIN_C,
+            "stress_margin_factor": STRESS_MARGIN_FACTOR,
+            "temperature_laws": cfg.has_laws(),
+        },
         "larson_miller": match &run.lmp {
             Ok(l) => json!(l),
             Err(e) => json!({"error": e}),
         },
         "baselines": run.baselines.iter().map(Baseline::to_json).collect::<Vec<_>>(),
-        "extrapolation": extrapolation_notes(data, &run.predictions.iter().map(|p| p.condition).collect::<Vec<_>>()),
+        "extrapolation": extrapolation_notes(&tested, &run.predictions.iter().map(|p| p.condition).collect::<Vec<_>>()),
     });
     write_text(
         &out.join("summary.json"),
@@ -575,6 +867,21 @@ pub fn write_outputs(
     )?;
     Ok(plots(out, cfg, data, model, params, run))
 }
+
+/// `predictions.csv`'s columns after the contract's (and the interval columns): where the
+/// condition lies against the tested ones ([`Extrapolation`]), how the simulation ended
+/// ([`Outcome`]; a failed one leaves the numbers empty) and which constants the row's numbers
+/// come from ([`ConstantsSource`]).
+pub const ROW_COLUMNS: [&str; 3] = ["extrapolation", "outcome", "constants"];
+
+/// `predictions.csv`'s last columns when the row's constants are the refit (`--intervals`):
+/// the predictions at the given constants.
+pub const GIVEN_COLUMNS: [&str; 4] = [
+    "given_rupture_time_h",
+    "given_rupture_strain_pct",
+    "given_min_rate_pct_per_h",
+    "given_outcome",
+];
 
 /// `band.csv`'s columns under `--intervals`: the 95 % confidence band of each predicted curve
 /// (the model's prediction, from the constants' uncertainty; pointwise prediction profile
@@ -590,6 +897,67 @@ pub const BAND_COLUMNS: [&str; 6] = [
 
 /// Most measured points a plot draws per curve.
 const PLOT_POINTS: usize = 2000;
+
+/// A polyline of (time h, strain %).
+pub type Line = Vec<(f64, f64)>;
+
+/// The band as `band.png` draws it around `curve` (time h, strain %): at each time of the
+/// curve within the band's times, the curve widened by the band's lower and upper
+/// half-widths relative to the strain (absolute where a band strain is not positive),
+/// interpolated linearly in time between the band's points. At a band point this is the band
+/// itself (band and curve share their centre); between points the band keeps its relative
+/// width about the curve, so that it surrounds the curve it is drawn with (straight lines
+/// between the band's points would cut through a steep tertiary curve). Empty without band
+/// points.
+pub fn band_lines(
+    curve: &[(f64, f64)],
+    band: &[crate::uncertainty::predict::BandPoint],
+) -> (Line, Line) {
+    let relative = band.iter().all(|p| p.strain_pct > 0.0);
+    let scale = |e: f64| if relative { e } else { 1.0 };
+    let mut b: Vec<(f64, f64, f64)> = band
+        .iter()
+        .map(|p| {
+            let e = scale(p.strain_pct);
+            (
+                p.time_h,
+                (p.strain_pct - p.lo95_pct) / e,
+                (p.hi95_pct - p.strain_pct) / e,
+            )
+        })
+        .collect();
+    b.sort_by(|x, y| x.0.total_cmp(&y.0));
+    let (Some(first), Some(last)) = (b.first().copied(), b.last().copied()) else {
+        return (vec![], vec![]);
+    };
+    let half = |t: f64| -> (f64, f64) {
+        let k = b.iter().position(|x| x.0 >= t).unwrap_or(b.len() - 1);
+        if k == 0 || b[k].0 == t {
+            return (b[k].1, b[k].2);
+        }
+        let (a, c) = (b[k - 1], b[k]);
+        let w = (t - a.0) / (c.0 - a.0);
+        (a.1 + w * (c.1 - a.1), a.2 + w * (c.2 - a.2))
+    };
+    let mut times: Vec<(f64, f64)> = curve
+        .iter()
+        .copied()
+        .filter(|(t, _)| *t >= first.0 && *t <= last.0)
+        .collect();
+    // The band's own points, with their strains, so that the drawn band passes through them.
+    times.extend(band.iter().map(|p| (p.time_h, p.strain_pct)));
+    times.sort_by(|x, y| x.0.total_cmp(&y.0));
+    times.dedup_by(|x, y| x.0 == y.0);
+    let lo = times
+        .iter()
+        .map(|&(t, e)| (t, e - half(t).0 * scale(e)))
+        .collect();
+    let hi = times
+        .iter()
+        .map(|&(t, e)| (t, e + half(t).1 * scale(e)))
+        .collect();
+    (lo, hi)
+}
 
 fn plots(
     out: &Path,
@@ -649,25 +1017,19 @@ fn plots(
             if ci.band.is_empty() {
                 continue;
             }
+            let curve: Vec<(f64, f64)> = p.curve.iter().map(|(t, e, _)| (*t, 100.0 * e)).collect();
+            let (lo, hi) = band_lines(&curve, &ci.band);
             groups.push(XyGroup::line(
                 p.condition.label(),
-                p.curve.iter().map(|(t, e, _)| (*t, 100.0 * e)).collect(),
+                curve,
                 Rgb::palette(k),
                 Dash::Solid,
             ));
-            for (label, side) in [
-                (format!("{}: 95 % band", p.condition.label()), true),
-                (String::new(), false),
+            for (label, line) in [
+                (format!("{}: 95 % band", p.condition.label()), hi),
+                (String::new(), lo),
             ] {
-                groups.push(XyGroup::line(
-                    label,
-                    ci.band
-                        .iter()
-                        .map(|b| (b.time_h, if side { b.hi95_pct } else { b.lo95_pct }))
-                        .collect(),
-                    Rgb::palette(k),
-                    Dash::Dashed,
-                ));
+                groups.push(XyGroup::line(label, line, Rgb::palette(k), Dash::Dashed));
             }
         }
         if !groups.is_empty() {
@@ -757,4 +1119,108 @@ pub fn check_t_ref(path: &Path, cfg: &RunConfig) -> Result<()> {
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::uncertainty::predict::BandPoint;
+
+    fn tested(laws: bool) -> Tested {
+        Tested {
+            temperatures: vec![(560.0, 85.0, 110.0), (590.0, 100.0, 120.0)],
+            laws,
+        }
+    }
+
+    fn at(t: f64, s: f64) -> Condition {
+        Condition {
+            temperature_c: t,
+            stress_mpa: s,
+        }
+    }
+
+    #[test]
+    fn where_a_condition_lies() {
+        use Extrapolation as X;
+        let t = tested(true);
+        // (temperature, stress, Some(class) or None = refused)
+        let table = [
+            (560.0, 100.0, Some(X::None)),
+            (575.0, 85.0, Some(X::None)), // between 560 and 590: the union 85–120 MPa
+            (575.0, 120.0, Some(X::None)),
+            (575.0, 84.0, Some(X::Stress)),
+            (560.0, 120.0, Some(X::Stress)), // above 560 °C's own 110 MPa
+            (560.0, 85.0 / 1.5, Some(X::Stress)),
+            (560.0, 85.0 / 1.5 * 0.999, Option::None),
+            (590.0, 180.0, Some(X::Stress)),
+            (590.0, 180.1, Option::None),
+            (600.0, 110.0, Some(X::Temperature)), // nearest tested: 590 °C, 100–120 MPa
+            (615.0, 110.0, Some(X::Temperature)),
+            (615.1, 110.0, Option::None),
+            (535.0, 90.0, Some(X::Temperature)),
+            (534.9, 90.0, Option::None),
+            (600.0, 75.0, Some(X::Both)),
+            (600.0, 66.0, Option::None), // below 100/1.5 at 590 °C's range
+            (5000.0, 100.0, Option::None),
+            (20.0, 100.0, Option::None),
+        ];
+        for (temp, s, want) in table {
+            let got = t.classify(at(temp, s));
+            match want {
+                Some(x) => assert_eq!(got, Ok(x), "{temp} °C {s} MPa"),
+                Option::None => assert!(got.is_err(), "{temp} °C {s} MPa: {got:?}"),
+            }
+        }
+        // Without a temperature law only the tested temperatures.
+        let t = tested(false);
+        assert_eq!(t.classify(at(560.0, 100.0)), Ok(X::None));
+        let e = t.classify(at(575.0, 100.0)).unwrap_err();
+        assert!(e.contains("no temperature law") && e.contains("575"), "{e}");
+        assert_eq!(serde_json::to_value(X::Both).unwrap(), "both");
+    }
+
+    #[test]
+    fn the_drawn_band_surrounds_its_curve_to_its_end() {
+        // A steep convex curve and a band whose half-widths grow towards rupture.
+        let curve: Vec<(f64, f64)> = (0..=400)
+            .map(|k| {
+                let t = k as f64 * 2.5;
+                (t, 0.1 + 0.001 * t + 5.0 * (t / 1000.0).powi(12))
+            })
+            .collect();
+        let e = |t: f64| 0.1 + 0.001 * t + 5.0 * (t / 1000.0).powi(12);
+        let band: Vec<BandPoint> = (1..=9)
+            .map(|k| {
+                let t = 1000.0 * k as f64 / 9.0;
+                let w = 0.02 + 0.05 * (t / 1000.0).powi(6);
+                BandPoint {
+                    time_h: t,
+                    strain_pct: e(t),
+                    lo95_pct: e(t) * (1.0 - w),
+                    hi95_pct: e(t) * (1.0 + 1.5 * w),
+                }
+            })
+            .collect();
+        let (lo, hi) = band_lines(&curve, &band);
+        assert_eq!(lo.len(), hi.len());
+        // From the first band point to the curve's end (the last band point).
+        assert!((lo[0].0 - 1000.0 / 9.0).abs() < 1e-9);
+        assert_eq!(lo.last().unwrap().0, 1000.0);
+        assert_eq!(hi.last().unwrap().0, curve.last().unwrap().0);
+        for ((t, l), (_, h)) in lo.iter().zip(&hi) {
+            let c = e(*t);
+            assert!(*l <= c && c <= *h, "{t}: {l} {c} {h}");
+        }
+        // Through the band's own points.
+        for b in &band {
+            let k = lo.iter().position(|p| p.0 == b.time_h).unwrap();
+            assert!((lo[k].1 - b.lo95_pct).abs() < 1e-12 && (hi[k].1 - b.hi95_pct).abs() < 1e-12);
+        }
+        // Straight lines between the band's points would cut through this curve.
+        let (a, b) = (&band[7], &band[8]);
+        let tm = 0.5 * (a.time_h + b.time_h);
+        assert!(0.5 * (a.lo95_pct + b.lo95_pct) > e(tm));
+        assert_eq!(band_lines(&curve, &[]), (vec![], vec![]));
+    }
 }

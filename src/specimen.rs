@@ -430,14 +430,7 @@ mod tests {
     );
 
     /// A random linear mixed model: n groups of `per` rows, p fixed effects, k effects.
-    fn problem(
-        seed: u64,
-        n: usize,
-        per: usize,
-        p: usize,
-        k: usize,
-        tau: &[f64],
-    ) -> Problem {
+    fn problem(seed: u64, n: usize, per: usize, p: usize, k: usize, tau: &[f64]) -> Problem {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let mut g = || -> f64 { StandardNormal.sample(&mut rng) };
         let m = n * per;

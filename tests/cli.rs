@@ -376,7 +376,12 @@ fn no_truncated_file(dir: &Path, reference: &Path) {
         }
         assert!(!name.starts_with('.'), "temporary file left: {name}");
         let bytes = std::fs::read(&p).unwrap();
-        if name == "summary.json" {
+        if name == "manifest.json" {
+            // The run's own manifest: whole, and saying the run did not complete.
+            let m: serde_json::Value = serde_json::from_slice(&bytes)
+                .unwrap_or_else(|e| panic!("manifest.json truncated ({} bytes): {e}", bytes.len()));
+            assert_eq!(m["complete"], false, "{m}");
+        } else if name == "summary.json" {
             serde_json::from_slice::<serde_json::Value>(&bytes)
                 .unwrap_or_else(|e| panic!("summary.json truncated ({} bytes): {e}", bytes.len()));
         } else if name.ends_with(".png") {

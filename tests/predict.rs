@@ -111,6 +111,8 @@ fn predict_at_tested_conditions_equals_simulate_and_keeps_the_contract() {
     ]);
     assert!(stdout.contains("Larson–Miller baseline: C = "), "{stdout}");
     let p = csv(&pred.join("predictions.csv"));
+    // The contract's five columns, then where each condition lies, how its simulation ended
+    // and which constants the numbers come from.
     assert_eq!(
         p[0],
         [
@@ -118,7 +120,10 @@ fn predict_at_tested_conditions_equals_simulate_and_keeps_the_contract() {
             "stress_MPa",
             "rupture_time_h",
             "rupture_strain_pct",
-            "min_rate_pct_per_h"
+            "min_rate_pct_per_h",
+            "extrapolation",
+            "outcome",
+            "constants"
         ]
     );
     let asked: Vec<(String, String)> = at
@@ -228,7 +233,7 @@ fn predict_at_tested_conditions_equals_simulate_and_keeps_the_contract() {
     }
     // 575 °C, 100 MPa lies inside the tested 560–590 °C and 85–120 MPa; 70 MPa does not: the
     // file says so for each baseline.
-    assert_eq!([&l[1][4], &l[1][6]], ["no", "no"]);
+    assert_eq!([&l[1][4], &l[1][6]], ["none", "none"]);
     assert_eq!([&l[2][4], &l[2][6]], ["stress", "stress"]);
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(pred2.join("summary.json")).unwrap())
@@ -299,7 +304,7 @@ fn predict_intervals_add_their_columns() {
         ok(&args);
         out.join("predictions.csv")
     });
-    assert_eq!(plain[0].len(), 5);
+    assert_eq!(plain[0][5..], ["extrapolation", "outcome", "constants"]);
     let mut with = args.to_vec();
     with.push("--intervals");
     let stdout = ok(&with);
@@ -308,7 +313,7 @@ fn predict_intervals_add_their_columns() {
         "{stdout}"
     );
     let rows = csv(&out.join("predictions.csv"));
-    let mut want: Vec<&str> = plain[0].iter().map(String::as_str).collect();
+    let mut want: Vec<&str> = plain[0][..5].iter().map(String::as_str).collect();
     want.extend([
         "rupture_time_lo95_h",
         "rupture_time_hi95_h",
@@ -322,6 +327,13 @@ fn predict_intervals_add_their_columns() {
         "rupture_strain_conf_hi95_pct",
         "min_rate_conf_lo95_pct_per_h",
         "min_rate_conf_hi95_pct_per_h",
+        "extrapolation",
+        "outcome",
+        "constants",
+        "given_rupture_time_h",
+        "given_rupture_strain_pct",
+        "given_min_rate_pct_per_h",
+        "given_outcome",
     ]);
     assert_eq!(rows[0], want);
     assert_eq!(rows.len(), 3);
@@ -596,6 +608,25 @@ tensile_strength = ["560:420", "575:400", "590:380"]
             "larson_miller.png",
         ],
     );
+    // The folder's manifest: this holdout's files, complete.
+    let m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("manifest.json")).unwrap()).unwrap();
+    assert_eq!(
+        (&m["command"], &m["complete"]),
+        (&serde_json::json!("holdout"), &serde_json::json!(true))
+    );
+    for f in [
+        "holdout.csv",
+        "constants.csv",
+        "summary.json",
+        "curves.png",
+        "parity.png",
+    ] {
+        assert!(
+            m["files"].as_array().unwrap().iter().any(|x| x == f),
+            "{f}: {m}"
+        );
+    }
     // With --intervals: the 95 % intervals of each held-out life from the training data, the
     // model's inside the new test's, and the count of measured lives inside.
     let out_i = tmp.path().join("hoi");
@@ -629,6 +660,14 @@ tensile_strength = ["560:420", "575:400", "590:380"]
             "{r:?}"
         );
     }
+    // The intervals' refit of the training constants, said in the printout and the summary.
+    assert!(
+        stdout.contains("centred on the maximum-likelihood refit"),
+        "{stdout}"
+    );
+    let r = &s["intervals_refit"];
+    assert!(r["delta_neg2ll"].as_f64().is_some(), "{r}");
+    assert_eq!(r["constants"].as_array().unwrap().len(), 8);
     assert_eq!(s["inside_pred95"]["inside"], 2);
     assert_eq!(s["inside_pred95"]["tests"], 2);
     // Leaving out a temperature that leaves one to fit is refused.

@@ -57,9 +57,10 @@ fn profile_writes_its_contract_on_the_seed_data() {
     // the bound they reached.
     let text = std::fs::read_to_string(out.join("intervals.csv")).unwrap();
     let mut lines = text.lines();
+    // (Then where the values come from and the given constants, empty without --constants.)
     assert_eq!(
         lines.next().unwrap(),
-        "name,value,lo68,hi68,lo95,hi95,class"
+        "name,value,lo68,hi68,lo95,hi95,class,value_source,given_value,given_in95"
     );
     let bounds = [
         ("A", 1e-10, 1e-9),

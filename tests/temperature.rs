@@ -568,6 +568,7 @@ fn joint_diagnose_names_a_hidden_effect_and_passes_a_clean_set() {
         let data = creepfit::data::Dataset {
             curves,
             warnings: Vec::new(),
+            dropped: Vec::new(),
         };
         let cfg = RunConfig::from_str(TWO_TEMPERATURE_CONFIG, Path::new("two.toml"))
             .unwrap()

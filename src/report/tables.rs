@@ -113,57 +113,122 @@ pub fn write_constants(
 }
 
 /// Read a `constants.csv` (columns `name,value`, any order, extra columns ignored) into the
-/// model's order; every model constant must be present. A `T_ref` row is skipped here
-/// ([`crate::predict::check_t_ref`] checks it). Errors name the file's physical line.
+/// model's order. Every model constant must appear exactly once with a finite value; an
+/// unknown name, a repeated one (a `T_ref` row included) or a missing one is an error naming
+/// the file, the line and the field. A `T_ref` row is skipped here
+/// ([`crate::predict::check_t_ref`] checks it); [`read_constants_for`] also checks the
+/// configuration's bounds.
 pub fn read_constants(path: &Path, model: &dyn Model) -> Result<Vec<f64>> {
+    read_constants_lines(path, model).map(|(v, _)| v)
+}
+
+/// [`read_constants`] for a run of `cfg`: also the reference temperature of the constants
+/// (`T_ref` row, [`crate::predict::check_t_ref`]) and every value inside the configuration's
+/// bounds `[lb, ub]` (a held law parameter: equal to its value), each an error naming the
+/// file, the line and the constant.
+pub fn read_constants_for(path: &Path, cfg: &RunConfig, model: &dyn Model) -> Result<Vec<f64>> {
+    crate::predict::check_t_ref(path, cfg)?;
+    let (values, lines) = read_constants_lines(path, model)?;
+    for ((v, line), c) in values.iter().zip(&lines).zip(&cfg.constants) {
+        if !(c.lb <= *v && *v <= c.ub) {
+            return Err(Error::data(
+                path,
+                *line,
+                format!(
+                    "column 'value': {} = {v} is outside the configuration's bounds [{}, {}] (constants.{} in {}); constants from another box or model do not belong to this configuration",
+                    c.name,
+                    c.lb,
+                    c.ub,
+                    c.name,
+                    cfg.path.display()
+                ),
+            ));
+        }
+    }
+    Ok(values)
+}
+
+/// The values of [`read_constants`] and the line each was read from.
+fn read_constants_lines(path: &Path, model: &dyn Model) -> Result<(Vec<f64>, Vec<usize>)> {
     let (bytes, progress) = crate::data::read_file(path)?;
     let mut table = crate::data::Table::open(path, &bytes, &["name", "value"], progress)?;
     let (ci, cv) = (table.col("name").unwrap(), table.col("value").unwrap());
     let specs = model.constants();
     let mut values = vec![f64::NAN; specs.len()];
+    let mut lines = vec![0usize; specs.len()];
+    let mut t_ref_line = 0usize;
     let mut rec = csv::StringRecord::new();
     while let Some(line) = table.next_row(&mut rec)? {
         let name = rec.get(ci).unwrap_or("").trim();
-        if name == T_REF_ROW && !model.constants().iter().any(|c| c.name == T_REF_ROW) {
+        let text = rec.get(cv).unwrap_or("").trim();
+        if name == T_REF_ROW && !specs.iter().any(|c| c.name == T_REF_ROW) {
+            if t_ref_line > 0 {
+                return Err(Error::data(
+                    path,
+                    line,
+                    format!("column 'name': '{name}' appears again (first on line {t_ref_line})"),
+                ));
+            }
+            t_ref_line = line;
             continue;
         }
-        let text = rec.get(cv).unwrap_or("").trim();
+        let Some(j) = specs.iter().position(|s| s.name == name) else {
+            return Err(Error::data(
+                path,
+                line,
+                format!(
+                    "column 'name': '{name}' is not a constant of model {} (its constants: {})",
+                    model.name(),
+                    specs.iter().map(|s| s.name).collect::<Vec<_>>().join(", ")
+                ),
+            ));
+        };
+        if lines[j] > 0 {
+            return Err(Error::data(
+                path,
+                line,
+                format!(
+                    "column 'name': '{name}' appears again (first on line {}); give each constant once",
+                    lines[j]
+                ),
+            ));
+        }
         let v: f64 = text.parse().map_err(|_| {
             Error::data(
                 path,
                 line,
-                format!("column 'value': cannot parse '{text}' as a number"),
+                format!("column 'value': {name}: cannot parse '{text}' as a number"),
             )
         })?;
         if !v.is_finite() {
             return Err(Error::data(
                 path,
                 line,
-                format!("column 'value': '{text}' is not finite"),
+                format!("column 'value': {name} = '{text}' is not finite"),
             ));
         }
-        match specs.iter().position(|s| s.name == name) {
-            Some(j) => values[j] = v,
-            None => {
-                return Err(Error::data(
-                    path,
-                    line,
-                    format!(
-                        "column 'name': '{name}' is not a constant of model {}",
-                        model.name()
-                    ),
-                ))
-            }
-        }
+        values[j] = v;
+        lines[j] = line;
     }
-    if let Some(j) = values.iter().position(|v| v.is_nan()) {
+    let missing: Vec<&str> = specs
+        .iter()
+        .zip(&lines)
+        .filter(|(_, l)| **l == 0)
+        .map(|(s, _)| s.name)
+        .collect();
+    if !missing.is_empty() {
         return Err(Error::data(
             path,
             0,
-            format!("constant '{}' is missing", specs[j].name),
+            format!(
+                "column 'name': constant(s) {} missing (model {} needs {})",
+                missing.join(", "),
+                model.name(),
+                specs.iter().map(|s| s.name).collect::<Vec<_>>().join(", ")
+            ),
         ));
     }
-    Ok(values)
+    Ok((values, lines))
 }
 
 /// Per-curve error rows of a fit (the columns of `errors.csv`), as numbers.

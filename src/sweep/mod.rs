@@ -40,7 +40,7 @@ use crate::error::{Error, Result};
 use crate::fit::{local_fit, param_space, FitSettings};
 use crate::guess::initial_guess;
 use crate::objective::mean_abs;
-use crate::output::{lock_folder, FolderLock};
+use crate::output::{lock_folder, RunFolder};
 
 /// The part of a sweep the command line asks for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -185,9 +185,9 @@ pub struct SweepRun {
     pub wall_s: f64,
     /// Threads used.
     pub threads: usize,
-    /// The output folder's write lock, held while this value lives (write the outputs
-    /// before dropping it).
-    pub lock: FolderLock,
+    /// The output folder, locked and owned by this run while this value lives: write the
+    /// outputs, then [`RunFolder::finish`] it (its manifest).
+    pub folder: RunFolder,
 }
 
 /// Run (or resume) a sweep part of the resolved configuration `cfg` (bound to `data`) into
@@ -242,6 +242,9 @@ pub fn run_sweep(cfg: &RunConfig, data: &Dataset) -> Result<(Plan, SweepRun)> {
     };
     // After the identity comparison, so that a folder of another sweep is named as such.
     check_bound(cfg, data)?;
+    // The folder is this sweep's: its journal is what it resumes from, the rest is redone.
+    let folder = RunFolder::take_over(lock, "sweep", &|f| f == journal::FILE)?;
+    crate::output::record(&journal_path);
     let jobs = missing(&header, &solutions);
 
     let threads = cfg
@@ -318,7 +321,7 @@ pub fn run_sweep(cfg: &RunConfig, data: &Dataset) -> Result<(Plan, SweepRun)> {
             missing,
             wall_s: t0.elapsed().as_secs_f64(),
             threads,
-            lock,
+            folder,
         },
     ))
 }

@@ -369,21 +369,64 @@ impl ConditionIntervals {
     }
 }
 
+/// The maximum-likelihood refit that intervals are centred on, and how far it lies from the
+/// constants it started from.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Refit {
+    /// The given constants (model order).
+    pub given: Vec<f64>,
+    /// The refitted constants: the maximum-likelihood fit from `given` (model order).
+    pub params: Vec<f64>,
+    /// −2 ln L at the refit and at the given constants (error model estimated at each; NaN
+    /// where the given constants cannot be evaluated).
+    pub neg2ll: f64,
+    pub given_neg2ll: f64,
+}
+
+impl Refit {
+    /// −2 ln L at the given constants minus at the refit (≥ 0 up to the optimiser's
+    /// tolerance: how much less likely the given constants are).
+    pub fn delta_neg2ll(&self) -> f64 {
+        self.given_neg2ll - self.neg2ll
+    }
+}
+
+/// What `creepfit predict --intervals` computes: the refit the intervals are centred on and
+/// the intervals at each condition.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct IntervalsRun {
+    pub refit: Refit,
+    pub conditions: Vec<ConditionIntervals>,
+}
+
+/// The fractions of the predicted rupture time at which a band is computed: k/n for
+/// k = 1 … n (`[profile] band_points` = n), so that the band runs to the rupture time, as
+/// far as the curve it surrounds.
+pub fn band_fractions(n: usize) -> Vec<f64> {
+    (1..=n).map(|k| k as f64 / n as f64).collect()
+}
+
 /// Intervals at untested conditions for `predict --intervals`: a local maximum-likelihood
-/// fit from `params` under the error model (as `profile --constants`), thresholds calibrated
-/// as `profile` does (`[profile] calibrate` bootstrap replicates over the rupture times at
-/// the conditions; plain χ² with 0), then [`prediction_intervals`] and [`prediction_band`]
-/// at each `load`.
+/// fit from `params` under the error model (as `profile --constants`; the intervals are
+/// centred on it, [`Refit`]), thresholds calibrated as `profile` does (`[profile] calibrate`
+/// bootstrap replicates over the rupture times at the conditions; plain χ² with 0), then
+/// [`prediction_intervals`] and [`prediction_band`] at each `load`.
 pub fn intervals_at(
     cfg: &crate::config::RunConfig,
     model: &dyn crate::model::Model,
     data: &crate::data::Dataset,
     params: &[f64],
     loads: &[Load],
-) -> crate::error::Result<Vec<ConditionIntervals>> {
+) -> crate::error::Result<IntervalsRun> {
     let ctx = super::report::context(cfg, model, data);
     let f = ctx.fit(&ctx.space, params, false);
     let reference = super::reference_from(&ctx, vec![f])?;
+    let refit = Refit {
+        given: params.to_vec(),
+        params: reference.params.clone(),
+        neg2ll: reference.neg2ll,
+        given_neg2ll: super::report::neg2ll_at(&ctx, params).unwrap_or(f64::NAN),
+    };
     let pc = &cfg.profile;
     let th = if pc.calibrate > 0 {
         let cons = super::report::calibration_constants(&ctx, &reference);
@@ -404,14 +447,15 @@ pub fn intervals_at(
     } else {
         Thresholds::chi2(1.0)
     };
-    let fractions: Vec<f64> = (1..=pc.band_points)
-        .map(|k| k as f64 / (pc.band_points + 1) as f64)
-        .collect();
-    Ok(loads
-        .iter()
-        .map(|l| ConditionIntervals {
-            quantities: prediction_intervals(&ctx, &reference, l, &th),
-            band: prediction_band(&ctx, &reference, l, &fractions, &th),
-        })
-        .collect())
+    let fractions = band_fractions(pc.band_points);
+    Ok(IntervalsRun {
+        refit,
+        conditions: loads
+            .iter()
+            .map(|l| ConditionIntervals {
+                quantities: prediction_intervals(&ctx, &reference, l, &th),
+                band: prediction_band(&ctx, &reference, l, &fractions, &th),
+            })
+            .collect(),
+    })
 }

@@ -33,6 +33,11 @@ pub struct LoadPrediction {
     /// Temperature (°C) and stress (MPa).
     pub temperature_c: f64,
     pub stress_mpa: f64,
+    /// Where the load lies against the tested conditions.
+    pub extrapolation: crate::predict::Extrapolation,
+    /// How the simulation at the optimum ended (`ruptured`, else why the quantities and the
+    /// band are missing).
+    pub outcome: &'static str,
     /// Rupture time, minimum rate, rupture strain with their intervals.
     pub quantities: Vec<PredictedInterval>,
     /// The 95 % band of the predicted curve.
@@ -63,6 +68,8 @@ pub struct ProfileRun {
     /// constants), and −2 ln L at the given constants for the latter.
     pub reference_from: String,
     pub given_neg2ll: Option<f64>,
+    /// The given constants the reference was refitted from (`--constants`), model order.
+    pub given: Option<Vec<f64>>,
     /// The thresholds of the constants' (and combinations') intervals, those of the
     /// predictions' intervals, and the calibration behind them.
     pub thresholds: Thresholds,
@@ -98,6 +105,15 @@ pub fn context<'a>(
             specimen: cfg.objective.specimen_effects.resolve(&data.curves).0,
         },
     )
+}
+
+/// −2 ln L at constants `x`, the error model estimated there (None where the model cannot
+/// be evaluated).
+pub fn neg2ll_at(ctx: &Context, x: &[f64]) -> Option<f64> {
+    crate::likelihood::residuals_at(ctx.model, ctx.curves, x, &ctx.settings)
+        .ok()
+        .map(|r| crate::errmodel::ErrorModel::estimate(&r, ctx.ml.lifetime_sd_floor).neg2ll(&r))
+        .filter(|v| v.is_finite())
 }
 
 /// The untested loads of `pc` at the data's temperature.
@@ -154,15 +170,10 @@ pub fn core(
     let (mut reference, from, given_neg2ll) = match given {
         Some(x) => {
             let f = ctx.fit(&ctx.space, x, false);
-            let at_given = crate::likelihood::residuals_at(ctx.model, ctx.curves, x, &ctx.settings)
-                .ok()
-                .map(|r| {
-                    crate::errmodel::ErrorModel::estimate(&r, ctx.ml.lifetime_sd_floor).neg2ll(&r)
-                });
             (
                 reference_from(ctx, vec![f])?,
                 "constants".to_string(),
-                at_given,
+                neg2ll_at(ctx, x),
             )
         }
         None => {
@@ -277,11 +288,20 @@ pub fn run(
     let combinations = well_determined(&ctx, &reference, &c.profiles, &thresholds, 3);
     timings.combinations = t3.elapsed().as_secs_f64();
     let t4 = Instant::now();
-    let fractions: Vec<f64> = (1..=pc.band_points)
-        .map(|k| k as f64 / (pc.band_points + 1) as f64)
-        .collect();
+    let fractions = super::predict::band_fractions(pc.band_points);
     let mut predictions = Vec::with_capacity(loads.len());
+    let tested = crate::predict::Tested::of(data, cfg.has_laws());
+    let ode = crate::uncertainty::constrained::prediction_ode(&ctx);
     for (t, l) in &loads {
+        let condition = crate::predict::Condition {
+            temperature_c: *t,
+            stress_mpa: l.stress_mpa,
+        };
+        let outcome = ctx
+            .model
+            .simulate(&reference.params, l, &[], &mut [], &ode)
+            .outcome
+            .as_str();
         let ti = Instant::now();
         let quantities = prediction_intervals(&ctx, &reference, l, &pth);
         timings.prediction_intervals += ti.elapsed().as_secs_f64();
@@ -291,6 +311,10 @@ pub fn run(
         predictions.push(LoadPrediction {
             temperature_c: *t,
             stress_mpa: l.stress_mpa,
+            extrapolation: tested
+                .classify(condition)
+                .unwrap_or(crate::predict::Extrapolation::Both),
+            outcome,
             quantities,
             band,
         });
@@ -301,6 +325,7 @@ pub fn run(
         reference,
         reference_from: c.reference_from,
         given_neg2ll: c.given_neg2ll,
+        given: given.map(<[f64]>::to_vec),
         thresholds,
         prediction_thresholds: pth,
         calibration: c.calibration,
@@ -321,12 +346,41 @@ fn shown(scale: Scale, v: f64) -> f64 {
     }
 }
 
-/// `intervals.csv` rows: `name,value,lo68,hi68,lo95,hi95,class`.
+/// `intervals.csv`'s columns: the contract's, then where `value` comes from
+/// (`ml_multistart`, or `ml_refit` from the given constants), the given constant and whether
+/// it lies inside the 95 % interval (both empty without `--constants`).
+pub const INTERVAL_HEADER: [&str; 10] = [
+    "name",
+    "value",
+    "lo68",
+    "hi68",
+    "lo95",
+    "hi95",
+    "class",
+    "value_source",
+    "given_value",
+    "given_in95",
+];
+
+impl ProfileRun {
+    /// Where the reference (every `value`) comes from, as written in `intervals.csv`.
+    pub fn value_source(&self) -> &'static str {
+        if self.given.is_some() {
+            "ml_refit"
+        } else {
+            "ml_multistart"
+        }
+    }
+}
+
+/// `intervals.csv` rows ([`INTERVAL_HEADER`]).
 pub fn interval_rows(run: &ProfileRun) -> Vec<Vec<String>> {
     run.profiles
         .iter()
-        .map(|p| {
+        .enumerate()
+        .map(|(j, p)| {
             let i = &p.interval;
+            let given = run.given.as_ref().map(|g| g[j]);
             vec![
                 p.name.clone(),
                 num(i.value),
@@ -335,6 +389,9 @@ pub fn interval_rows(run: &ProfileRun) -> Vec<Vec<String>> {
                 num(i.lo95),
                 num(i.hi95),
                 p.class.as_str().to_string(),
+                run.value_source().to_string(),
+                given.map_or(String::new(), num),
+                given.map_or(String::new(), |g| (i.lo95 <= g && g <= i.hi95).to_string()),
             ]
         })
         .collect()
@@ -346,7 +403,7 @@ pub fn write_outputs(cfg: &RunConfig, run: &ProfileRun, out: &Path) -> Result<Ve
     let names: Vec<String> = cfg.constants.iter().map(|c| c.name.clone()).collect();
     write_csv(
         &out.join("intervals.csv"),
-        &["name", "value", "lo68", "hi68", "lo95", "hi95", "class"],
+        &INTERVAL_HEADER,
         &interval_rows(run),
     )?;
     // profiles.csv: every profile point, the optimum included, with the other constants.
@@ -502,6 +559,15 @@ pub fn summary(cfg: &RunConfig, run: &ProfileRun) -> serde_json::Value {
             "from": run.reference_from,
             "neg2ll": jnum(r.neg2ll),
             "given_neg2ll": run.given_neg2ll.map(jnum),
+            "delta_neg2ll_given": run.given_neg2ll.map(|g| jnum(g - r.neg2ll)),
+            "given_constants": run.given.as_ref().map(|g| names.iter().zip(g).zip(&r.params).zip(&run.profiles).map(|(((n, g), v), p)| json!({
+                "name": n,
+                "given": jnum(*g),
+                "value": jnum(*v),
+                "difference": jnum(v - g),
+                "relative_difference_pct": jnum(100.0 * (v - g) / g.abs()),
+                "given_in95": p.interval.lo95 <= *g && *g <= p.interval.hi95,
+            })).collect::<Vec<_>>()),
             "constants": names.iter().zip(&r.params).map(|(n, v)| json!({"name": n, "value": jnum(*v)})).collect::<Vec<_>>(),
             "fits": r.fits,
             "failed_fits": r.failed,
@@ -551,11 +617,37 @@ pub fn report_md(cfg: &RunConfig, run: &ProfileRun) -> String {
         if run.reference_from == "multistart" {
             format!("multistart, {} fits", run.reference.fits)
         } else {
-            "local fit from the given constants".to_string()
+            "a maximum-likelihood REFIT from the given constants: every value and interval below is about the refit, not the given constants".to_string()
         },
         run.reference.neg2ll,
         100.0 * run.reference.noise.lifetime_sd
     );
+    if let Some(given) = &run.given {
+        md += &format!(
+            "## The refit against the given constants\n\n−2 ln L at the given constants {}, at the refit {:.3}: difference {} (the given constants are that much less likely under the error model; the 95 % threshold of one constant is {:.3}).\n\n| constant | given | refit | difference | relative | given inside the refit's 95 % interval |\n|---|---|---|---|---|---|\n",
+            run.given_neg2ll.map_or("not computable".to_string(), |v| format!("{v:.3}")),
+            run.reference.neg2ll,
+            run.given_neg2ll
+                .map_or("unknown".to_string(), |v| format!("{:.3}", v - run.reference.neg2ll)),
+            th.t95
+        );
+        for ((p, gv), v) in run.profiles.iter().zip(given).zip(&run.reference.params) {
+            md += &format!(
+                "| {} | {} | {} | {} | {:+.2} % | {} |\n",
+                p.name,
+                g(*gv),
+                g(*v),
+                g(v - gv),
+                100.0 * (v - gv) / gv.abs(),
+                if p.interval.lo95 <= *gv && *gv <= p.interval.hi95 {
+                    "yes"
+                } else {
+                    "NO"
+                }
+            );
+        }
+        md += "\n";
+    }
     md += &match &run.calibration {
         Some(c) => format!(
             "Thresholds of Δ(−2 ln L): {:.3} (68 %) and {:.3} (95 %) for the constants, {:.3} and {:.3} for the predictions: the χ²₁ quantiles × {:.3} and × {:.3}, the mean likelihood-ratio statistic of the constants' and of the predictions' true values over {} parametric-bootstrap replicates ({} failed) at the fitted values (Bartlett correction; floored at 1).\n\n",
@@ -650,6 +742,12 @@ pub fn report_md(cfg: &RunConfig, run: &ProfileRun) -> String {
     if !run.predictions.is_empty() {
         md += "## Predictions at untested loads\n\nConfidence interval: the uncertainty of the model's prediction (the constants). Prediction interval: a new test, adding the scatter between specimens.\n\n| load | quantity | prediction | 95 % confidence | 95 % prediction (new test) | specimen scatter (sd of ln) |\n|---|---|---|---|---|---|\n";
         for p in &run.predictions {
+            if p.quantities.is_empty() {
+                md += &format!(
+                    "| {} °C, {} MPa | – | no prediction: the simulation at the optimum ended with `{}` | | | |\n",
+                    p.temperature_c, p.stress_mpa, p.outcome
+                );
+            }
             for q in &p.quantities {
                 md += &format!(
                     "| {} °C, {} MPa | {} | {} | [{}, {}]{} | [{}, {}] | {:.3} ({} residuals) |\n",
@@ -689,21 +787,38 @@ pub fn report_md(cfg: &RunConfig, run: &ProfileRun) -> String {
 pub fn profile_command(cfg: &RunConfig, data: &Dataset, constants: Option<&Path>) -> Result<()> {
     let model = cfg.build_model()?;
     let given = match constants {
-        Some(p) => Some(crate::report::tables::read_constants(p, model.as_ref())?),
+        Some(p) => Some(crate::report::tables::read_constants_for(
+            p,
+            cfg,
+            model.as_ref(),
+        )?),
         None => None,
     };
-    let out = cfg.out_dir("profile");
-    let _lock = crate::output::lock_folder(&out)?;
-    let run = run(cfg, data, given.as_deref(), &cfg.profile)?;
-    let failures = write_outputs(cfg, &run, &out)?;
-    print!("{}", report_md(cfg, &run));
-    println!("wrote {}", out.display());
-    if failures.is_empty() {
-        Ok(())
-    } else {
-        Err(Error::PlotsNotWritten {
-            out: out.to_path_buf(),
-            failures,
-        })
+    let tested = crate::predict::Tested::of(data, cfg.has_laws());
+    for (t, l) in loads(cfg, data, &cfg.profile) {
+        let c = crate::predict::Condition {
+            temperature_c: t,
+            stress_mpa: l.stress_mpa,
+        };
+        if let Err(why) = tested.classify(c) {
+            return Err(cfg.error_at("profile.predict_stress_MPa", why));
+        }
     }
+    let out = cfg.out_dir("profile");
+    let mut folder = crate::output::RunFolder::begin(&out, "profile")?;
+    crate::cli::note_data(&mut folder, data);
+    folder.finish((|| {
+        let run = run(cfg, data, given.as_deref(), &cfg.profile)?;
+        let failures = write_outputs(cfg, &run, &out)?;
+        print!("{}", report_md(cfg, &run));
+        println!("wrote {}", out.display());
+        if failures.is_empty() {
+            Ok(())
+        } else {
+            Err(Error::PlotsNotWritten {
+                out: out.to_path_buf(),
+                failures,
+            })
+        }
+    })())
 }
