@@ -5,16 +5,22 @@
 //!
 //!   dε/dt = m(ε) · A sinh( Bσ s(ε) (1 − H(ε)) / ((1 − Φ(t)) (1 − ω(ε))) )
 //!   H(ε) = H*(1 − exp(−h g(ε)/(σ H*))),  ω(ε) = C k_σ ε,  ε_total = ε0 + ε
+//!   rupture when ω(ε) = ω_f
 //!
-//! with s = 1 + ε, g = ln(1+ε) for `constant_load` (else s = 1, g = ε); m = 1 + C_d ε for
-//! `dislocation_damage`; k_σ = (σ/σ_ref)^ν for `stress_ductility`; ε0 = σ/E_L for
-//! `loading_strain`. Each file holds its constants and its terms; adding one is a file, a
-//! line in [`CATALOGUE`] and its term in [`KhdExtended::rhs`].
+//! with s = 1 + ε, g = ln(1+ε) for `constant_load`, s = e^ε, g = 1 − e^(−ε) for
+//! `true_strain_load` (else s = 1, g = ε); m = (1 + C_d ε) for `dislocation_damage` times
+//! (1 + φ0 ε^φ1) for `strain_softening`; k_σ = (σ/σ_ref)^ν for `stress_ductility`;
+//! ε0 = σ/E_L for `loading_strain`; ω_f the constant of `rupture_damage` (else the load's).
+//! Each file holds its constants and its terms; adding one is a file, a line in
+//! [`CATALOGUE`] and its term in [`KhdExtended::rhs`].
 
 pub mod constant_load;
 pub mod dislocation_damage;
 pub mod loading_strain;
+pub mod rupture_damage;
+pub mod strain_softening;
 pub mod stress_ductility;
+pub mod true_strain_load;
 
 use super::khd::{self, coarsening_factor, khd_rate_coarsened, KhdPrepared};
 use super::{ConstantSpec, CreepModel, Load};
@@ -27,6 +33,9 @@ pub const CATALOGUE: &[&str] = &[
     loading_strain::NAME,
     dislocation_damage::NAME,
     stress_ductility::NAME,
+    strain_softening::NAME,
+    rupture_damage::NAME,
+    true_strain_load::NAME,
 ];
 
 /// Extra constants of one extension; `None` for an unknown name.
@@ -36,12 +45,16 @@ pub fn extension_constants(name: &str) -> Option<Vec<ConstantSpec>> {
         loading_strain::NAME => Some(loading_strain::constants()),
         dislocation_damage::NAME => Some(dislocation_damage::constants()),
         stress_ductility::NAME => Some(stress_ductility::constants()),
+        strain_softening::NAME => Some(strain_softening::constants()),
+        rupture_damage::NAME => Some(rupture_damage::constants()),
+        true_strain_load::NAME => Some(vec![]),
         _ => None,
     }
 }
 
 /// The value of extension constant `constant` that switches its extension off (or, for E_L,
-/// nearly: its upper bound) within [lb, ub]; `None` for a constant of no extension.
+/// nearly: its upper bound) within [lb, ub]; `None` for a constant of no extension and for a
+/// constant that has no such value (φ1 of `strain_softening`: φ0 = 0 switches it off).
 pub fn off_value(constant: &str, lb: f64, ub: f64) -> Option<f64> {
     let has = |c: Vec<ConstantSpec>| c.iter().any(|s| s.name == constant);
     if has(loading_strain::constants()) {
@@ -50,6 +63,10 @@ pub fn off_value(constant: &str, lb: f64, ub: f64) -> Option<f64> {
         Some(dislocation_damage::off_value(lb, ub))
     } else if has(stress_ductility::constants()) {
         Some(stress_ductility::off_value(lb, ub))
+    } else if has(strain_softening::constants()) {
+        strain_softening::off_value(constant, lb, ub)
+    } else if has(rupture_damage::constants()) {
+        Some(rupture_damage::off_value(lb, ub))
     } else {
         None
     }
@@ -66,16 +83,32 @@ pub struct KhdExtended {
     pub dislocation_damage: Option<usize>,
     /// Index of ν.
     pub stress_ductility: Option<usize>,
+    /// Index of φ0 (φ1 follows it).
+    pub strain_softening: Option<usize>,
+    /// Index of ω_f.
+    pub rupture_damage: Option<usize>,
+    /// σ → σ0 e^ε.
+    pub true_strain_load: bool,
 }
 
 impl KhdExtended {
     /// The composed model for `names` (each at most once; unknown names are `Err(name)`), and
     /// its constants: the base model's six, then each extension's in catalogue order.
+    /// `constant_load` and `true_strain_load` are two forms of one effect: together they are
+    /// `Err("true_strain_load with constant_load")`.
     pub fn new(names: &[String]) -> Result<(Self, Vec<ConstantSpec>), String> {
         for n in names {
             if !CATALOGUE.contains(&n.as_str()) {
                 return Err(n.clone());
             }
+        }
+        let has = |n: &str| names.iter().any(|m| m == n);
+        if has(constant_load::NAME) && has(true_strain_load::NAME) {
+            return Err(format!(
+                "{} with {}",
+                true_strain_load::NAME,
+                constant_load::NAME
+            ));
         }
         let mut m = KhdExtended::default();
         let mut constants = khd::constants();
@@ -89,6 +122,9 @@ impl KhdExtended {
                 loading_strain::NAME => m.loading_strain = Some(idx),
                 dislocation_damage::NAME => m.dislocation_damage = Some(idx),
                 stress_ductility::NAME => m.stress_ductility = Some(idx),
+                strain_softening::NAME => m.strain_softening = Some(idx),
+                rupture_damage::NAME => m.rupture_damage = Some(idx),
+                true_strain_load::NAME => m.true_strain_load = true,
                 _ => unreachable!("catalogue entry without a term"),
             }
             constants.extend(extension_constants(name).expect("catalogued"));
@@ -108,6 +144,11 @@ pub struct ExtPrepared<S> {
     pub c_d: S,
     /// C·k_σ: damage per unit creep strain.
     pub c_eff: S,
+    /// φ0, φ1 of the strain softening (0, 0 when off).
+    pub phi0: S,
+    pub phi1: S,
+    /// Damage at rupture: the constant of `rupture_damage`, else the load's ω_f.
+    pub omega_f: S,
 }
 
 impl CreepModel<1> for KhdExtended {
@@ -126,11 +167,22 @@ impl CreepModel<1> for KhdExtended {
             Some(i) => base.c * stress_ductility::ductility_factor(params[i], load.stress_mpa),
             None => base.c,
         };
+        let (phi0, phi1) = match self.strain_softening {
+            Some(i) => (params[i], params[i + 1]),
+            None => (S::cst(0.0), S::cst(0.0)),
+        };
+        let omega_f = match self.rupture_damage {
+            Some(i) => params[i],
+            None => S::cst(load.omega_f),
+        };
         ExtPrepared {
             base,
             eps0,
             c_d,
             c_eff,
+            phi0,
+            phi1,
+            omega_f,
         }
     }
     fn init<S: Scalar>(&self, _p: &ExtPrepared<S>) -> [S; 1] {
@@ -160,6 +212,11 @@ impl CreepModel<1> for KhdExtended {
                 constant_load::hardening_strain(eps),
                 constant_load::stress_factor(eps),
             )
+        } else if self.true_strain_load {
+            (
+                true_strain_load::hardening_strain(eps),
+                true_strain_load::stress_factor(eps),
+            )
         } else {
             (eps, S::cst(1.0))
         };
@@ -173,8 +230,13 @@ impl CreepModel<1> for KhdExtended {
         };
         match khd_rate_coarsened(&scaled, hard, tp, S::cst(1.0) - p.c_eff * eps) {
             Some(rate) => {
-                dy[0] = if self.dislocation_damage.is_some() {
+                let rate = if self.dislocation_damage.is_some() {
                     rate * dislocation_damage::rate_factor(p.c_d, eps)
+                } else {
+                    rate
+                };
+                dy[0] = if self.strain_softening.is_some() {
+                    rate * strain_softening::rate_factor(p.phi0, p.phi1, eps)
                 } else {
                     rate
                 };
@@ -185,7 +247,7 @@ impl CreepModel<1> for KhdExtended {
     }
     #[inline(always)]
     fn event<S: Scalar>(&self, p: &ExtPrepared<S>, y: &[S; 1]) -> S {
-        p.c_eff * y[0] - p.base.omega_f
+        p.c_eff * y[0] - p.omega_f
     }
     #[inline(always)]
     fn event_rate<S: Scalar>(&self, p: &ExtPrepared<S>, _y: &[S; 1], dy: &[S; 1]) -> S {
@@ -209,6 +271,8 @@ impl CreepModel<1> for KhdExtended {
         let eps = y[0];
         let g = if self.constant_load {
             constant_load::hardening_strain(eps)
+        } else if self.true_strain_load {
+            true_strain_load::hardening_strain(eps)
         } else {
             eps
         };
