@@ -111,13 +111,12 @@ fn every_extension_switched_off_is_the_base_model() {
     assert!(tc < tb * 0.99, "{tc} vs {tb}");
 }
 
-/// The defining equations of `constant_load`, `true_strain_load`, `dislocation_damage` and
-/// `strain_softening` integrated as written: state [ε, H, Φ, ω, D] with σ = σ0(1+ε) (or
-/// σ0 e^ε) in the rate and in dH/dt, and the rate multiplied by 1/(1−D), dD/dt = C_d (1−D)²
-/// dε/dt, and by 1 + φ0 ε^φ1 (a power, not the extension's exp(φ1 ln ε)).
+/// The defining equations of `constant_load`, `dislocation_damage` and `strain_softening`
+/// integrated as written: state [ε, H, Φ, ω, D] with σ = σ0(1+ε) in the rate and in dH/dt,
+/// and the rate multiplied by 1/(1−D), dD/dt = C_d (1−D)² dε/dt, and by 1 + φ0 ε^φ1 (a
+/// power, not the extension's exp(φ1 ln ε)).
 struct Defining {
     constant_load: bool,
-    true_strain: bool,
     c_d: f64,
     soft: (f64, f64),
 }
@@ -126,7 +125,6 @@ impl Defining {
     fn plain() -> Defining {
         Defining {
             constant_load: false,
-            true_strain: false,
             c_d: 0.0,
             soft: (0.0, 1.0),
         }
@@ -159,8 +157,6 @@ impl CreepModel<5> for Defining {
         let [eps, hard, phi, om, d] = *y;
         let sig = if self.constant_load {
             (eps + 1.0) * p.sigma
-        } else if self.true_strain {
-            eps.exp() * p.sigma
         } else {
             S::cst(p.sigma)
         };
@@ -331,34 +327,6 @@ fn strain_softening_matches_its_defining_equations() {
     }
 }
 
-#[test]
-fn true_strain_load_matches_its_defining_equations() {
-    let m = ext(&["true_strain_load"]);
-    let def = Defining {
-        true_strain: true,
-        ..Defining::plain()
-    };
-    for sigma in [85.0, 120.0] {
-        let (t_ref, _) = defining(&def, sigma, &[]);
-        let ts = times(t_ref);
-        let (_, s_ref) = defining(&def, sigma, &ts);
-        let (t, _, s) = run(m.as_ref(), &BASE, sigma, &ts);
-        assert!(rel(t, t_ref) < 1e-8, "{sigma} MPa: {t} vs {t_ref}");
-        for k in 1..ts.len() {
-            assert!(rel(s[k], s_ref[k]) < 1e-8, "{} vs {}", s[k], s_ref[k]);
-        }
-        // e^ε > 1 + ε: shorter than constant_load's life.
-        let (tc, _, _) = run(ext(&["constant_load"]).as_ref(), &BASE, sigma, &[]);
-        assert!(t < tc, "{t} vs {tc}");
-    }
-    // Two forms of one effect: not both.
-    let both = build(
-        "khd",
-        &["constant_load".to_string(), "true_strain_load".to_string()],
-    );
-    assert!(both.is_err());
-}
-
 /// A free ω_f is the base model with the load's ω_f set to it: the same curves and rupture,
 /// and the rupture strain ω_f/C exactly (ω_f/(C k_σ) with `stress_ductility`).
 #[test]
@@ -481,7 +449,7 @@ fn sensitivity_jacobian_of_new_extensions_matches_central_differences() {
     ];
     // (extensions, their constants' truth, lb, ub)
     type Case<'a> = (&'a [&'a str], Vec<f64>, Vec<f64>, Vec<f64>);
-    let cases: [Case; 4] = [
+    let cases: [Case; 3] = [
         (
             &["strain_softening"],
             vec![30.0, 2.0],
@@ -489,7 +457,6 @@ fn sensitivity_jacobian_of_new_extensions_matches_central_differences() {
             vec![200.0, 8.0],
         ),
         (&["rupture_damage"], vec![0.45], vec![0.05], vec![0.9]),
-        (&["true_strain_load"], vec![], vec![], vec![]),
         (
             &[
                 "constant_load",

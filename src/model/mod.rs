@@ -538,13 +538,7 @@ fn build_khd(e: &ModelEntry, extensions: &[String]) -> Result<Box<dyn Model>> {
         });
     }
     let (m, constants) = KhdExtended::new(extensions).map_err(|bad| {
-        if ext::CATALOGUE.contains(&bad.split(' ').next().unwrap_or("")) {
-            Error::Invalid(format!(
-                "extensions: {bad}: two forms of the same effect, choose one"
-            ))
-        } else {
-            Error::UnknownModel(format!("extension {bad}"), ext::CATALOGUE.join(", "))
-        }
+        Error::UnknownModel(format!("extension {bad}"), ext::CATALOGUE.join(", "))
     })?;
     let full = format!("khd+{}", extensions.join("+"));
     Ok(Box::new(

@@ -7,8 +7,8 @@
 //!   H(ε) = H*(1 − exp(−h g(ε)/(σ H*))),  ω(ε) = C k_σ ε,  ε_total = ε0 + ε
 //!   rupture when ω(ε) = ω_f
 //!
-//! with s = 1 + ε, g = ln(1+ε) for `constant_load`, s = e^ε, g = 1 − e^(−ε) for
-//! `true_strain_load` (else s = 1, g = ε); m = (1 + C_d ε) for `dislocation_damage` times
+//! with s = 1 + ε, g = ln(1+ε) for `constant_load` (else s = 1, g = ε); m = (1 + C_d ε) for
+//! `dislocation_damage` times
 //! (1 + φ0 ε^φ1) for `strain_softening`; k_σ = (σ/σ_ref)^ν for `stress_ductility`;
 //! ε0 = σ/E_L for `loading_strain`; ω_f the constant of `rupture_damage` (else the load's).
 //! Each file holds its constants and its terms; adding one is a file, a line in
@@ -20,7 +20,6 @@ pub mod loading_strain;
 pub mod rupture_damage;
 pub mod strain_softening;
 pub mod stress_ductility;
-pub mod true_strain_load;
 
 use super::khd::{self, coarsening_factor, khd_rate_coarsened, KhdPrepared};
 use super::{ConstantSpec, CreepModel, Load};
@@ -35,7 +34,6 @@ pub const CATALOGUE: &[&str] = &[
     stress_ductility::NAME,
     strain_softening::NAME,
     rupture_damage::NAME,
-    true_strain_load::NAME,
 ];
 
 /// Extra constants of one extension; `None` for an unknown name.
@@ -47,7 +45,6 @@ pub fn extension_constants(name: &str) -> Option<Vec<ConstantSpec>> {
         stress_ductility::NAME => Some(stress_ductility::constants()),
         strain_softening::NAME => Some(strain_softening::constants()),
         rupture_damage::NAME => Some(rupture_damage::constants()),
-        true_strain_load::NAME => Some(vec![]),
         _ => None,
     }
 }
@@ -87,28 +84,16 @@ pub struct KhdExtended {
     pub strain_softening: Option<usize>,
     /// Index of ω_f.
     pub rupture_damage: Option<usize>,
-    /// σ → σ0 e^ε.
-    pub true_strain_load: bool,
 }
 
 impl KhdExtended {
     /// The composed model for `names` (each at most once; unknown names are `Err(name)`), and
     /// its constants: the base model's six, then each extension's in catalogue order.
-    /// `constant_load` and `true_strain_load` are two forms of one effect: together they are
-    /// `Err("true_strain_load with constant_load")`.
     pub fn new(names: &[String]) -> Result<(Self, Vec<ConstantSpec>), String> {
         for n in names {
             if !CATALOGUE.contains(&n.as_str()) {
                 return Err(n.clone());
             }
-        }
-        let has = |n: &str| names.iter().any(|m| m == n);
-        if has(constant_load::NAME) && has(true_strain_load::NAME) {
-            return Err(format!(
-                "{} with {}",
-                true_strain_load::NAME,
-                constant_load::NAME
-            ));
         }
         let mut m = KhdExtended::default();
         let mut constants = khd::constants();
@@ -124,7 +109,6 @@ impl KhdExtended {
                 stress_ductility::NAME => m.stress_ductility = Some(idx),
                 strain_softening::NAME => m.strain_softening = Some(idx),
                 rupture_damage::NAME => m.rupture_damage = Some(idx),
-                true_strain_load::NAME => m.true_strain_load = true,
                 _ => unreachable!("catalogue entry without a term"),
             }
             constants.extend(extension_constants(name).expect("catalogued"));
@@ -212,11 +196,6 @@ impl CreepModel<1> for KhdExtended {
                 constant_load::hardening_strain(eps),
                 constant_load::stress_factor(eps),
             )
-        } else if self.true_strain_load {
-            (
-                true_strain_load::hardening_strain(eps),
-                true_strain_load::stress_factor(eps),
-            )
         } else {
             (eps, S::cst(1.0))
         };
@@ -271,8 +250,6 @@ impl CreepModel<1> for KhdExtended {
         let eps = y[0];
         let g = if self.constant_load {
             constant_load::hardening_strain(eps)
-        } else if self.true_strain_load {
-            true_strain_load::hardening_strain(eps)
         } else {
             eps
         };
