@@ -163,8 +163,8 @@ pub fn initial_guess(
         x[IC] = omega_f / mean_ef;
     }
     // A free damage at rupture (`rupture_damage`) starts at the ω_f that C was guessed with.
-    let names = model.constants();
-    if let Some(j) = names.iter().position(|c| c.name == "omegaf") {
+    let omegaf = super::ext::rupture_damage::constants()[0].name;
+    if let Some(j) = model.constants().iter().position(|c| c.name == omegaf) {
         if !held(j) {
             x[j] = omega_f.clamp(space.lb[j], space.ub[j]);
         }

@@ -8,9 +8,9 @@
 //!   rupture when ω(ε) = ω_f
 //!
 //! with s = 1 + ε, g = ln(1+ε) for `constant_load` (else s = 1, g = ε); m = (1 + C_d ε) for
-//! `dislocation_damage` times
-//! (1 + φ0 ε^φ1) for `strain_softening`; k_σ = (σ/σ_ref)^ν for `stress_ductility`;
-//! ε0 = σ/E_L for `loading_strain`; ω_f the constant of `rupture_damage` (else the load's).
+//! `dislocation_damage` times (1 + φ0 ε^φ1) for `strain_softening`; k_σ = (σ/σ_ref)^ν for
+//! `stress_ductility`; ε0 = σ/E_L for `loading_strain`; ω_f the constant of `rupture_damage`
+//! (else the load's).
 //! Each file holds its constants and its terms; adding one is a file, a line in
 //! [`CATALOGUE`] and its term in [`KhdExtended::rhs`].
 
