@@ -133,9 +133,9 @@ pub enum Command {
         /// Seed of the first set (set i has seed SEED + i).
         #[arg(long, default_value_t = 1)]
         seed: u64,
-        /// Scenario of every set (default: cycle through all): none, constant_load,
+        /// Scenario of every set (default: cycle through the battery's): none, constant_load,
         /// loading_strain, dislocation_damage, stress_ductility, primary_transient,
-        /// mid_life_step.
+        /// mid_life_step, strain_softening, rupture_damage.
         #[arg(long)]
         scenario: Option<String>,
         /// The laboratory: identical specimens, or specimens with their own creep rate and

@@ -240,16 +240,24 @@ fn noisy_fit_is_stable_and_reports_its_error() {
 #[test]
 fn recovers_extension_constants_without_noise() {
     let truth_base = vec![4e-10, 0.12, 0.55, 6e4, 8e-6, 5.0];
-    for (ext, extra, lb, ub, scale) in [
-        ("constant_load", None, 0.0, 0.0, Scale::Linear),
-        ("loading_strain", Some(8e4), 1e3, 1e7, Scale::Log),
-        ("dislocation_damage", Some(6.0), 0.0, 50.0, Scale::Linear),
-        ("stress_ductility", Some(1.5), -10.0, 10.0, Scale::Linear),
+    // (extension, [(true value, lb, ub, scale)] of its constants)
+    let lin = Scale::Linear;
+    for (ext, extra) in [
+        ("constant_load", vec![]),
+        ("loading_strain", vec![(8e4, 1e3, 1e7, Scale::Log)]),
+        ("dislocation_damage", vec![(6.0, 0.0, 50.0, lin)]),
+        ("stress_ductility", vec![(1.5, -10.0, 10.0, lin)]),
+        // φ0 ε^φ1 = 200·ε² doubles the rate at the rupture strain ω_f/C ≈ 0.067.
+        (
+            "strain_softening",
+            vec![(200.0, 0.0, 1000.0, lin), (2.0, 0.5, 8.0, lin)],
+        ),
+        ("rupture_damage", vec![(0.45, 0.05, 0.9, lin)]),
     ] {
         let model = creepfit::model::build("khd", &[ext.to_string()]).unwrap();
         let mut space = space_560();
         let mut truth = truth_base.clone();
-        if let Some(v) = extra {
+        for (v, lb, ub, scale) in extra {
             space.lb.push(lb);
             space.ub.push(ub);
             space.scale.push(scale);

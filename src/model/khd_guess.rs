@@ -162,6 +162,13 @@ pub fn initial_guess(
     if !held(IC) {
         x[IC] = omega_f / mean_ef;
     }
+    // A free damage at rupture (`rupture_damage`) starts at the ω_f that C was guessed with.
+    let omegaf = super::ext::rupture_damage::constants()[0].name;
+    if let Some(j) = model.constants().iter().position(|c| c.name == omegaf) {
+        if !held(j) {
+            x[j] = omega_f.clamp(space.lb[j], space.ub[j]);
+        }
+    }
 
     // 2. Minimum rates → (A, S); then (H*, h) on the primary stages.
     let min_rates: Vec<f64> = curves

@@ -5,15 +5,20 @@
 //!
 //!   dε/dt = m(ε) · A sinh( Bσ s(ε) (1 − H(ε)) / ((1 − Φ(t)) (1 − ω(ε))) )
 //!   H(ε) = H*(1 − exp(−h g(ε)/(σ H*))),  ω(ε) = C k_σ ε,  ε_total = ε0 + ε
+//!   rupture when ω(ε) = ω_f
 //!
-//! with s = 1 + ε, g = ln(1+ε) for `constant_load` (else s = 1, g = ε); m = 1 + C_d ε for
-//! `dislocation_damage`; k_σ = (σ/σ_ref)^ν for `stress_ductility`; ε0 = σ/E_L for
-//! `loading_strain`. Each file holds its constants and its terms; adding one is a file, a
-//! line in [`CATALOGUE`] and its term in [`KhdExtended::rhs`].
+//! with s = 1 + ε, g = ln(1+ε) for `constant_load` (else s = 1, g = ε); m = (1 + C_d ε) for
+//! `dislocation_damage` times (1 + φ0 ε^φ1) for `strain_softening`; k_σ = (σ/σ_ref)^ν for
+//! `stress_ductility`; ε0 = σ/E_L for `loading_strain`; ω_f the constant of `rupture_damage`
+//! (else the load's).
+//! Each file holds its constants and its terms; adding one is a file, a line in
+//! [`CATALOGUE`] and its term in [`KhdExtended::rhs`].
 
 pub mod constant_load;
 pub mod dislocation_damage;
 pub mod loading_strain;
+pub mod rupture_damage;
+pub mod strain_softening;
 pub mod stress_ductility;
 
 use super::khd::{self, coarsening_factor, khd_rate_coarsened, KhdPrepared};
@@ -27,6 +32,8 @@ pub const CATALOGUE: &[&str] = &[
     loading_strain::NAME,
     dislocation_damage::NAME,
     stress_ductility::NAME,
+    strain_softening::NAME,
+    rupture_damage::NAME,
 ];
 
 /// Extra constants of one extension; `None` for an unknown name.
@@ -36,12 +43,15 @@ pub fn extension_constants(name: &str) -> Option<Vec<ConstantSpec>> {
         loading_strain::NAME => Some(loading_strain::constants()),
         dislocation_damage::NAME => Some(dislocation_damage::constants()),
         stress_ductility::NAME => Some(stress_ductility::constants()),
+        strain_softening::NAME => Some(strain_softening::constants()),
+        rupture_damage::NAME => Some(rupture_damage::constants()),
         _ => None,
     }
 }
 
 /// The value of extension constant `constant` that switches its extension off (or, for E_L,
-/// nearly: its upper bound) within [lb, ub]; `None` for a constant of no extension.
+/// nearly: its upper bound) within [lb, ub]; `None` for a constant of no extension and for a
+/// constant that has no such value (φ1 of `strain_softening`: φ0 = 0 switches it off).
 pub fn off_value(constant: &str, lb: f64, ub: f64) -> Option<f64> {
     let has = |c: Vec<ConstantSpec>| c.iter().any(|s| s.name == constant);
     if has(loading_strain::constants()) {
@@ -50,6 +60,10 @@ pub fn off_value(constant: &str, lb: f64, ub: f64) -> Option<f64> {
         Some(dislocation_damage::off_value(lb, ub))
     } else if has(stress_ductility::constants()) {
         Some(stress_ductility::off_value(lb, ub))
+    } else if has(strain_softening::constants()) {
+        strain_softening::off_value(constant, lb, ub)
+    } else if has(rupture_damage::constants()) {
+        Some(rupture_damage::off_value(lb, ub))
     } else {
         None
     }
@@ -66,6 +80,10 @@ pub struct KhdExtended {
     pub dislocation_damage: Option<usize>,
     /// Index of ν.
     pub stress_ductility: Option<usize>,
+    /// Index of φ0 (φ1 follows it).
+    pub strain_softening: Option<usize>,
+    /// Index of ω_f.
+    pub rupture_damage: Option<usize>,
 }
 
 impl KhdExtended {
@@ -89,6 +107,8 @@ impl KhdExtended {
                 loading_strain::NAME => m.loading_strain = Some(idx),
                 dislocation_damage::NAME => m.dislocation_damage = Some(idx),
                 stress_ductility::NAME => m.stress_ductility = Some(idx),
+                strain_softening::NAME => m.strain_softening = Some(idx),
+                rupture_damage::NAME => m.rupture_damage = Some(idx),
                 _ => unreachable!("catalogue entry without a term"),
             }
             constants.extend(extension_constants(name).expect("catalogued"));
@@ -108,6 +128,11 @@ pub struct ExtPrepared<S> {
     pub c_d: S,
     /// C·k_σ: damage per unit creep strain.
     pub c_eff: S,
+    /// φ0, φ1 of the strain softening (0, 0 when off).
+    pub phi0: S,
+    pub phi1: S,
+    /// Damage at rupture: the constant of `rupture_damage`, else the load's ω_f.
+    pub omega_f: S,
 }
 
 impl CreepModel<1> for KhdExtended {
@@ -126,11 +151,22 @@ impl CreepModel<1> for KhdExtended {
             Some(i) => base.c * stress_ductility::ductility_factor(params[i], load.stress_mpa),
             None => base.c,
         };
+        let (phi0, phi1) = match self.strain_softening {
+            Some(i) => (params[i], params[i + 1]),
+            None => (S::cst(0.0), S::cst(0.0)),
+        };
+        let omega_f = match self.rupture_damage {
+            Some(i) => params[i],
+            None => S::cst(load.omega_f),
+        };
         ExtPrepared {
             base,
             eps0,
             c_d,
             c_eff,
+            phi0,
+            phi1,
+            omega_f,
         }
     }
     fn init<S: Scalar>(&self, _p: &ExtPrepared<S>) -> [S; 1] {
@@ -173,8 +209,13 @@ impl CreepModel<1> for KhdExtended {
         };
         match khd_rate_coarsened(&scaled, hard, tp, S::cst(1.0) - p.c_eff * eps) {
             Some(rate) => {
-                dy[0] = if self.dislocation_damage.is_some() {
+                let rate = if self.dislocation_damage.is_some() {
                     rate * dislocation_damage::rate_factor(p.c_d, eps)
+                } else {
+                    rate
+                };
+                dy[0] = if self.strain_softening.is_some() {
+                    rate * strain_softening::rate_factor(p.phi0, p.phi1, eps)
                 } else {
                     rate
                 };
@@ -185,7 +226,7 @@ impl CreepModel<1> for KhdExtended {
     }
     #[inline(always)]
     fn event<S: Scalar>(&self, p: &ExtPrepared<S>, y: &[S; 1]) -> S {
-        p.c_eff * y[0] - p.base.omega_f
+        p.c_eff * y[0] - p.omega_f
     }
     #[inline(always)]
     fn event_rate<S: Scalar>(&self, p: &ExtPrepared<S>, _y: &[S; 1], dy: &[S; 1]) -> S {
