@@ -296,12 +296,13 @@ pub fn read_results(dir: &Path) -> Result<BTreeMap<u64, SetResult>> {
 
 /// Run sets `first_seed .. first_seed + n` (set i gets scenario [`scenario_of`]`(i)`) into
 /// `dir`, skipping those already in `results.jsonl`; returns all results, in seed order.
+/// `observer` is told of every finished set (a step, and a line with its outcome).
 pub fn run_battery(
     dir: &Path,
     first_seed: u64,
     n: usize,
     world: World,
-    progress: bool,
+    observer: &dyn crate::progress::Observer,
 ) -> Result<Vec<SetResult>> {
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     let done = read_results(dir)?;
@@ -325,6 +326,8 @@ pub fn run_battery(
         .collect();
     let counter = std::sync::atomic::AtomicUsize::new(0);
     let total = todo.len();
+    observer.phase("sets", Some(n as u64));
+    observer.resumed((n - total) as u64);
     let fresh: Vec<SetResult> = todo
         .par_iter()
         .map(|&(i, seed)| {
@@ -337,16 +340,15 @@ pub fn run_battery(
                     .map_err(|e| Error::io(&path, e))?;
             }
             let k = counter.fetch_add(1, std::sync::atomic::Ordering::SeqCst) + 1;
-            if progress {
-                eprintln!(
-                    "[{k}/{total}] {} {}: {} (λ = {:.1}, {:.1} s)",
-                    r.name,
-                    r.scenario,
-                    r.error.clone().unwrap_or_else(|| r.outcome()),
-                    r.lambda,
-                    r.wall_s
-                );
-            }
+            observer.note(&format!(
+                "[{k}/{total}] {} {}: {} (λ = {:.1}, {:.1} s)",
+                r.name,
+                r.scenario,
+                r.error.clone().unwrap_or_else(|| r.outcome()),
+                r.lambda,
+                r.wall_s
+            ));
+            observer.advance(1);
             Ok(r)
         })
         .collect::<Result<_>>()?;

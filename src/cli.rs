@@ -8,9 +8,10 @@ use clap::{Parser, Subcommand};
 use crate::config::DiagnoseOverrides;
 use crate::config::{Overrides, RunConfig, RunOptions, StartChoice};
 use crate::data::Dataset;
-use crate::diagnose::diagnose;
+use crate::journal::Journal;
+use crate::progress::{Bars, Observer, StopWhen};
 use crate::error::{Error, Result};
-use crate::fit::{run_fit, FitSettings};
+use crate::fit::FitSettings;
 use crate::model::Load;
 use crate::objective::Objective;
 use crate::ode::OdeOptions;
@@ -46,6 +47,9 @@ pub enum Command {
         /// One lifetime weight w for every curve instead of the configured w_grid/w_sets.
         #[arg(long)]
         w: Option<f64>,
+        /// No progress bars (drawn on stderr only when it is a terminal).
+        #[arg(long, short)]
+        quiet: bool,
     },
     /// Multistart: Latin-hypercube starts × w candidates, a local fit from each, in parallel.
     Sweep {
@@ -71,6 +75,9 @@ pub enum Command {
         /// Stop after this many new fits, as if interrupted (for tests of resumption).
         #[arg(long, hide = true)]
         stop_after: Option<usize>,
+        /// No progress bars (drawn on stderr only when it is a terminal).
+        #[arg(long, short)]
+        quiet: bool,
     },
     /// Combine the journals of sweep shards into the unsharded result.
     Merge {
@@ -106,6 +113,13 @@ pub enum Command {
         /// Worker threads (default: all cores).
         #[arg(long)]
         threads: Option<usize>,
+        /// No progress bars (drawn on stderr only when it is a terminal).
+        #[arg(long, short)]
+        quiet: bool,
+        /// Stop after this many new journal records, as if interrupted (for tests of
+        /// resumption).
+        #[arg(long, hide = true)]
+        stop_after: Option<usize>,
     },
     /// How sure the constants and predictions are: profile likelihoods, intervals,
     /// identifiability, well-determined combinations, prediction intervals.
@@ -122,6 +136,13 @@ pub enum Command {
         /// Worker threads (default: all cores).
         #[arg(long)]
         threads: Option<usize>,
+        /// No progress bars (drawn on stderr only when it is a terminal).
+        #[arg(long, short)]
+        quiet: bool,
+        /// Stop after this many new journal records, as if interrupted (for tests of
+        /// resumption).
+        #[arg(long, hide = true)]
+        stop_after: Option<usize>,
     },
     /// Generate synthetic data sets with known hidden effects (input formats + truth.json).
     Synth {
@@ -160,6 +181,9 @@ pub enum Command {
         /// The laboratory the sets come from (see `synth --world`).
         #[arg(long, value_enum, default_value_t = crate::synth::World::Identical)]
         world: crate::synth::World,
+        /// No progress bar and no line per set.
+        #[arg(long, short)]
+        quiet: bool,
     },
     /// Predict at untested conditions: curves, rupture time, rupture strain and minimum
     /// creep rate, beside the classical baselines (Larson–Miller, Orr–Sherby–Dorn,
@@ -181,6 +205,9 @@ pub enum Command {
         /// Output folder (default results/<name>/predict/).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// No progress bars (drawn on stderr only when it is a terminal).
+        #[arg(long, short)]
+        quiet: bool,
     },
     /// Leave one temperature out: fit on the others, predict the held-out tests' rupture
     /// times and curves, and compare with the classical baselines (Larson–Miller,
@@ -206,6 +233,13 @@ pub enum Command {
         /// Output folder (default results/<name>/holdout-<T>C/).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// No progress bars (drawn on stderr only when it is a terminal).
+        #[arg(long, short)]
+        quiet: bool,
+        /// Stop after this many new journal records, as if interrupted (for tests of
+        /// resumption).
+        #[arg(long, hide = true)]
+        stop_after: Option<usize>,
     },
     /// Simulate the configured tests with given constants (dense curves, ruptures).
     Simulate {
@@ -244,6 +278,20 @@ fn out_only(out: Option<PathBuf>) -> Overrides {
     }
 }
 
+/// Command-line settings of a long command: where the outputs go, whether progress is drawn
+/// (not under `--quiet`), and the test-only stop.
+fn long_run(out: Option<PathBuf>, quiet: bool, stop_after: Option<usize>) -> Overrides {
+    Overrides {
+        run: RunOptions {
+            out,
+            progress: !quiet,
+            stop_after,
+            ..RunOptions::default()
+        },
+        ..Overrides::default()
+    }
+}
+
 /// `Ok` if every plot was written, else the error saying the numbers are in `out`.
 fn plots_done(out: &Path, failures: Vec<String>) -> Result<()> {
     if failures.is_empty() {
@@ -274,11 +322,12 @@ pub fn run(cli: Cli) -> Result<()> {
             out,
             start,
             w,
+            quiet,
         } => {
             let cli = Overrides {
                 w,
                 fit_starts: Some(start),
-                ..out_only(out)
+                ..long_run(out, quiet, None)
             };
             fit(&config, &cli)
         }
@@ -294,6 +343,7 @@ pub fn run(cli: Cli) -> Result<()> {
             at,
             intervals,
             out,
+            quiet,
         } => {
             let at = at
                 .map(|s| {
@@ -304,7 +354,7 @@ pub fn run(cli: Cli) -> Result<()> {
             let cli = Overrides {
                 predict_at: at,
                 predict_intervals: intervals.then_some(true),
-                ..out_only(out)
+                ..long_run(out, quiet, None)
             };
             predict_cmd(&config, &constants, &cli)
         }
@@ -315,12 +365,14 @@ pub fn run(cli: Cli) -> Result<()> {
             seed,
             intervals,
             out,
+            quiet,
+            stop_after,
         } => {
             let cli = Overrides {
                 starts,
                 seed,
                 predict_intervals: intervals.then_some(true),
-                ..out_only(out)
+                ..long_run(out, quiet, stop_after)
             };
             crate::holdout::holdout_cmd(&config, temperature, &cli)
         }
@@ -332,6 +384,7 @@ pub fn run(cli: Cli) -> Result<()> {
             shard,
             out,
             stop_after,
+            quiet,
         } => {
             let auto = shard == Some(sweep::ShardArg::Auto);
             let shard = match shard {
@@ -348,7 +401,7 @@ pub fn run(cli: Cli) -> Result<()> {
                     threads,
                     shard,
                     stop_after,
-                    progress: true,
+                    progress: !quiet,
                 },
                 ..Overrides::default()
             };
@@ -375,21 +428,19 @@ pub fn run(cli: Cli) -> Result<()> {
             bootstrap,
             alpha,
             threads,
+            quiet,
+            stop_after,
         } => {
-            let cli = Overrides {
+            let mut cli = Overrides {
                 diagnose: DiagnoseOverrides {
                     starts,
                     seed,
                     bootstrap,
                     alpha,
                 },
-                run: RunOptions {
-                    out,
-                    threads,
-                    ..RunOptions::default()
-                },
-                ..Overrides::default()
+                ..long_run(out, quiet, stop_after)
             };
+            cli.run.threads = threads;
             diagnose_cmd(&config, &cli)
         }
         Command::Profile {
@@ -397,15 +448,11 @@ pub fn run(cli: Cli) -> Result<()> {
             constants,
             out,
             threads,
+            quiet,
+            stop_after,
         } => {
-            let cli = Overrides {
-                run: RunOptions {
-                    out,
-                    threads,
-                    ..RunOptions::default()
-                },
-                ..Overrides::default()
-            };
+            let mut cli = long_run(out, quiet, stop_after);
+            cli.run.threads = threads;
             let (cfg, data) = load(&config, &cli)?;
             with_threads(cfg.run.threads, || {
                 crate::uncertainty::report::profile_command(&cfg, &data, constants.as_deref())
@@ -424,6 +471,7 @@ pub fn run(cli: Cli) -> Result<()> {
             seed,
             threads,
             world,
+            quiet,
         } => with_threads(threads, || {
             // One writer, one battery per folder: the lock, then the identity (refused before
             // anything changes), then the folder is this run's (what it resumes from kept).
@@ -440,7 +488,7 @@ pub fn run(cli: Cli) -> Result<()> {
                 f == BATTERY_IDENTITY || f == "results.jsonl" || f.starts_with("sets/")
             })?;
             crate::output::record(&out.join(BATTERY_IDENTITY));
-            let outcome = battery_into(&out, sets, seed, world);
+            let outcome = battery_into(&out, sets, seed, world, quiet);
             folder.finish(outcome)
         }),
     }
@@ -451,7 +499,13 @@ pub const BATTERY_IDENTITY: &str = "battery.json";
 
 /// `battery`'s computation and outputs into `out` (its generated sets and the appended
 /// `results.jsonl` are recorded in the manifest as written by the run).
-fn battery_into(out: &Path, sets: usize, seed: u64, world: crate::synth::World) -> Result<()> {
+fn battery_into(
+    out: &Path,
+    sets: usize,
+    seed: u64,
+    world: crate::synth::World,
+    quiet: bool,
+) -> Result<()> {
     let out = out.to_path_buf();
     let record_all = |out: &Path| {
         crate::output::record(&out.join("results.jsonl"));
@@ -467,7 +521,9 @@ fn battery_into(out: &Path, sets: usize, seed: u64, world: crate::synth::World) 
         }
         walk(&out.join("sets"));
     };
-    let results = crate::battery::run_battery(&out, seed, sets, world, true);
+    let bars = Bars::new(quiet);
+    let results = crate::battery::run_battery(&out, seed, sets, world, &bars);
+    bars.clear();
     record_all(&out);
     let results = results?;
     let r = crate::battery::write_reports(&out, &results, seed)?;
@@ -525,17 +581,107 @@ fn diagnose_cmd(config: &Path, cli: &Overrides) -> Result<()> {
         ));
     }
     let out = cfg.out_dir("diagnose");
-    let mut folder = RunFolder::begin(&out, "diagnose")?;
+    let (mut folder, journal) =
+        take_with_journal(&out, "diagnose", &crate::diagnose::hooks::identity(&cfg))?;
     note_data(&mut folder, &data);
-    folder.finish(diagnose_into(&cfg, &data, &out))
+    let bars = Bars::new(!cfg.run.progress);
+    let stop = stop_after(&bars, &journal, cfg.run.stop_after);
+    let hooks = crate::diagnose::Hooks {
+        observer: &stop,
+        journal: Some(&journal),
+    };
+    let outcome = diagnose_into(&cfg, &data, &out, &hooks, &bars);
+    folder.finish(outcome)
 }
 
+/// Take the output folder `out` over for a resumable run of `command` with run identity `id`:
+/// the lock, then the journal (a folder of another run is refused before anything in it
+/// changes), then the folder is this run's, its journal kept to resume from.
+pub(crate) fn take_with_journal(
+    out: &Path,
+    command: &str,
+    id: &serde_json::Value,
+) -> Result<(RunFolder, Journal)> {
+    let lock = crate::output::lock_folder(out)?;
+    let journal = Journal::open(out, id)?;
+    let folder = RunFolder::take_over(lock, command, &|f| f == crate::journal::FILE)?;
+    crate::output::record(journal.path());
+    if journal.discarded() > 0 {
+        eprintln!(
+            "warning: {}: {} records of another creepfit build discarded (computed again)",
+            journal.path().display(),
+            journal.discarded()
+        );
+    }
+    if journal.found() > 0 {
+        eprintln!(
+            "{}: resuming from {} journaled records",
+            journal.path().display(),
+            journal.found()
+        );
+    }
+    Ok((folder, journal))
+}
+
+/// `observer`, asked to stop once `journal` holds `limit` new records (`--stop-after`).
+pub(crate) fn stop_after<'a>(
+    observer: &'a dyn Observer,
+    journal: &'a Journal,
+    limit: Option<usize>,
+) -> StopWhen<'a> {
+    StopWhen::new(observer, move || {
+        limit.is_some_and(|k| journal.written() >= k as u64)
+    })
+}
+
+/// Write `timings.json` into `out`: how long this run took, what it resumed. Timings are kept
+/// out of the result files, which are then the same for an interrupted and resumed run as for
+/// an uninterrupted one.
+pub(crate) fn write_timings(
+    out: &Path,
+    command: &str,
+    journal: Option<&Journal>,
+    timings: serde_json::Value,
+) -> Result<()> {
+    let mut t = serde_json::json!({ "command": command });
+    if let Some(j) = journal {
+        t["journal_records_resumed"] = j.found().into();
+        t["journal_records_written"] = j.written().into();
+    }
+    if let (Some(m), serde_json::Value::Object(more)) = (t.as_object_mut(), timings) {
+        m.extend(more);
+    }
+    write_text(
+        &out.join(TIMINGS_FILE),
+        &serde_json::to_string_pretty(&t).expect("JSON of plain values"),
+    )
+}
+
+/// The file of a run's wall times (not a result: it differs between runs of one computation).
+pub const TIMINGS_FILE: &str = "timings.json";
+
 /// `diagnose`'s computation and outputs into `out`.
-fn diagnose_into(cfg: &RunConfig, data: &Dataset, out: &Path) -> Result<()> {
-    let d = with_threads(cfg.run.threads, || diagnose(cfg, data))?;
+fn diagnose_into(
+    cfg: &RunConfig,
+    data: &Dataset,
+    out: &Path,
+    hooks: &crate::diagnose::Hooks,
+    bars: &Bars,
+) -> Result<()> {
+    let d = with_threads(cfg.run.threads, || {
+        crate::diagnose::diagnose_observed(cfg, data, &cfg.diagnose, hooks)
+    });
+    bars.clear();
+    let d = d?;
     write_text(
         &out.join("diagnosis.json"),
         &serde_json::to_string_pretty(&d).expect("JSON of plain values"),
+    )?;
+    write_timings(
+        out,
+        "diagnose",
+        hooks.journal,
+        serde_json::json!({ "wall_s": d.wall_s, "phase_s": d.phase_s }),
     )?;
     let md = crate::diagnose::report::report_md(cfg, &d);
     write_text(&out.join("report.md"), &md)?;
@@ -836,7 +982,14 @@ fn fit(config: &Path, cli: &Overrides) -> Result<()> {
 /// `fit`'s computation and outputs into `out`.
 fn fit_into(cfg: &RunConfig, data: &Dataset, out: &Path) -> Result<()> {
     let out = out.to_path_buf();
-    let run = run_fit(cfg, data)?;
+    let bars = Bars::new(!cfg.run.progress);
+    let hooks = crate::progress::Hooks {
+        observer: &bars,
+        journal: None,
+    };
+    let run = crate::fit::run_fit_observed(cfg, data, 0, &hooks);
+    bars.clear();
+    let run = run?;
     let best = &run.fits[run.best];
     let curves = &data.curves;
     tables::write_constants(

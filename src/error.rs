@@ -50,6 +50,10 @@ pub enum Error {
     /// The diagnosis could not be carried out.
     #[error("diagnose: {0}")]
     Diagnose(String),
+    /// A resumable run stopped before it finished (asked to, by `--stop-after`); what it
+    /// finished is journaled and a rerun resumes from it.
+    #[error("interrupted: {0}")]
+    Interrupted(String),
 }
 
 /// Shorthand for results of this crate.

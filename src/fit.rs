@@ -441,6 +441,21 @@ pub fn run_fit(cfg: &RunConfig, data: &Dataset) -> Result<FitRun> {
 /// the guess (drawn from `cfg.sweep.seed`, as a sweep's): a global search in one command, for
 /// joint calibrations whose guess can lie in a poor basin (`holdout`).
 pub fn run_fit_multistart(cfg: &RunConfig, data: &Dataset, lhs: usize) -> Result<FitRun> {
+    run_fit_observed(cfg, data, lhs, &crate::progress::Hooks::default())
+}
+
+/// [`run_fit_multistart`] telling `hooks.observer` of every finished local fit (phase `local
+/// fits`), each journaled in `hooks.journal` as it finishes and read back from it when a
+/// rerun finds it there (keyed by its index, start and weights). When the observer asks to
+/// stop, the fits not yet started are skipped and the run ends with [`Error::Interrupted`]
+/// (the finished ones are journaled).
+pub fn run_fit_observed(
+    cfg: &RunConfig,
+    data: &Dataset,
+    lhs: usize,
+    hooks: &crate::progress::Hooks,
+) -> Result<FitRun> {
+    let (observer, journal) = (hooks.observer, hooks.journal);
     let t0 = Instant::now();
     let model = cfg.build_model()?;
     let space = param_space(cfg);
@@ -486,12 +501,54 @@ pub fn run_fit_multistart(cfg: &RunConfig, data: &Dataset, lhs: usize) -> Result
         .iter()
         .flat_map(|s| ws.iter().map(move |w| (s, w)))
         .collect();
-    let mut fits: Vec<LocalFit> = jobs
+    let key = |k: usize, label: &str, start: &[f64], w: &[f64]| {
+        format!(
+            "fit/{k}/{}",
+            crate::journal::debug_hash(&(label, start, w))
+        )
+    };
+    observer.phase("local fits", Some(jobs.len() as u64));
+    if let Some(j) = journal {
+        let found = jobs
+            .iter()
+            .enumerate()
+            .filter(|(k, ((l, s), w))| j.contains(&key(*k, l, s, w)))
+            .count();
+        observer.resumed(found as u64);
+    }
+    let write_error: std::sync::Mutex<Option<Error>> = std::sync::Mutex::new(None);
+    let fits: Vec<Option<LocalFit>> = jobs
         .par_iter()
-        .map(|((label, start), w)| {
-            local_fit(model.as_ref(), curves, &space, w, start, label, &settings)
+        .enumerate()
+        .map(|(k, ((label, start), w))| {
+            let key = key(k, label, start, w);
+            if let Some(r) = journal.and_then(|j| j.get::<LocalFitRecord>(&key)) {
+                return Some(r.into());
+            }
+            if observer.cancelled() || write_error.lock().is_ok_and(|e| e.is_some()) {
+                return None;
+            }
+            let f = local_fit(model.as_ref(), curves, &space, w, start, label, &settings);
+            if let Some(j) = journal {
+                if let Err(e) = j.put(&key, &LocalFitRecord::from(&f)) {
+                    write_error
+                        .lock()
+                        .unwrap_or_else(|e| e.into_inner())
+                        .get_or_insert(e);
+                }
+            }
+            observer.advance(1);
+            Some(f)
         })
         .collect();
+    if let Some(e) = write_error.into_inner().unwrap_or_else(|e| e.into_inner()) {
+        return Err(e);
+    }
+    let done = fits.iter().filter(|f| f.is_some()).count();
+    if done < fits.len() {
+        return Err(hooks.interrupted(&format!("local fits ({done} of {} done)", fits.len())));
+    }
+    let mut fits: Vec<LocalFit> = fits.into_iter().flatten().collect();
     let used_min_rate = curves.iter().all(|c| c.min_rate_measured.is_some());
     let best = match settings.kind {
         ObjectiveKind::Eq8 => choose_best(&fits, used_min_rate),
@@ -527,6 +584,131 @@ pub fn run_fit_multistart(cfg: &RunConfig, data: &Dataset, lhs: usize) -> Result
         settings,
         wall_s: t0.elapsed().as_secs_f64(),
     })
+}
+
+/// A [`LocalFit`] as a journal record: every field, numbers exact
+/// ([`crate::journal::exact`]), so that a fit read back is the fit that was computed.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct LocalFitRecord {
+    start_label: String,
+    #[serde(with = "crate::journal::exact::vec")]
+    start: Vec<f64>,
+    #[serde(with = "crate::journal::exact::vec")]
+    w: Vec<f64>,
+    #[serde(with = "crate::journal::exact::vec")]
+    params: Vec<f64>,
+    #[serde(with = "crate::journal::exact::vec")]
+    lm_x: Vec<f64>,
+    #[serde(with = "crate::journal::exact")]
+    lm_objective: f64,
+    #[serde(with = "crate::journal::exact::vec")]
+    lm_residuals: Vec<f64>,
+    lm_iterations: usize,
+    lm_evaluations: usize,
+    lm_termination: Termination,
+    lm_failure: Option<String>,
+    #[serde(with = "crate::journal::exact")]
+    lm_lambda: f64,
+    #[serde(with = "crate::journal::exact")]
+    eval_objective: f64,
+    #[serde(with = "crate::journal::exact")]
+    eval_norm_residual: f64,
+    eval_curves: Vec<CurveRecord>,
+    #[serde(with = "crate::journal::exact::vec")]
+    lifetime_err_pct: Vec<f64>,
+    #[serde(with = "crate::journal::exact::vec")]
+    min_rate_err_pct: Vec<f64>,
+    #[serde(with = "crate::journal::exact")]
+    wall_s: f64,
+}
+
+/// A [`crate::objective::CurvePrediction`] as part of a [`LocalFitRecord`].
+#[derive(serde::Serialize, serde::Deserialize)]
+struct CurveRecord {
+    outcome: crate::ode::Outcome,
+    #[serde(with = "crate::journal::exact")]
+    rupture_time_h: f64,
+    #[serde(with = "crate::journal::exact")]
+    rupture_strain: f64,
+    #[serde(with = "crate::journal::exact")]
+    min_rate: f64,
+    #[serde(with = "crate::journal::exact::vec")]
+    strain: Vec<f64>,
+}
+
+impl From<&LocalFit> for LocalFitRecord {
+    fn from(f: &LocalFit) -> Self {
+        LocalFitRecord {
+            start_label: f.start_label.clone(),
+            start: f.start.clone(),
+            w: f.w.clone(),
+            params: f.params.clone(),
+            lm_x: f.lm.x.clone(),
+            lm_objective: f.lm.objective,
+            lm_residuals: f.lm.residuals.clone(),
+            lm_iterations: f.lm.iterations,
+            lm_evaluations: f.lm.evaluations,
+            lm_termination: f.lm.termination,
+            lm_failure: f.lm.failure.clone(),
+            lm_lambda: f.lm.lambda,
+            eval_objective: f.eval.objective,
+            eval_norm_residual: f.eval.norm_residual,
+            eval_curves: f
+                .eval
+                .curves
+                .iter()
+                .map(|c| CurveRecord {
+                    outcome: c.outcome,
+                    rupture_time_h: c.rupture_time_h,
+                    rupture_strain: c.rupture_strain,
+                    min_rate: c.min_rate,
+                    strain: c.strain.clone(),
+                })
+                .collect(),
+            lifetime_err_pct: f.lifetime_err_pct.clone(),
+            min_rate_err_pct: f.min_rate_err_pct.clone(),
+            wall_s: f.wall_s,
+        }
+    }
+}
+
+impl From<LocalFitRecord> for LocalFit {
+    fn from(r: LocalFitRecord) -> Self {
+        LocalFit {
+            start_label: r.start_label,
+            start: r.start,
+            w: r.w,
+            params: r.params,
+            lm: LmReport {
+                x: r.lm_x,
+                objective: r.lm_objective,
+                residuals: r.lm_residuals,
+                iterations: r.lm_iterations,
+                evaluations: r.lm_evaluations,
+                termination: r.lm_termination,
+                failure: r.lm_failure,
+                lambda: r.lm_lambda,
+            },
+            eval: Evaluation {
+                objective: r.eval_objective,
+                norm_residual: r.eval_norm_residual,
+                curves: r
+                    .eval_curves
+                    .into_iter()
+                    .map(|c| crate::objective::CurvePrediction {
+                        outcome: c.outcome,
+                        rupture_time_h: c.rupture_time_h,
+                        rupture_strain: c.rupture_strain,
+                        min_rate: c.min_rate,
+                        strain: c.strain,
+                    })
+                    .collect(),
+            },
+            lifetime_err_pct: r.lifetime_err_pct,
+            min_rate_err_pct: r.min_rate_err_pct,
+            wall_s: r.wall_s,
+        }
+    }
 }
 
 #[cfg(test)]

@@ -21,12 +21,11 @@ use crate::baseline::{self, Baseline, BaselineKind, BaselineSettings};
 use crate::config::{Overrides, RunConfig};
 use crate::data::{Curve, Dataset};
 use crate::error::{Error, Result};
-use crate::fit::{run_fit_multistart, FitRun};
+use crate::fit::{run_fit_observed, FitRun};
 use crate::lmp::LarsonMiller;
 use crate::model::Load;
 use crate::objective::{mean_abs, CurvePrediction, Objective};
 use crate::ode::Outcome;
-use crate::output::RunFolder;
 use crate::report::diagrams::Diagrams;
 use crate::report::plot::{
     plot_creep_curves, plot_xy, AxisScale, Dash, MarkerShape, Rgb, XyAxes, XyGroup,
@@ -316,6 +315,25 @@ pub fn holdout(
     temperature_c: f64,
     intervals: bool,
 ) -> Result<Holdout> {
+    holdout_observed(
+        cfg,
+        data,
+        temperature_c,
+        intervals,
+        &crate::progress::Hooks::default(),
+    )
+}
+
+/// [`holdout`] telling `hooks.observer` of its phases (the training fits, then the
+/// intervals), the training fits journaled in `hooks.journal` and resumed from it
+/// ([`crate::fit::run_fit_observed`]).
+pub fn holdout_observed(
+    cfg: &RunConfig,
+    data: &Dataset,
+    temperature_c: f64,
+    intervals: bool,
+    hooks: &crate::progress::Hooks,
+) -> Result<Holdout> {
     if !cfg.has_laws() {
         return Err(Error::config(
             &cfg.path,
@@ -346,7 +364,7 @@ pub fn holdout(
         warnings: Vec::new(),
         dropped: Vec::new(),
     };
-    let fit = run_fit_multistart(cfg, &train_data, cfg.sweep.starts)?;
+    let fit = run_fit_observed(cfg, &train_data, cfg.sweep.starts, hooks)?;
     let best = &fit.fits[fit.best];
     let lmp = LarsonMiller::fit_curves(&train_data.curves, cfg.predict.lmp_degree)
         .map_err(|e| e.to_string());
@@ -379,12 +397,16 @@ pub fn holdout(
             .iter()
             .map(|&s| Load::new(s, temperature_c, cfg.objective.omega_f))
             .collect();
-        let iv = crate::uncertainty::predict::intervals_at(
+        let iv = crate::uncertainty::predict::intervals_at_observed(
             cfg,
             fit.model.as_ref(),
             &train_data,
             &best.params,
             &loads,
+            &crate::progress::Hooks {
+                journal: None,
+                ..*hooks
+            },
         )?;
         intervals_refit = Some(iv.refit);
         iv.conditions
@@ -602,14 +624,45 @@ pub const CURVE_COLUMNS: [&str; 3] = ["predicted_life_pct", "curve_outcome", "cu
 pub fn holdout_cmd(config: &Path, temperature_c: f64, cli: &Overrides) -> Result<()> {
     let (cfg, data) = crate::cli::load(config, cli)?;
     let out = cfg.out_dir(&format!("holdout-{temperature_c}C"));
-    let mut folder = RunFolder::begin(&out, "holdout")?;
+    let (mut folder, journal) =
+        crate::cli::take_with_journal(&out, "holdout", &identity(&cfg, temperature_c))?;
     crate::cli::note_data(&mut folder, &data);
-    folder.finish(holdout_into(&cfg, &data, temperature_c, &out))
+    let bars = crate::progress::Bars::new(!cfg.run.progress);
+    let stop = crate::cli::stop_after(&bars, &journal, cfg.run.stop_after);
+    let hooks = crate::progress::Hooks {
+        observer: &stop,
+        journal: Some(&journal),
+    };
+    let t0 = std::time::Instant::now();
+    let h = holdout_observed(&cfg, &data, temperature_c, cfg.predict.intervals, &hooks);
+    bars.clear();
+    let outcome = h.and_then(|h| {
+        crate::cli::write_timings(
+            &out,
+            "holdout",
+            Some(&journal),
+            json!({
+                "wall_s": t0.elapsed().as_secs_f64(),
+                "training_fit_s": h.fit.wall_s,
+            }),
+        )?;
+        holdout_into(&cfg, &data, &h, &out)
+    });
+    folder.finish(outcome)
 }
 
-/// `holdout`'s computation and outputs into `out`.
-fn holdout_into(cfg: &RunConfig, data: &Dataset, temperature_c: f64, out: &Path) -> Result<()> {
-    let h = holdout(cfg, data, temperature_c, cfg.predict.intervals)?;
+/// The run identity of `holdout` of `cfg` (bound to its data) at `temperature_c` kept in its
+/// journal: the configuration's ([`crate::identity::identity`]: every setting of the training
+/// fits, the data's hash, the crate version), the command and the held-out temperature.
+pub fn identity(cfg: &RunConfig, temperature_c: f64) -> serde_json::Value {
+    let mut id = crate::identity::identity(cfg);
+    id["command"] = "holdout".into();
+    id["held_out_temperature_C"] = temperature_c.into();
+    id
+}
+
+/// `holdout`'s outputs into `out`.
+fn holdout_into(cfg: &RunConfig, data: &Dataset, h: &Holdout, out: &Path) -> Result<()> {
     let with_intervals = h.tests.iter().any(|t| t.interval.is_some());
     let best = &h.fit.fits[h.fit.best];
     let specimens = h.tests.iter().any(|t| t.specimen.is_some());
@@ -731,7 +784,6 @@ fn holdout_into(cfg: &RunConfig, data: &Dataset, temperature_c: f64, out: &Path)
             Ok(l) => json!(l),
             Err(e) => json!({"error": e}),
         },
-        "wall_s": h.fit.wall_s,
         "model_tests_predicted": h.model_score().1,
         "baselines": baselines,
         "one_to_beat": one_to_beat,

@@ -21,6 +21,7 @@
 //!    candidate as the out-of-sample check — reported, never a veto.
 
 pub mod bootstrap;
+pub mod hooks;
 pub mod decide;
 pub mod gof;
 pub mod report;
@@ -46,6 +47,7 @@ use crate::objective::{mean_abs, ParamSpace};
 use crate::sweep::latin_hypercube;
 pub use decide::Verdict;
 use decide::{ExtensionEvidence, SelectInput};
+pub use hooks::Hooks;
 use signature::{curve_signature, findings, CurveSignature, Finding};
 
 /// Separates the random streams of the bootstraps of one run.
@@ -592,10 +594,13 @@ pub struct Diagnosis {
     pub decision: Vec<String>,
     /// The settings used.
     pub settings: DiagnoseConfig,
-    /// Wall time, s.
+    /// Wall time, s (not in `diagnosis.json`, whose content does not depend on how the run
+    /// went: `timings.json`).
+    #[serde(skip)]
     pub wall_s: f64,
     /// Wall time per phase, s: fits on the data, null bootstrap, the cause's
-    /// goodness-of-fit bootstrap, leave-one-stress-out.
+    /// goodness-of-fit bootstrap, leave-one-stress-out (`timings.json`).
+    #[serde(skip)]
     pub phase_s: PhaseTimes,
 }
 
@@ -782,7 +787,8 @@ fn gof_bootstrap(
     settings: &FitSettings,
     ml: &MlOptions,
     dc: &DiagnoseConfig,
-) -> Vec<GofTest> {
+    hooks: &Hooks,
+) -> Result<Vec<GofTest>> {
     let gs: Vec<gof::Gof> = gof::SHAPES
         .iter()
         .map(|sh| {
@@ -796,7 +802,9 @@ fn gof_bootstrap(
         })
         .collect();
     let observed: Vec<f64> = gs.iter().map(|g| g.statistic).collect();
-    let (reps, _) = bootstrap::sequential(&observed, dc.bootstrap, |b| {
+    let key = hooks::model_key(&(&spec.name, fit, basins));
+    let phase = "cause's goodness-of-fit bootstrap";
+    let (reps, _) = hooks.sequential(phase, GOF_STREAM, &key, &observed, dc.bootstrap, |b| {
         let mut rng = bootstrap::replicate_rng(dc.seed, GOF_STREAM, b);
         let data = bootstrap::replicate_hier(curves, spec.model.as_ref(), fit, settings, &mut rng);
         let mut st = basins.to_vec();
@@ -823,7 +831,7 @@ fn gof_bootstrap(
                 })
             })
             .collect()
-    });
+    })?;
     let p: Vec<f64> = gs
         .iter()
         .enumerate()
@@ -833,7 +841,8 @@ fn gof_bootstrap(
         })
         .collect();
     let (_, adj) = decide::holm(&p, dc.alpha);
-    gs.into_iter()
+    Ok(gs
+        .into_iter()
         .enumerate()
         .map(|(k, g)| GofTest {
             model: spec.name.clone(),
@@ -842,7 +851,7 @@ fn gof_bootstrap(
             p_holm: Some(adj[k]),
             replicates: reps.len(),
         })
-        .collect()
+        .collect())
 }
 
 /// `c` with at most `max_points` points: the first point as it is, the others in
@@ -922,6 +931,17 @@ pub fn diagnose(cfg: &RunConfig, data: &Dataset) -> Result<Diagnosis> {
 
 /// Diagnose with explicit settings `dc` (the command line's overrides applied).
 pub fn diagnose_with(cfg: &RunConfig, data: &Dataset, dc: &DiagnoseConfig) -> Result<Diagnosis> {
+    diagnose_observed(cfg, data, dc, &Hooks::default())
+}
+
+/// [`diagnose_with`] reporting its phases to `hooks.observer` (and stopping when it asks
+/// to), its bootstrap replicates journaled in (and resumed from) `hooks.journal`.
+pub fn diagnose_observed(
+    cfg: &RunConfig,
+    data: &Dataset,
+    dc: &DiagnoseConfig,
+    hooks: &Hooks,
+) -> Result<Diagnosis> {
     dc.validate()
         .map_err(|m| Error::Diagnose(format!("{}: {}", m.field, m.what)))?;
     let t0 = Instant::now();
@@ -979,7 +999,9 @@ pub fn diagnose_with(cfg: &RunConfig, data: &Dataset, dc: &DiagnoseConfig) -> Re
     let mut failed_starts = Vec::with_capacity(specs.len());
     let mut start_sets: Vec<Vec<Vec<f64>>> = Vec::with_capacity(specs.len());
     let mut basins: Vec<Vec<Vec<f64>>> = Vec::with_capacity(specs.len());
+    hooks.phase("fits on the data", specs.len());
     for (i, spec) in specs.iter().enumerate() {
+        hooks.check("fits on the data")?;
         let mut starts = vec![spec.start_from_base(&khd_names, &guess.params)];
         if i > 0 {
             if let Some(b) = &fits[0] {
@@ -1053,6 +1075,7 @@ pub fn diagnose_with(cfg: &RunConfig, data: &Dataset, dc: &DiagnoseConfig) -> Re
         fits.push(best);
         failed_starts.push(failed);
         start_sets.push(starts);
+        hooks.step();
     }
     let mut phase = PhaseTimes {
         fits: t0.elapsed().as_secs_f64(),
@@ -1095,9 +1118,15 @@ pub fn diagnose_with(cfg: &RunConfig, data: &Dataset, dc: &DiagnoseConfig) -> Re
     };
     let mut observed = lr_obs.clone();
     observed.extend(gof_obs.iter().map(|g| g.statistic));
-    let (reps, stopped_early) = bootstrap::sequential(&observed, dc.bootstrap, |b| {
-        null_replicate(&specs, &fits, &basins, curves, &warm, &ml, dc, b)
-    });
+    let key = hooks::model_key(&(&fits, &basins));
+    let (reps, stopped_early) = hooks.sequential(
+        "null bootstrap",
+        NULL_STREAM,
+        &key,
+        &observed,
+        dc.bootstrap,
+        |b| null_replicate(&specs, &fits, &basins, curves, &warm, &ml, dc, b),
+    )?;
     phase.null_bootstrap = t0.elapsed().as_secs_f64() - phase.fits;
     let failed_base_refits = reps.iter().filter(|r| r[n_ext + ng] > 0.0).count();
     let col = |k: usize| -> Vec<f64> { reps.iter().map(|r| r[k]).collect() };
@@ -1137,8 +1166,8 @@ pub fn diagnose_with(cfg: &RunConfig, data: &Dataset, dc: &DiagnoseConfig) -> Re
         spread,
     });
     // Stage 2: the best extension's own goodness of fit.
-    let cause_gof: Vec<GofTest> = sel.best.map_or(vec![], |b| {
-        gof_bootstrap(
+    let cause_gof: Vec<GofTest> = match sel.best {
+        Some(b) => gof_bootstrap(
             &specs[b + 1],
             fits[b + 1]
                 .as_ref()
@@ -1148,26 +1177,36 @@ pub fn diagnose_with(cfg: &RunConfig, data: &Dataset, dc: &DiagnoseConfig) -> Re
             &warm,
             &ml,
             dc,
-        )
-    });
+            hooks,
+        )?,
+        None => vec![],
+    };
     let cause_p: Vec<f64> = cause_gof.iter().map(|g| g.p_value).collect();
     let (verdict, cause_idx) = decide::verdict(&sel, &cause_p, dc.alpha);
     let t_loo = Instant::now();
     phase.cause_bootstrap = t0.elapsed().as_secs_f64() - phase.fits - phase.null_bootstrap;
 
     // 5. Leave-one-stress-out, explanation, assembly.
+    hooks.phase("leave-one-stress-out", specs.len());
     let loos: Vec<Loo> = specs
         .iter()
         .enumerate()
-        .map(|(i, s)| match &fits[i] {
-            Some(f) => leave_one_stress_out(s, curves, &f.params, &start_sets[i], &settings, &ml),
-            None => Loo {
-                rmse: f64::NAN,
-                lifetime_err_pct: f64::NAN,
-                failed_folds: vec![],
-            },
+        .map(|(i, s)| {
+            hooks.check("leave-one-stress-out")?;
+            let loo = match &fits[i] {
+                Some(f) => {
+                    leave_one_stress_out(s, curves, &f.params, &start_sets[i], &settings, &ml)
+                }
+                None => Loo {
+                    rmse: f64::NAN,
+                    lifetime_err_pct: f64::NAN,
+                    failed_folds: vec![],
+                },
+            };
+            hooks.step();
+            Ok(loo)
         })
-        .collect();
+        .collect::<Result<_>>()?;
     phase.loo = t_loo.elapsed().as_secs_f64();
     let n_eff = base_fit
         .noise

@@ -187,7 +187,7 @@ impl Default for LmOptions {
 }
 
 /// Why the iteration stopped.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Termination {
     /// The step became negligible.

@@ -33,7 +33,7 @@ impl Default for OdeOptions {
 }
 
 /// How an integration ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Outcome {
     /// The rupture event (ω = ω_f) was reached and located.

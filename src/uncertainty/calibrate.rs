@@ -17,6 +17,8 @@
 //! Replicate k draws from its own random stream ([`replicate_rng`]): the factor does not
 //! depend on the thread count.
 
+use std::sync::Mutex;
+
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -24,7 +26,9 @@ use super::constrained::{constrained_fit, held_fit, Quantity};
 use super::profile::quantity_se;
 use super::{Context, Reference};
 use crate::diagnose::bootstrap::{replicate_data, replicate_rng};
+use crate::journal::{debug_hash, Exact};
 use crate::likelihood::MlFit;
+use crate::progress::Hooks;
 
 /// Random stream of the calibration bootstrap.
 const CALIBRATION_STREAM: u64 = 11;
@@ -79,7 +83,10 @@ pub fn factors(stats: &[(f64, usize)], n_constants: usize) -> (f64, f64, f64) {
 }
 
 /// Bootstrap `b` replicates and compute T for each constant of `constants` (indices) and
-/// each quantity of `quantities` (labelled).
+/// each quantity of `quantities` (labelled). Each replicate is a step of the phase
+/// `calibration replicates` of `hooks.observer`, journaled in `hooks.journal` as it finishes
+/// (keyed by the hash of the reference and the quantities, and its index) and read back from
+/// it; `Err` ([`crate::Error::Interrupted`]) when the observer asks to stop.
 pub fn bartlett(
     ctx: &Context,
     reference: &Reference,
@@ -87,7 +94,8 @@ pub fn bartlett(
     quantities: &[(String, Quantity)],
     b: usize,
     seed: u64,
-) -> Calibration {
+    hooks: &Hooks,
+) -> crate::Result<Calibration> {
     // τ of each quantity's penalty: 2 % of its Wald standard error at the data's optimum.
     let targets: Vec<(f64, f64)> = quantities
         .iter()
@@ -104,57 +112,50 @@ pub fn bartlett(
             )
         })
         .collect();
-    let k = constants.len() + quantities.len();
-    let rows: Vec<Option<Vec<f64>>> = (0..b)
+    let prefix = format!(
+        "cal/{}/",
+        debug_hash(&(reference, constants, quantities, seed))
+    );
+    hooks.phase("calibration replicates", b);
+    if let Some(j) = hooks.journal {
+        let found = (0..b)
+            .filter(|r| j.contains(&format!("{prefix}{r}")))
+            .count();
+        hooks.observer.resumed(found as u64);
+    }
+    let write_error: Mutex<Option<crate::Error>> = Mutex::new(None);
+    // Per replicate: None when it was not computed (the run stops), else its row (None: the
+    // replicate could not be refitted).
+    let rows: Vec<Option<Option<Vec<f64>>>> = (0..b)
         .into_par_iter()
         .map(|r| {
-            let mut rng = replicate_rng(seed, CALIBRATION_STREAM, r);
-            let data = replicate_data(ctx.curves, &reference.eval, &reference.noise, &mut rng);
-            let c = Context {
-                curves: &data,
-                space: ctx.space.clone(),
-                ..*ctx
-            };
-            let mut best: Option<MlFit> = None;
-            for s in std::iter::once(&reference.params).chain(&reference.basins) {
-                let f = c.fit(&c.space, s, true);
-                if f.ok() && best.as_ref().is_none_or(|b| f.neg2ll < b.neg2ll) {
-                    best = Some(f);
+            let key = format!("{prefix}{r}");
+            if let Some(row) = hooks.journal.and_then(|j| j.get::<Option<Exact>>(&key)) {
+                return Some(row.map(|e| e.0));
+            }
+            if hooks.observer.cancelled() || write_error.lock().is_ok_and(|e| e.is_some()) {
+                return None;
+            }
+            let row = replicate(ctx, reference, constants, quantities, &targets, seed, r);
+            if let Some(j) = hooks.journal {
+                if let Err(e) = j.put(&key, &row.clone().map(Exact)) {
+                    write_error
+                        .lock()
+                        .unwrap_or_else(|e| e.into_inner())
+                        .get_or_insert(e);
                 }
             }
-            let best = best?;
-            let mut min = best.neg2ll;
-            let mut held = Vec::with_capacity(k);
-            // Each held fit from two starts: the replicate's optimum with the held value put
-            // in, and the replicate's truth (the reference), which satisfies the constraint
-            // exactly. One start alone lands in a side valley now and then (measured: a mean
-            // T of 42 for B on one set, from a few replicates, where two starts give 1.0).
-            let lower = |a: f64, b: f64| match (a.is_finite(), b.is_finite()) {
-                (true, true) => a.min(b),
-                (true, false) => a,
-                (false, _) => b,
-            };
-            let val = |f: super::constrained::PointFit| if f.ok() { f.neg2ll } else { f64::NAN };
-            for &j in constants {
-                let v = reference.params[j];
-                let a = val(held_fit(&c, j, v, &best.params, true));
-                let b = val(held_fit(&c, j, v, &reference.params, true));
-                held.push(lower(a, b));
-            }
-            for ((_, q), &(g, tau)) in quantities.iter().zip(&targets) {
-                let a = val(constrained_fit(&c, q, g, tau, &best.params, true));
-                let b = val(constrained_fit(&c, q, g, tau, &reference.params, true));
-                held.push(lower(a, b));
-            }
-            // A held fit below the free one means the free fit missed the optimum.
-            min = held
-                .iter()
-                .copied()
-                .filter(|v| v.is_finite())
-                .fold(min, f64::min);
-            Some(held.iter().map(|v| (v - min).max(0.0)).collect())
+            hooks.step();
+            Some(row)
         })
         .collect();
+    if let Some(e) = write_error.into_inner().unwrap_or_else(|e| e.into_inner()) {
+        return Err(e);
+    }
+    if rows.iter().any(Option::is_none) {
+        return Err(hooks.interrupted("calibration replicates"));
+    }
+    let rows: Vec<Option<Vec<f64>>> = rows.into_iter().flatten().collect();
     let failed = rows.iter().filter(|r| r.is_none()).count();
     let ok: Vec<&Vec<f64>> = rows.iter().flatten().collect();
     let labels: Vec<String> = constants
@@ -177,14 +178,73 @@ pub fn bartlett(
         .collect();
     let stats: Vec<(f64, usize)> = per_quantity.iter().map(|q| (q.1, q.2)).collect();
     let (mean_t, factor, prediction_factor) = factors(&stats, constants.len());
-    Calibration {
+    Ok(Calibration {
         mean_t,
         factor,
         prediction_factor,
         replicates: b,
         failed,
         per_quantity,
+    })
+}
+
+/// Replicate `r` of the calibration bootstrap: T of every constant and quantity (None:
+/// the replicate could not be refitted).
+fn replicate(
+    ctx: &Context,
+    reference: &Reference,
+    constants: &[usize],
+    quantities: &[(String, Quantity)],
+    targets: &[(f64, f64)],
+    seed: u64,
+    r: usize,
+) -> Option<Vec<f64>> {
+    let k = constants.len() + quantities.len();
+    let mut rng = replicate_rng(seed, CALIBRATION_STREAM, r);
+    let data = replicate_data(ctx.curves, &reference.eval, &reference.noise, &mut rng);
+    let c = Context {
+        curves: &data,
+        space: ctx.space.clone(),
+        ..*ctx
+    };
+    let mut best: Option<MlFit> = None;
+    for s in std::iter::once(&reference.params).chain(&reference.basins) {
+        let f = c.fit(&c.space, s, true);
+        if f.ok() && best.as_ref().is_none_or(|b| f.neg2ll < b.neg2ll) {
+            best = Some(f);
+        }
     }
+    let best = best?;
+    let mut min = best.neg2ll;
+    let mut held = Vec::with_capacity(k);
+    // Each held fit from two starts: the replicate's optimum with the held value put
+    // in, and the replicate's truth (the reference), which satisfies the constraint
+    // exactly. One start alone lands in a side valley now and then (measured: a mean
+    // T of 42 for B on one set, from a few replicates, where two starts give 1.0).
+    let lower = |a: f64, b: f64| match (a.is_finite(), b.is_finite()) {
+        (true, true) => a.min(b),
+        (true, false) => a,
+        (false, _) => b,
+    };
+    let val = |f: super::constrained::PointFit| if f.ok() { f.neg2ll } else { f64::NAN };
+    for &j in constants {
+        let v = reference.params[j];
+        let a = val(held_fit(&c, j, v, &best.params, true));
+        let b = val(held_fit(&c, j, v, &reference.params, true));
+        held.push(lower(a, b));
+    }
+    for ((_, q), &(g, tau)) in quantities.iter().zip(targets) {
+        let a = val(constrained_fit(&c, q, g, tau, &best.params, true));
+        let b = val(constrained_fit(&c, q, g, tau, &reference.params, true));
+        held.push(lower(a, b));
+    }
+    // A held fit below the free one means the free fit missed the optimum.
+    min = held
+        .iter()
+        .copied()
+        .filter(|v| v.is_finite())
+        .fold(min, f64::min);
+    Some(held.iter().map(|v| (v - min).max(0.0)).collect())
 }
 
 #[cfg(test)]

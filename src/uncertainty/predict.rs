@@ -418,6 +418,21 @@ pub fn intervals_at(
     params: &[f64],
     loads: &[Load],
 ) -> crate::error::Result<IntervalsRun> {
+    intervals_at_observed(cfg, model, data, params, loads, &crate::progress::Hooks::default())
+}
+
+/// [`intervals_at`] telling `hooks.observer` of its phases (refit, calibration replicates,
+/// one step per condition's intervals and band); `Err` when it asks to stop. Nothing is
+/// journaled (the calibration replicates only if `hooks.journal` is given).
+pub fn intervals_at_observed(
+    cfg: &crate::config::RunConfig,
+    model: &dyn crate::model::Model,
+    data: &crate::data::Dataset,
+    params: &[f64],
+    loads: &[Load],
+    hooks: &crate::progress::Hooks,
+) -> crate::error::Result<IntervalsRun> {
+    hooks.observer.phase("maximum-likelihood refit", None);
     let ctx = super::report::context(cfg, model, data);
     let f = ctx.fit(&ctx.space, params, false);
     let reference = super::reference_from(&ctx, vec![f])?;
@@ -442,20 +457,32 @@ pub fn intervals_at(
                 )
             })
             .collect();
-        let cal = super::calibrate::bartlett(&ctx, &reference, &cons, &qs, pc.calibrate, pc.seed);
+        let cal = super::calibrate::bartlett(
+            &ctx,
+            &reference,
+            &cons,
+            &qs,
+            pc.calibrate,
+            pc.seed,
+            hooks,
+        )?;
         Thresholds::chi2(cal.prediction_factor)
     } else {
         Thresholds::chi2(1.0)
     };
     let fractions = band_fractions(pc.band_points);
-    Ok(IntervalsRun {
-        refit,
-        conditions: loads
-            .iter()
-            .map(|l| ConditionIntervals {
+    hooks.phase("intervals at the conditions", loads.len());
+    let conditions = loads
+        .iter()
+        .map(|l| {
+            hooks.check("intervals at the conditions")?;
+            let c = ConditionIntervals {
                 quantities: prediction_intervals(&ctx, &reference, l, &th),
                 band: prediction_band(&ctx, &reference, l, &fractions, &th),
-            })
-            .collect(),
-    })
+            };
+            hooks.step();
+            Ok(c)
+        })
+        .collect::<crate::error::Result<_>>()?;
+    Ok(IntervalsRun { refit, conditions })
 }

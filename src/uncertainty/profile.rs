@@ -30,6 +30,8 @@
 //! reference, the reference was not the global optimum: the caller refits from that point and
 //! profiles again ([`crate::uncertainty::report::run_profiles`]).
 
+use std::sync::Mutex;
+
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
@@ -37,7 +39,9 @@ use serde::{Deserialize, Serialize};
 
 use super::constrained::{constrained_fit, held_fit, PointFit, Quantity};
 use super::{covariance, information, Context, Reference, Thresholds};
+use crate::journal::debug_hash;
 use crate::lsq::Termination;
+use crate::progress::Hooks;
 
 /// Target growth of √Δ per continuation step.
 pub const ROOT_STEP: f64 = 0.35;
@@ -438,21 +442,60 @@ pub fn wald_se(ctx: &Context, reference: &Reference) -> Vec<f64> {
     }
 }
 
-/// Profiles of the constants `which` (indices, model order), their sides in parallel.
+/// Profiles of the constants `which` (indices, model order), their sides in parallel. Each
+/// side is a step of the phase `profile sides` of `hooks.observer`, journaled in
+/// `hooks.journal` as it finishes (keyed by the hash of the reference and the thresholds, the
+/// constant and the side) and read back from it; `Err` ([`crate::Error::Interrupted`]) when
+/// the observer asks to stop (the finished sides are journaled).
 pub fn profile_constants(
     ctx: &Context,
     reference: &Reference,
     which: &[usize],
     th: &Thresholds,
-) -> Vec<ConstantProfile> {
+    hooks: &Hooks,
+) -> crate::Result<Vec<ConstantProfile>> {
     let se = wald_se(ctx, reference);
     let tasks: Vec<(usize, f64)> = which.iter().flat_map(|&j| [(j, -1.0), (j, 1.0)]).collect();
-    let sides: Vec<Side> = tasks
+    let prefix = format!("side/{}/", debug_hash(&(reference, th, &se)));
+    let key = |j: usize, dir: f64| format!("{prefix}{j}/{}", if dir < 0.0 { "lower" } else { "upper" });
+    hooks.phase("profile sides", tasks.len());
+    if let Some(jl) = hooks.journal {
+        let found = tasks.iter().filter(|(j, d)| jl.contains(&key(*j, *d))).count();
+        hooks.observer.resumed(found as u64);
+    }
+    let write_error: Mutex<Option<crate::Error>> = Mutex::new(None);
+    let sides: Vec<Option<Side>> = tasks
         .par_iter()
-        .map(|&(j, dir)| constant_side(ctx, reference, j, dir, se[j], th))
+        .map(|&(j, dir)| {
+            let k = key(j, dir);
+            if let Some(r) = hooks.journal.and_then(|jl| jl.get::<SideRecord>(&k)) {
+                return Some(r.into());
+            }
+            if hooks.observer.cancelled() || write_error.lock().is_ok_and(|e| e.is_some()) {
+                return None;
+            }
+            let side = constant_side(ctx, reference, j, dir, se[j], th);
+            if let Some(jl) = hooks.journal {
+                if let Err(e) = jl.put(&k, &SideRecord::from(&side)) {
+                    write_error
+                        .lock()
+                        .unwrap_or_else(|e| e.into_inner())
+                        .get_or_insert(e);
+                }
+            }
+            hooks.step();
+            Some(side)
+        })
         .collect();
+    if let Some(e) = write_error.into_inner().unwrap_or_else(|e| e.into_inner()) {
+        return Err(e);
+    }
+    if sides.iter().any(Option::is_none) {
+        return Err(hooks.interrupted("profile sides"));
+    }
+    let sides: Vec<Side> = sides.into_iter().flatten().collect();
     let names = ctx.names();
-    which
+    Ok(which
         .iter()
         .enumerate()
         .map(|(k, &j)| {
@@ -460,7 +503,75 @@ pub fn profile_constants(
             let upper = sides[2 * k + 1].clone();
             summarise(ctx, reference, j, names[j], lower, upper, se[j], th)
         })
-        .collect()
+        .collect())
+}
+
+/// A [`Side`] as a journal record: every field, numbers exact ([`crate::journal::exact`]).
+#[derive(Serialize, Deserialize)]
+struct SideRecord {
+    points: Vec<PointRecord>,
+    end: SideEnd,
+}
+
+/// A [`ProfilePoint`] as part of a [`SideRecord`].
+#[derive(Serialize, Deserialize)]
+struct PointRecord {
+    #[serde(with = "crate::journal::exact")]
+    value: f64,
+    #[serde(with = "crate::journal::exact")]
+    coord: f64,
+    #[serde(with = "crate::journal::exact")]
+    delta: f64,
+    #[serde(with = "crate::journal::exact::vec")]
+    params: Vec<f64>,
+    fits: usize,
+    retried: bool,
+    termination: Termination,
+    failure: Option<String>,
+}
+
+impl From<&Side> for SideRecord {
+    fn from(s: &Side) -> Self {
+        SideRecord {
+            points: s
+                .points
+                .iter()
+                .map(|p| PointRecord {
+                    value: p.value,
+                    coord: p.coord,
+                    delta: p.delta,
+                    params: p.params.clone(),
+                    fits: p.fits,
+                    retried: p.retried,
+                    termination: p.termination,
+                    failure: p.failure.clone(),
+                })
+                .collect(),
+            end: s.end,
+        }
+    }
+}
+
+impl From<SideRecord> for Side {
+    fn from(r: SideRecord) -> Self {
+        Side {
+            points: r
+                .points
+                .into_iter()
+                .map(|p| ProfilePoint {
+                    value: p.value,
+                    coord: p.coord,
+                    delta: p.delta,
+                    params: p.params,
+                    fits: p.fits,
+                    retried: p.retried,
+                    termination: p.termination,
+                    failure: p.failure,
+                })
+                .collect(),
+            end: r.end,
+        }
+    }
 }
 
 /// The same profile read at other thresholds: intervals and class from its points (exact as

@@ -20,6 +20,7 @@ use crate::error::{Error, Result};
 use crate::fit::{param_space, FitSettings};
 use crate::guess::initial_guess;
 use crate::likelihood::MlOptions;
+use crate::progress::Hooks;
 use crate::model::{Load, Scale};
 use crate::report::plot::{plot_profile, ProfilePlot};
 use crate::report::tables::{jnum, num, write_csv, write_text};
@@ -158,15 +159,19 @@ pub struct Core {
 /// The reference (a multistart, or a local fit from `given`), the calibration of the
 /// thresholds (over the constants of [`calibration_constants`] and the rupture time at every
 /// load of `loads`), and the profiles of every constant, redone from a better optimum if one
-/// turns up on them (at most [`MAX_RESTARTS`] times).
+/// turns up on them (at most [`MAX_RESTARTS`] times). The phases are told to
+/// `hooks.observer`; the calibration replicates and the profile sides are journaled in
+/// `hooks.journal` and resumed from it ([`bartlett`], [`profile_constants`]).
 pub fn core(
     ctx: &Context,
     cfg: &RunConfig,
     given: Option<&[f64]>,
     pc: &ProfileConfig,
     loads: &[Load],
+    hooks: &Hooks,
 ) -> Result<Core> {
     let t0 = Instant::now();
+    hooks.observer.phase("maximum-likelihood fit", None);
     let (mut reference, from, given_neg2ll) = match given {
         Some(x) => {
             let f = ctx.fit(&ctx.space, x, false);
@@ -213,7 +218,7 @@ pub fn core(
                     )
                 })
                 .collect();
-            let cal = bartlett(ctx, &reference, &cons, &qs, pc.calibrate, pc.seed);
+            let cal = bartlett(ctx, &reference, &cons, &qs, pc.calibrate, pc.seed, hooks)?;
             (
                 (
                     Thresholds::chi2(cal.factor),
@@ -228,7 +233,7 @@ pub fn core(
         timings.calibration += t1.elapsed().as_secs_f64();
         let t2 = Instant::now();
         let all: Vec<usize> = (0..ctx.space.len()).collect();
-        let profiles = profile_constants(ctx, &reference, &all, &th);
+        let profiles = profile_constants(ctx, &reference, &all, &th, hooks)?;
         timings.profiles += t2.elapsed().as_secs_f64();
         let better = profiles
             .iter()
@@ -238,6 +243,7 @@ pub fn core(
         match better {
             Some(p) if restarts < MAX_RESTARTS => {
                 restarts += 1;
+                hooks.observer.phase("refit from a better optimum", None);
                 let fits = vec![
                     ctx.fit(&ctx.space, &p.params, false),
                     ctx.fit(&ctx.space, &p.params, true),
@@ -272,12 +278,24 @@ pub fn run(
     given: Option<&[f64]>,
     pc: &ProfileConfig,
 ) -> Result<ProfileRun> {
+    run_observed(cfg, data, given, pc, &Hooks::default())
+}
+
+/// [`run`] telling `hooks.observer` of its phases and steps, its calibration replicates and
+/// profile sides journaled in `hooks.journal` and resumed from it ([`core`]).
+pub fn run_observed(
+    cfg: &RunConfig,
+    data: &Dataset,
+    given: Option<&[f64]>,
+    pc: &ProfileConfig,
+    hooks: &Hooks,
+) -> Result<ProfileRun> {
     let t0 = Instant::now();
     let model = cfg.build_model()?;
     let ctx = context(cfg, model.as_ref(), data);
     let loads = loads(cfg, data, pc);
     let only: Vec<Load> = loads.iter().map(|l| l.1).collect();
-    let c = core(&ctx, cfg, given, pc, &only)?;
+    let c = core(&ctx, cfg, given, pc, &only, hooks)?;
     let (reference, thresholds, pth, mut timings) = (
         c.reference,
         c.thresholds,
@@ -285,6 +303,7 @@ pub fn run(
         c.timings,
     );
     let t3 = Instant::now();
+    hooks.observer.phase("combinations", None);
     let combinations = well_determined(&ctx, &reference, &c.profiles, &thresholds, 3);
     timings.combinations = t3.elapsed().as_secs_f64();
     let t4 = Instant::now();
@@ -292,7 +311,11 @@ pub fn run(
     let mut predictions = Vec::with_capacity(loads.len());
     let tested = crate::predict::Tested::of(data, cfg.has_laws());
     let ode = crate::uncertainty::constrained::prediction_ode(&ctx);
+    if !loads.is_empty() {
+        hooks.phase("predictions", loads.len());
+    }
     for (t, l) in &loads {
+        hooks.check("predictions")?;
         let condition = crate::predict::Condition {
             temperature_c: *t,
             stress_mpa: l.stress_mpa,
@@ -318,6 +341,7 @@ pub fn run(
             quantities,
             band,
         });
+        hooks.step();
     }
     timings.predictions = t4.elapsed().as_secs_f64();
     timings.total = t0.elapsed().as_secs_f64();
@@ -591,7 +615,6 @@ pub fn summary(cfg: &RunConfig, run: &ProfileRun) -> serde_json::Value {
         "constants": constants,
         "combinations": run.combinations,
         "predictions": run.predictions,
-        "timings_s": run.timings,
         "settings": cfg.profile,
     })
 }
@@ -771,7 +794,12 @@ pub fn report_md(cfg: &RunConfig, run: &ProfileRun) -> String {
         }
         md += "\n";
     }
-    md += &format!(
+    md
+}
+
+/// The run's wall times in words (printed, not in `report.md`: see `timings.json`).
+pub fn timings_line(run: &ProfileRun) -> String {
+    format!(
         "Wall time {:.2} s (fit {:.2}, calibration {:.2}, profiles {:.2}, combinations {:.2}, predictions {:.2}).\n",
         run.timings.total,
         run.timings.fit,
@@ -779,8 +807,21 @@ pub fn report_md(cfg: &RunConfig, run: &ProfileRun) -> String {
         run.timings.profiles,
         run.timings.combinations,
         run.timings.predictions
-    );
-    md
+    )
+}
+
+/// The run identity of `creepfit profile` on `cfg` (bound to its data) kept in its journal:
+/// the configuration's ([`crate::identity::identity`]), the command, the `[profile]`
+/// settings and the given constants (`--constants`, exact), if any.
+pub fn identity(cfg: &RunConfig, given: Option<&[f64]>) -> serde_json::Value {
+    let mut id = crate::identity::identity(cfg);
+    id["command"] = "profile".into();
+    id["profile"] = serde_json::to_value(&cfg.profile).expect("settings serialise");
+    id["given_constants"] = match given {
+        Some(g) => g.iter().map(|v| crate::journal::exact::to_json(*v)).collect(),
+        None => serde_json::Value::Null,
+    };
+    id
 }
 
 /// Run `creepfit profile` on a configuration: compute, write, print the report.
@@ -805,12 +846,28 @@ pub fn profile_command(cfg: &RunConfig, data: &Dataset, constants: Option<&Path>
         }
     }
     let out = cfg.out_dir("profile");
-    let mut folder = crate::output::RunFolder::begin(&out, "profile")?;
+    let (mut folder, journal) =
+        crate::cli::take_with_journal(&out, "profile", &identity(cfg, given.as_deref()))?;
     crate::cli::note_data(&mut folder, data);
+    let bars = crate::progress::Bars::new(!cfg.run.progress);
+    let stop = crate::cli::stop_after(&bars, &journal, cfg.run.stop_after);
+    let hooks = Hooks {
+        observer: &stop,
+        journal: Some(&journal),
+    };
     folder.finish((|| {
-        let run = run(cfg, data, given.as_deref(), &cfg.profile)?;
+        let run = run_observed(cfg, data, given.as_deref(), &cfg.profile, &hooks);
+        bars.clear();
+        let run = run?;
         let failures = write_outputs(cfg, &run, &out)?;
+        crate::cli::write_timings(
+            &out,
+            "profile",
+            Some(&journal),
+            json!({ "timings_s": run.timings }),
+        )?;
         print!("{}", report_md(cfg, &run));
+        print!("{}", timings_line(&run));
         println!("wrote {}", out.display());
         if failures.is_empty() {
             Ok(())
