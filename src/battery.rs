@@ -324,8 +324,27 @@ pub fn read_results(dir: &Path) -> Result<BTreeMap<u64, SetResult>> {
 
 /// Run sets `first_seed .. first_seed + n` (set i gets scenario [`scenario_of`]`(i)`) into
 /// `dir`, skipping those already in `results.jsonl`; returns all results, in seed order.
-/// `observer` is told of every finished set (a step, and a line with its outcome).
+/// With `progress`, a line per finished set on stderr (and a bar on a terminal).
 pub fn run_battery(
+    dir: &Path,
+    first_seed: u64,
+    n: usize,
+    world: World,
+    progress: bool,
+) -> Result<Vec<SetResult>> {
+    let bars;
+    let observer: &dyn crate::progress::Observer = if progress {
+        bars = crate::progress::Bars::new(false);
+        &bars
+    } else {
+        &crate::progress::SILENT
+    };
+    run_battery_observed(dir, first_seed, n, world, observer)
+}
+
+/// [`run_battery`] telling `observer` of every finished set (a step, and a line with its
+/// outcome) instead of printing.
+pub fn run_battery_observed(
     dir: &Path,
     first_seed: u64,
     n: usize,

@@ -8,14 +8,14 @@ use clap::{Parser, Subcommand};
 use crate::config::DiagnoseOverrides;
 use crate::config::{Overrides, RunConfig, RunOptions, StartChoice};
 use crate::data::Dataset;
-use crate::journal::Journal;
-use crate::progress::{Bars, Observer, StopWhen};
 use crate::error::{Error, Result};
 use crate::fit::FitSettings;
+use crate::journal::Journal;
 use crate::model::Load;
 use crate::objective::Objective;
 use crate::ode::OdeOptions;
 use crate::output::RunFolder;
+use crate::progress::{Bars, Observer, StopWhen};
 use crate::report::diagrams::Diagrams;
 use crate::report::plot::{
     plot_creep_curves, plot_curve_residuals, CurveId, CurvePlot, CurveSeries,
@@ -522,7 +522,7 @@ fn battery_into(
         walk(&out.join("sets"));
     };
     let bars = Bars::new(quiet);
-    let results = crate::battery::run_battery(&out, seed, sets, world, &bars);
+    let results = crate::battery::run_battery_observed(&out, seed, sets, world, &bars);
     bars.clear();
     record_all(&out);
     let results = results?;
@@ -1209,7 +1209,16 @@ fn predict_into(
             .iter()
             .map(|c| crate::model::Load::new(c.stress_mpa, c.temperature_c, cfg.objective.omega_f))
             .collect();
-        let iv = crate::uncertainty::predict::intervals_at(cfg, model, data, params, &loads)?;
+        let bars = Bars::new(!cfg.run.progress);
+        let hooks = crate::progress::Hooks {
+            observer: &bars,
+            journal: None,
+        };
+        let iv = crate::uncertainty::predict::intervals_at_observed(
+            cfg, model, data, params, &loads, &hooks,
+        );
+        bars.clear();
+        let iv = iv?;
         let centre = crate::predict::predict(cfg, data, model, &iv.refit.params, &cfg.predict.at);
         crate::predict::centre_on_intervals(centre, iv, given.predictions)
     } else {

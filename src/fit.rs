@@ -502,10 +502,7 @@ pub fn run_fit_observed(
         .flat_map(|s| ws.iter().map(move |w| (s, w)))
         .collect();
     let key = |k: usize, label: &str, start: &[f64], w: &[f64]| {
-        format!(
-            "fit/{k}/{}",
-            crate::journal::debug_hash(&(label, start, w))
-        )
+        format!("fit/{k}/{}", crate::journal::debug_hash(&(label, start, w)))
     };
     observer.phase("local fits", Some(jobs.len() as u64));
     if let Some(j) = journal {

@@ -802,7 +802,7 @@ fn holdout_into(cfg: &RunConfig, data: &Dataset, h: &Holdout, out: &Path) -> Res
         &out.join("summary.json"),
         &serde_json::to_string_pretty(&summary).expect("JSON of plain values"),
     )?;
-    print!("{}", table(&h));
+    print!("{}", table(h));
     let mut failures = Vec::new();
     let held = Dataset {
         curves: h.curves.clone(),

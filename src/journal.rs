@@ -41,7 +41,10 @@ enum Line {
         #[serde(default)]
         build: String,
     },
-    Record { key: String, value: Value },
+    Record {
+        key: String,
+        value: Value,
+    },
 }
 
 /// An open journal: the records found, and the file new ones are appended to.
@@ -88,7 +91,10 @@ impl std::fmt::Debug for Journal {
 
 /// What a journal file holds: its header's identity and its records (a torn last line, an
 /// interrupted write, is left out); `None` when there is no file or no complete header.
-fn read(path: &Path) -> Result<Option<(Value, String, Vec<(String, Value)>)>> {
+/// A journal file's header identity, the build that wrote it, and its records.
+type Held = (Value, String, Vec<(String, Value)>);
+
+fn read(path: &Path) -> Result<Option<Held>> {
     let text = match std::fs::read_to_string(path) {
         Ok(t) => t,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
@@ -270,7 +276,10 @@ impl Journal {
 /// round-trip form, so two values hash alike only when they are equal bit for bit (up to
 /// NaN payloads).
 pub fn debug_hash<T: std::fmt::Debug + ?Sized>(v: &T) -> String {
-    format!("{:016x}", crate::identity::fnv1a(format!("{v:?}").as_bytes()))
+    format!(
+        "{:016x}",
+        crate::identity::fnv1a(format!("{v:?}").as_bytes())
+    )
 }
 
 /// Exact JSON of `f64`: finite values as numbers in shortest round-trip form (bit for bit
@@ -389,7 +398,8 @@ mod tests {
         // A torn last line (a kill in the middle of a write) is dropped and cut off.
         let p = d.path().join(FILE);
         let mut f = OpenOptions::new().append(true).open(&p).unwrap();
-        f.write_all(b"{\"record\":{\"key\":\"rep/1/x/2\",\"val").unwrap();
+        f.write_all(b"{\"record\":{\"key\":\"rep/1/x/2\",\"val")
+            .unwrap();
         drop(f);
         let j = Journal::open(d.path(), &id).unwrap();
         assert_eq!(j.found(), 2);
@@ -401,13 +411,13 @@ mod tests {
         drop(j);
         let text = std::fs::read_to_string(&p).unwrap();
         assert_eq!(text.lines().count(), 4, "{text}");
-        assert!(text.lines().all(|l| serde_json::from_str::<Line>(l).is_ok()));
+        assert!(text
+            .lines()
+            .all(|l| serde_json::from_str::<Line>(l).is_ok()));
         // Another run's settings: refused, naming the setting, nothing changed.
         let mut other = id.clone();
         other["diagnose"]["seed"] = json!(2);
-        let e = Journal::open(d.path(), &other)
-            .unwrap_err()
-            .to_string();
+        let e = Journal::open(d.path(), &other).unwrap_err().to_string();
         assert!(
             e.contains("a run with diagnose.seed = 1, this command asks for 2"),
             "{e}"
@@ -415,9 +425,7 @@ mod tests {
         assert_eq!(std::fs::read_to_string(&p).unwrap(), text);
         // A line in the middle that is not a journal line is an error naming it.
         std::fs::write(&p, text.replacen("\n", "\nrubbish\n", 1)).unwrap();
-        let e = Journal::open(d.path(), &id)
-            .unwrap_err()
-            .to_string();
+        let e = Journal::open(d.path(), &id).unwrap_err().to_string();
         assert!(e.contains(":2:"), "{e}");
         // Another build's records are not reused: a new journal.
         std::fs::write(&p, &text).unwrap();

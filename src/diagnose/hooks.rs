@@ -57,8 +57,7 @@ impl Hooks<'_> {
         }
         let failure: Mutex<Option<Error>> = Mutex::new(None);
         let stop = || {
-            self.observer.cancelled()
-                || failure.lock().unwrap_or_else(|e| e.into_inner()).is_some()
+            self.observer.cancelled() || failure.lock().unwrap_or_else(|e| e.into_inner()).is_some()
         };
         let out = super::bootstrap::sequential(observed, max, |b| {
             let k = format!("{prefix}{b}");
@@ -109,19 +108,20 @@ mod tests {
         let observed = [0.99, 0.995];
         let plain = super::super::bootstrap::sequential(&observed, 60, toy);
         // Stopped after 15 new replicates (some more finish in flight and are kept).
-        let j = Journal::open(d.path(), &id).unwrap();
-        let stop = StopWhen::new(&SILENT, || j.written() >= 15);
-        let hooks = Hooks {
-            observer: &stop,
-            journal: Some(&j),
+        let kept = {
+            let j = Journal::open(d.path(), &id).unwrap();
+            let stop = StopWhen::new(&SILENT, || j.written() >= 15);
+            let hooks = Hooks {
+                observer: &stop,
+                journal: Some(&j),
+            };
+            let e = hooks
+                .sequential("toy", 1, "k", &observed, 60, toy)
+                .unwrap_err();
+            assert!(matches!(e, Error::Interrupted(_)), "{e}");
+            j.written() as usize
         };
-        let e = hooks
-            .sequential("toy", 1, "k", &observed, 60, toy)
-            .unwrap_err();
-        assert!(matches!(e, Error::Interrupted(_)), "{e}");
-        let kept = j.written() as usize;
         assert!((15..60).contains(&kept), "{kept}");
-        drop(j);
         // The rerun computes only the missing replicates and gives the same result.
         let j = Journal::open(d.path(), &id).unwrap();
         assert_eq!(j.found(), kept);

@@ -21,9 +21,9 @@
 //!    candidate as the out-of-sample check — reported, never a veto.
 
 pub mod bootstrap;
-pub mod hooks;
 pub mod decide;
 pub mod gof;
+pub mod hooks;
 pub mod report;
 pub mod signature;
 
@@ -779,6 +779,7 @@ fn null_replicate(
 }
 
 /// Goodness-of-fit bootstrap of one fitted model: replicates under it, refitted by it.
+#[allow(clippy::too_many_arguments)]
 fn gof_bootstrap(
     spec: &Spec,
     fit: &MlFit,

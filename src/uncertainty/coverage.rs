@@ -241,7 +241,14 @@ fn measure(dir: &Path, seed: u64, s: &CoverageSettings, out: &mut SetCoverage) -
         predict_stress_mpa: vec![load.stress_mpa],
         ..cfg.profile.clone()
     };
-    let c = core(&ctx, &cfg, None, &pc, &[load], &crate::progress::Hooks::default())?;
+    let c = core(
+        &ctx,
+        &cfg,
+        None,
+        &pc,
+        &[load],
+        &crate::progress::Hooks::default(),
+    )?;
     let (reference, th, pth, profiles) = (
         c.reference,
         c.thresholds,

@@ -418,7 +418,14 @@ pub fn intervals_at(
     params: &[f64],
     loads: &[Load],
 ) -> crate::error::Result<IntervalsRun> {
-    intervals_at_observed(cfg, model, data, params, loads, &crate::progress::Hooks::default())
+    intervals_at_observed(
+        cfg,
+        model,
+        data,
+        params,
+        loads,
+        &crate::progress::Hooks::default(),
+    )
 }
 
 /// [`intervals_at`] telling `hooks.observer` of its phases (refit, calibration replicates,
@@ -457,15 +464,8 @@ pub fn intervals_at_observed(
                 )
             })
             .collect();
-        let cal = super::calibrate::bartlett(
-            &ctx,
-            &reference,
-            &cons,
-            &qs,
-            pc.calibrate,
-            pc.seed,
-            hooks,
-        )?;
+        let cal =
+            super::calibrate::bartlett(&ctx, &reference, &cons, &qs, pc.calibrate, pc.seed, hooks)?;
         Thresholds::chi2(cal.prediction_factor)
     } else {
         Thresholds::chi2(1.0)

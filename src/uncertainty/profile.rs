@@ -457,10 +457,14 @@ pub fn profile_constants(
     let se = wald_se(ctx, reference);
     let tasks: Vec<(usize, f64)> = which.iter().flat_map(|&j| [(j, -1.0), (j, 1.0)]).collect();
     let prefix = format!("side/{}/", debug_hash(&(reference, th, &se)));
-    let key = |j: usize, dir: f64| format!("{prefix}{j}/{}", if dir < 0.0 { "lower" } else { "upper" });
+    let key =
+        |j: usize, dir: f64| format!("{prefix}{j}/{}", if dir < 0.0 { "lower" } else { "upper" });
     hooks.phase("profile sides", tasks.len());
     if let Some(jl) = hooks.journal {
-        let found = tasks.iter().filter(|(j, d)| jl.contains(&key(*j, *d))).count();
+        let found = tasks
+            .iter()
+            .filter(|(j, d)| jl.contains(&key(*j, *d)))
+            .count();
         hooks.observer.resumed(found as u64);
     }
     let write_error: Mutex<Option<crate::Error>> = Mutex::new(None);

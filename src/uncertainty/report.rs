@@ -20,8 +20,8 @@ use crate::error::{Error, Result};
 use crate::fit::{param_space, FitSettings};
 use crate::guess::initial_guess;
 use crate::likelihood::MlOptions;
-use crate::progress::Hooks;
 use crate::model::{Load, Scale};
+use crate::progress::Hooks;
 use crate::report::plot::{plot_profile, ProfilePlot};
 use crate::report::tables::{jnum, num, write_csv, write_text};
 
@@ -818,7 +818,10 @@ pub fn identity(cfg: &RunConfig, given: Option<&[f64]>) -> serde_json::Value {
     id["command"] = "profile".into();
     id["profile"] = serde_json::to_value(&cfg.profile).expect("settings serialise");
     id["given_constants"] = match given {
-        Some(g) => g.iter().map(|v| crate::journal::exact::to_json(*v)).collect(),
+        Some(g) => g
+            .iter()
+            .map(|v| crate::journal::exact::to_json(*v))
+            .collect(),
         None => serde_json::Value::Null,
     };
     id
