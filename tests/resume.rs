@@ -1,0 +1,202 @@
+//! `diagnose` and `profile` resume after an interruption: a run stopped part way (the hidden
+//! `--stop-after`, which stops once so many new records are journaled, as a kill would leave
+//! them) and rerun into the same folder computes only what is missing and writes result
+//! files byte-identical to an uninterrupted run's; a folder of another run is refused naming
+//! the differing setting; nothing is drawn on a stderr that is not a terminal.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use tempfile::TempDir;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn creepfit(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_creepfit"))
+        .args(args)
+        .current_dir(root())
+        .output()
+        .expect("binary runs")
+}
+
+fn ok(o: &Output) {
+    assert!(
+        o.status.success(),
+        "{}\n{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
+fn bytes(p: &Path) -> Vec<u8> {
+    std::fs::read(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
+}
+
+fn timings(dir: &Path) -> serde_json::Value {
+    serde_json::from_slice(&bytes(&dir.join("timings.json"))).unwrap()
+}
+
+/// Records in a journal (its lines but the header).
+fn records(dir: &Path) -> u64 {
+    String::from_utf8(bytes(&dir.join("journal.jsonl")))
+        .unwrap()
+        .lines()
+        .count() as u64
+        - 1
+}
+
+/// A small diagnosis of the seed's 560 °C data: 2 random starts per model, 19 replicates
+/// (α = 0.5 so that 19 replicates can reject over the 8 tests).
+fn diagnose(out: &Path, extra: &[&str]) -> Output {
+    let mut args = vec![
+        "diagnose",
+        "configs/560C.toml",
+        "--starts",
+        "2",
+        "--bootstrap",
+        "19",
+        "--alpha",
+        "0.5",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    creepfit(&args)
+}
+
+/// The stopped run: exits non-zero, says it was interrupted and where the work is kept.
+fn interrupted(o: &Output, journal: &Path) {
+    assert!(!o.status.success(), "an interrupted run exits non-zero");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("interrupted"), "{err}");
+    assert!(err.contains(journal.to_str().unwrap()), "{err}");
+}
+
+#[test]
+fn an_interrupted_diagnosis_resumes_to_the_same_files() {
+    let d = TempDir::new().unwrap();
+    let plain = d.path().join("plain");
+    let o = diagnose(&plain, &["--threads", "2"]);
+    ok(&o);
+    // Nothing drawn on a stderr that is not a terminal (a pipe here).
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!err.contains("ETA") && !err.contains('\r'), "{err}");
+    let total = records(&plain);
+    assert_eq!(timings(&plain)["journal_records_written"], total);
+    assert!(total > 12, "{total}");
+
+    let resumed = d.path().join("resumed");
+    let o = diagnose(
+        &resumed,
+        &["--threads", "1", "--stop-after", "12", "--quiet"],
+    );
+    interrupted(&o, &resumed.join("journal.jsonl"));
+    assert!(!resumed.join("diagnosis.json").exists());
+    let kept = records(&resumed);
+    assert!((12..total).contains(&kept), "{kept} of {total}");
+    let o = diagnose(&resumed, &["--threads", "2"]);
+    ok(&o);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains(&format!("resuming from {kept} journaled records")),
+        "{err}"
+    );
+    // Only the missing work was done: the journaled records were all reused.
+    let t = timings(&resumed);
+    assert_eq!(t["journal_records_resumed"], kept);
+    assert_eq!(t["journal_records_written"], total - kept);
+    for f in ["diagnosis.json", "report.md", "residuals_base.png"] {
+        assert!(
+            bytes(&plain.join(f)) == bytes(&resumed.join(f)),
+            "{f} differs after resuming"
+        );
+    }
+    // A rerun of a finished run recomputes nothing and writes the same files.
+    ok(&diagnose(&resumed, &["--threads", "2"]));
+    assert_eq!(timings(&resumed)["journal_records_written"], 0);
+    assert!(bytes(&plain.join("diagnosis.json")) == bytes(&resumed.join("diagnosis.json")));
+}
+
+#[test]
+fn a_diagnosis_with_other_settings_is_refused_in_the_folder() {
+    let d = TempDir::new().unwrap();
+    let o = diagnose(d.path(), &["--threads", "1", "--stop-after", "1"]);
+    interrupted(&o, &d.path().join("journal.jsonl"));
+    let before = bytes(&d.path().join("journal.jsonl"));
+    let o = diagnose(d.path(), &["--threads", "1", "--seed", "99"]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("journal.jsonl: this folder holds the journal of a run with diagnose.seed = ")
+            && err.contains("this command asks for 99"),
+        "{err}"
+    );
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        bytes(&d.path().join("journal.jsonl")) == before,
+        "nothing changed"
+    );
+}
+
+/// The 560 °C configuration with a small `[profile]` table, written into `dir`.
+fn profile_config(dir: &Path) -> PathBuf {
+    let text = std::fs::read_to_string(root().join("configs/560C.toml"))
+        .unwrap()
+        .replace(
+            "../data/",
+            &format!("{}/", root().join("data").to_str().unwrap()),
+        )
+        + "\n[profile]\ncalibrate = 10\npredict_stress_MPa = [70]\nband_points = 3\n";
+    let p = dir.join("560.toml");
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+#[test]
+fn an_interrupted_profile_resumes_to_the_same_files() {
+    let d = TempDir::new().unwrap();
+    let cfg = profile_config(d.path());
+    let run = |out: &Path, extra: &[&str]| {
+        let mut args = vec![
+            "profile",
+            cfg.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        creepfit(&args)
+    };
+    let plain = d.path().join("plain");
+    ok(&run(&plain, &["--threads", "2"]));
+    let total = records(&plain);
+    // 10 calibration replicates and 2 sides of each of 6 constants.
+    assert_eq!(total, 22);
+    let resumed = d.path().join("resumed");
+    // Stopped among the profile sides (after the 10 calibration replicates).
+    let o = run(&resumed, &["--threads", "1", "--stop-after", "14", "-q"]);
+    interrupted(&o, &resumed.join("journal.jsonl"));
+    let kept = records(&resumed);
+    assert!((14..total).contains(&kept), "{kept}");
+    ok(&run(&resumed, &["--threads", "2"]));
+    let t = timings(&resumed);
+    assert_eq!(t["journal_records_resumed"], kept);
+    assert_eq!(t["journal_records_written"], total - kept);
+    for f in [
+        "intervals.csv",
+        "profiles.csv",
+        "summary.json",
+        "report.md",
+        "profile_B.png",
+    ] {
+        assert!(
+            bytes(&plain.join(f)) == bytes(&resumed.join(f)),
+            "{f} differs after resuming"
+        );
+    }
+    // No wall time in the result files: they are in timings.json.
+    let summary = String::from_utf8(bytes(&plain.join("summary.json"))).unwrap();
+    assert!(!summary.contains("timings_s"), "{summary}");
+    assert!(timings(&plain)["timings_s"]["total"].as_f64().unwrap() > 0.0);
+}
