@@ -88,11 +88,23 @@ fn an_interrupted_diagnosis_resumes_to_the_same_files() {
     assert!(total > 12, "{total}");
 
     let resumed = d.path().join("resumed");
+    // Stopped during the fits on the data (one record per model: 7 models), then again
+    // during the null bootstrap.
     let o = diagnose(
         &resumed,
-        &["--threads", "1", "--stop-after", "12", "--quiet"],
+        &["--threads", "1", "--stop-after", "3", "--quiet"],
     );
     interrupted(&o, &resumed.join("journal.jsonl"));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("during the fits on the data"), "{err}");
+    assert_eq!(records(&resumed), 3);
+    let o = diagnose(
+        &resumed,
+        &["--threads", "1", "--stop-after", "9", "--quiet"],
+    );
+    interrupted(&o, &resumed.join("journal.jsonl"));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("during the null bootstrap"), "{err}");
     assert!(!resumed.join("diagnosis.json").exists());
     let kept = records(&resumed);
     assert!((12..total).contains(&kept), "{kept} of {total}");

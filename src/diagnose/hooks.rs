@@ -8,8 +8,15 @@
 
 use std::sync::Mutex;
 
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+
+use crate::errmodel::{Ar1, ErrorModel, Residuals};
 use crate::error::{Error, Result};
-use crate::journal::{debug_hash, Exact};
+use crate::journal::{debug_hash, exact, Exact};
+use crate::likelihood::{EffectKind, MlFit, SpecimenFit};
+use crate::lsq::Termination;
+use crate::objective::{CurvePrediction, Evaluation};
 
 pub use crate::progress::Hooks;
 
@@ -88,6 +95,233 @@ impl Hooks<'_> {
     }
 }
 
+/// What the fits on the data keep of one model (a journal record): its best fit (`None`: no
+/// start converged), the number of failed starts and the distinct optima the replicates
+/// start from.
+#[derive(Debug, Clone)]
+pub struct ModelFits {
+    /// The best fit on the data, scatter intervals included.
+    pub best: Option<MlFit>,
+    /// Starts whose fit failed.
+    pub failed: usize,
+    /// Distinct optima (constants) found on the data.
+    pub basins: Vec<Vec<f64>>,
+}
+
+/// The journal key of the fits on the data of model `i` (named `name`) from `starts`.
+pub fn fits_key(i: usize, name: &str, starts: &[Vec<f64>]) -> String {
+    format!("fits/{i}/{name}/{}", debug_hash(starts))
+}
+
+impl Hooks<'_> {
+    /// The fits on the data journaled under `key` ([`fits_key`]) by an earlier run, if any
+    /// (counted as a resumed step).
+    pub fn fits_done(&self, key: &str) -> Option<ModelFits> {
+        let r = self.journal.and_then(|j| j.get::<FitsRecord>(key))?;
+        self.observer.resumed(1);
+        Some(r.into())
+    }
+
+    /// The fits on the data `f` are done: journaled (flushed) under `key`, a step.
+    pub fn fits_finished(&self, key: &str, f: &ModelFits) -> Result<()> {
+        if let Some(j) = self.journal {
+            j.put(key, &FitsRecord::from(f))?;
+        }
+        self.step();
+        Ok(())
+    }
+}
+
+/// A [`ModelFits`] as a journal record: every field, every number exact
+/// ([`crate::journal::exact`]), so that a fit read back is the fit that was computed.
+#[derive(Serialize, Deserialize)]
+struct FitsRecord {
+    best: Option<MlFitRecord>,
+    failed: usize,
+    basins: Vec<Exact>,
+}
+
+#[derive(Serialize, Deserialize)]
+struct MlFitRecord {
+    params: Exact,
+    /// Per curve: the AR(1) [σ, φ].
+    strain_noise: Vec<Exact>,
+    #[serde(with = "exact")]
+    lifetime_sd: f64,
+    #[serde(with = "exact")]
+    neg2ll: f64,
+    residuals: Option<ResidualsRecord>,
+    eval: Option<EvaluationRecord>,
+    specimen: Option<SpecimenRecord>,
+    termination: Termination,
+    iterations: usize,
+    evaluations: usize,
+    failure: Option<String>,
+}
+
+#[derive(Serialize, Deserialize)]
+struct ResidualsRecord {
+    strain: Vec<Exact>,
+    /// Exact numbers, `null` for none.
+    lifetime: Vec<Value>,
+}
+
+#[derive(Serialize, Deserialize)]
+struct EvaluationRecord {
+    #[serde(with = "exact")]
+    objective: f64,
+    #[serde(with = "exact")]
+    norm_residual: f64,
+    curves: Vec<CurveRecord>,
+}
+
+#[derive(Serialize, Deserialize)]
+struct CurveRecord {
+    outcome: crate::ode::Outcome,
+    #[serde(with = "exact")]
+    rupture_time_h: f64,
+    #[serde(with = "exact")]
+    rupture_strain: f64,
+    #[serde(with = "exact")]
+    min_rate: f64,
+    strain: Exact,
+}
+
+#[derive(Serialize, Deserialize)]
+struct SpecimenRecord {
+    kinds: Vec<EffectKind>,
+    scatter: Exact,
+    scatter_lo95: Exact,
+    scatter_hi95: Exact,
+    effects: Vec<Exact>,
+    effects_sd: Vec<Exact>,
+    #[serde(with = "exact")]
+    neg2ll_effects: f64,
+    dropped: Vec<EffectKind>,
+}
+
+fn exacts(v: &[Vec<f64>]) -> Vec<Exact> {
+    v.iter().map(|x| Exact(x.clone())).collect()
+}
+
+fn plain(v: Vec<Exact>) -> Vec<Vec<f64>> {
+    v.into_iter().map(|x| x.0).collect()
+}
+
+impl From<&ModelFits> for FitsRecord {
+    fn from(m: &ModelFits) -> Self {
+        FitsRecord {
+            best: m.best.as_ref().map(|f| MlFitRecord {
+                params: Exact(f.params.clone()),
+                strain_noise: f
+                    .noise
+                    .strain
+                    .iter()
+                    .map(|a| Exact(vec![a.sigma, a.phi]))
+                    .collect(),
+                lifetime_sd: f.noise.lifetime_sd,
+                neg2ll: f.neg2ll,
+                residuals: f.residuals.as_ref().map(|r| ResidualsRecord {
+                    strain: exacts(&r.strain),
+                    lifetime: r
+                        .lifetime
+                        .iter()
+                        .map(|x| x.map_or(Value::Null, exact::to_json))
+                        .collect(),
+                }),
+                eval: f.eval.as_ref().map(|e| EvaluationRecord {
+                    objective: e.objective,
+                    norm_residual: e.norm_residual,
+                    curves: e
+                        .curves
+                        .iter()
+                        .map(|c| CurveRecord {
+                            outcome: c.outcome,
+                            rupture_time_h: c.rupture_time_h,
+                            rupture_strain: c.rupture_strain,
+                            min_rate: c.min_rate,
+                            strain: Exact(c.strain.clone()),
+                        })
+                        .collect(),
+                }),
+                specimen: f.specimen.as_ref().map(|s| SpecimenRecord {
+                    kinds: s.kinds.clone(),
+                    scatter: Exact(s.scatter.clone()),
+                    scatter_lo95: Exact(s.scatter_lo95.clone()),
+                    scatter_hi95: Exact(s.scatter_hi95.clone()),
+                    effects: exacts(&s.effects),
+                    effects_sd: exacts(&s.effects_sd),
+                    neg2ll_effects: s.neg2ll_effects,
+                    dropped: s.dropped.clone(),
+                }),
+                termination: f.termination,
+                iterations: f.iterations,
+                evaluations: f.evaluations,
+                failure: f.failure.clone(),
+            }),
+            failed: m.failed,
+            basins: exacts(&m.basins),
+        }
+    }
+}
+
+impl From<FitsRecord> for ModelFits {
+    fn from(r: FitsRecord) -> Self {
+        ModelFits {
+            best: r.best.map(|f| MlFit {
+                params: f.params.0,
+                noise: ErrorModel {
+                    strain: f
+                        .strain_noise
+                        .into_iter()
+                        .map(|a| Ar1 {
+                            sigma: a.0.first().copied().unwrap_or(f64::NAN),
+                            phi: a.0.get(1).copied().unwrap_or(f64::NAN),
+                        })
+                        .collect(),
+                    lifetime_sd: f.lifetime_sd,
+                },
+                neg2ll: f.neg2ll,
+                residuals: f.residuals.map(|r| Residuals {
+                    strain: plain(r.strain),
+                    lifetime: r.lifetime.iter().map(exact::from_json).collect(),
+                }),
+                eval: f.eval.map(|e| Evaluation {
+                    objective: e.objective,
+                    norm_residual: e.norm_residual,
+                    curves: e
+                        .curves
+                        .into_iter()
+                        .map(|c| CurvePrediction {
+                            outcome: c.outcome,
+                            rupture_time_h: c.rupture_time_h,
+                            rupture_strain: c.rupture_strain,
+                            min_rate: c.min_rate,
+                            strain: c.strain.0,
+                        })
+                        .collect(),
+                }),
+                specimen: f.specimen.map(|s| SpecimenFit {
+                    kinds: s.kinds,
+                    scatter: s.scatter.0,
+                    scatter_lo95: s.scatter_lo95.0,
+                    scatter_hi95: s.scatter_hi95.0,
+                    effects: plain(s.effects),
+                    effects_sd: plain(s.effects_sd),
+                    neg2ll_effects: s.neg2ll_effects,
+                    dropped: s.dropped,
+                }),
+                termination: f.termination,
+                iterations: f.iterations,
+                evaluations: f.evaluations,
+                failure: f.failure,
+            }),
+            failed: r.failed,
+            basins: plain(r.basins),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -155,5 +389,86 @@ mod tests {
             })
             .unwrap();
         assert_eq!(calls.load(Ordering::SeqCst), 60);
+    }
+
+    #[test]
+    fn fits_on_the_data_come_back_from_the_journal_bit_for_bit() {
+        let curve = CurvePrediction {
+            outcome: crate::ode::Outcome::Ruptured,
+            rupture_time_h: 1234.5678901234567,
+            rupture_strain: f64::INFINITY,
+            min_rate: 1e-7 / 3.0,
+            strain: vec![0.0, 0.1 / 7.0, f64::NAN],
+        };
+        let fit = MlFit {
+            params: vec![1.0 / 3.0, -2e-300, f64::MAX],
+            noise: ErrorModel {
+                strain: vec![Ar1 {
+                    sigma: 1e-4 / 3.0,
+                    phi: 0.987654321,
+                }],
+                lifetime_sd: f64::NAN,
+            },
+            neg2ll: -8967.612345,
+            residuals: Some(Residuals {
+                strain: vec![vec![1e-5, -f64::INFINITY], vec![]],
+                lifetime: vec![Some(0.25), None, Some(f64::NAN)],
+            }),
+            eval: Some(Evaluation {
+                objective: 0.1 + 0.2,
+                norm_residual: f64::NEG_INFINITY,
+                curves: vec![curve],
+            }),
+            specimen: Some(SpecimenFit {
+                kinds: vec![EffectKind::Rate],
+                scatter: vec![0.23],
+                scatter_lo95: vec![0.0],
+                scatter_hi95: vec![f64::NAN],
+                effects: vec![vec![-0.1, 0.2 / 3.0]],
+                effects_sd: vec![vec![0.05, 0.07]],
+                neg2ll_effects: 12.5,
+                dropped: vec![EffectKind::Ductility],
+            }),
+            termination: Termination::ConvergedStep,
+            iterations: 17,
+            evaluations: 40,
+            failure: Some("x".into()),
+        };
+        let fits = ModelFits {
+            best: Some(fit),
+            failed: 2,
+            basins: vec![vec![0.5, 1.0 / 7.0]],
+        };
+        let d = tempfile::TempDir::new().unwrap();
+        let id = serde_json::json!({"command": "test"});
+        let key = fits_key(0, "base", &[vec![1.0]]);
+        {
+            let j = Journal::open(d.path(), &id).unwrap();
+            let h = Hooks {
+                observer: &SILENT,
+                journal: Some(&j),
+            };
+            assert!(h.fits_done(&key).is_none());
+            h.fits_finished(&key, &fits).unwrap();
+        }
+        let j = Journal::open(d.path(), &id).unwrap();
+        let h = Hooks {
+            observer: &SILENT,
+            journal: Some(&j),
+        };
+        let back = h.fits_done(&key).expect("journaled");
+        // Debug writes every number in shortest round-trip form: equal text, equal bits.
+        assert_eq!(format!("{back:?}"), format!("{fits:?}"));
+        assert!(h.fits_done(&fits_key(0, "base", &[vec![2.0]])).is_none());
+        let none = ModelFits {
+            best: None,
+            failed: 5,
+            basins: vec![],
+        };
+        h.fits_finished("fits/1/x/0", &none).unwrap();
+        assert_eq!(
+            format!("{:?}", h.fits_done("fits/1/x/0").unwrap()),
+            format!("{none:?}")
+        );
     }
 }
