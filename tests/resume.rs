@@ -212,3 +212,68 @@ fn an_interrupted_profile_resumes_to_the_same_files() {
     assert!(!summary.contains("timings_s"), "{summary}");
     assert!(timings(&plain)["timings_s"]["total"].as_f64().unwrap() > 0.0);
 }
+
+/// Every file of `dir` but the journal, the manifest and the timings, by name.
+fn results(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut files: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.is_file())
+        .map(|p| (p.file_name().unwrap().to_str().unwrap().to_string(), p))
+        .filter(|(n, _)| {
+            ![
+                "journal.jsonl",
+                "manifest.json",
+                "timings.json",
+                ".creepfit.lock",
+            ]
+            .contains(&n.as_str())
+        })
+        .map(|(n, p)| (n, bytes(&p)))
+        .collect();
+    files.sort();
+    files
+}
+
+#[test]
+fn an_interrupted_holdout_resumes_to_the_same_files() {
+    let d = TempDir::new().unwrap();
+    let run = |out: &Path, extra: &[&str]| {
+        let mut args = vec![
+            "holdout",
+            "configs/alloy617.toml",
+            "--temperature",
+            "950",
+            "--starts",
+            "3",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        creepfit(&args)
+    };
+    let plain = d.path().join("plain");
+    ok(&run(&plain, &[]));
+    let total = records(&plain);
+    assert!(total >= 4, "{total}");
+    let resumed = d.path().join("resumed");
+    let o = run(&resumed, &["--stop-after", "2", "-q"]);
+    interrupted(&o, &resumed.join("journal.jsonl"));
+    let kept = records(&resumed);
+    assert!((2..total).contains(&kept), "{kept} of {total}");
+    ok(&run(&resumed, &[]));
+    let t = timings(&resumed);
+    assert_eq!(t["journal_records_resumed"], kept);
+    assert_eq!(t["journal_records_written"], total - kept);
+    let (a, b) = (results(&plain), results(&resumed));
+    assert_eq!(
+        a.iter().map(|f| &f.0).collect::<Vec<_>>(),
+        b.iter().map(|f| &f.0).collect::<Vec<_>>()
+    );
+    assert!(a.len() >= 5, "{a:?}");
+    for ((name, x), (_, y)) in a.iter().zip(&b) {
+        assert!(x == y, "{name} differs after resuming");
+    }
+    let summary = String::from_utf8(bytes(&plain.join("summary.json"))).unwrap();
+    assert!(!summary.contains("wall_s"), "{summary}");
+}
