@@ -185,7 +185,7 @@ impl Observer for Bars {
             ),
             None => (
                 indicatif::ProgressBar::new_spinner(),
-                "{elapsed_precise} {prefix}: {spinner} {pos} done",
+                "{elapsed_precise} {prefix}: {spinner}",
             ),
         };
         bar.set_style(

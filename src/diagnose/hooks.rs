@@ -122,6 +122,42 @@ impl Hooks<'_> {
         Some(r.into())
     }
 
+    /// The leave-one-stress-out check of model `i` (named `name`) fitted to `params` (`None`:
+    /// not fitted) from `starts`: read from the journal when an earlier run finished it, else
+    /// `compute()`d and journaled (flushed). `Err` when the observer asks to stop first.
+    pub fn loo(
+        &self,
+        i: usize,
+        name: &str,
+        params: Option<&Vec<f64>>,
+        starts: &[Vec<f64>],
+        compute: impl FnOnce() -> super::Loo,
+    ) -> Result<super::Loo> {
+        let key = format!("loo/{i}/{name}/{}", debug_hash(&(params, starts)));
+        if let Some(r) = self.journal.and_then(|j| j.get::<LooRecord>(&key)) {
+            self.observer.resumed(1);
+            return Ok(super::Loo {
+                rmse: r.rmse,
+                lifetime_err_pct: r.lifetime_err_pct,
+                failed_folds: r.failed_folds.0,
+            });
+        }
+        self.check("leave-one-stress-out")?;
+        let loo = compute();
+        if let Some(j) = self.journal {
+            j.put(
+                &key,
+                &LooRecord {
+                    rmse: loo.rmse,
+                    lifetime_err_pct: loo.lifetime_err_pct,
+                    failed_folds: Exact(loo.failed_folds.clone()),
+                },
+            )?;
+        }
+        self.step();
+        Ok(loo)
+    }
+
     /// The fits on the data `f` are done: journaled (flushed) under `key`, a step.
     pub fn fits_finished(&self, key: &str, f: &ModelFits) -> Result<()> {
         if let Some(j) = self.journal {
@@ -130,6 +166,16 @@ impl Hooks<'_> {
         self.step();
         Ok(())
     }
+}
+
+/// A [`super::Loo`] as a journal record, numbers exact.
+#[derive(Serialize, Deserialize)]
+struct LooRecord {
+    #[serde(with = "exact")]
+    rmse: f64,
+    #[serde(with = "exact")]
+    lifetime_err_pct: f64,
+    failed_folds: Exact,
 }
 
 /// A [`ModelFits`] as a journal record: every field, every number exact

@@ -1210,19 +1210,15 @@ pub fn diagnose_observed(
         .iter()
         .enumerate()
         .map(|(i, s)| {
-            hooks.check("leave-one-stress-out")?;
-            let loo = match &fits[i] {
-                Some(f) => {
-                    leave_one_stress_out(s, curves, &f.params, &start_sets[i], &settings, &ml)
-                }
+            let params = fits[i].as_ref().map(|f| &f.params);
+            hooks.loo(i, &s.name, params, &start_sets[i], || match params {
+                Some(p) => leave_one_stress_out(s, curves, p, &start_sets[i], &settings, &ml),
                 None => Loo {
                     rmse: f64::NAN,
                     lifetime_err_pct: f64::NAN,
                     failed_folds: vec![],
                 },
-            };
-            hooks.step();
-            Ok(loo)
+            })
         })
         .collect::<Result<_>>()?;
     phase.loo = t_loo.elapsed().as_secs_f64();
