@@ -24,11 +24,13 @@ t0=$(now); run "$out/plain" > "$out/plain.log" 2>&1; t1=$(now)
 full=$(awk "BEGIN{print $t1-$t0}")
 echo "uninterrupted: $full s"
 wait_s=$(awk "BEGIN{print $full*$frac}")
-run "$out/resumed" > "$out/killed.log" 2>&1 &
+# The binary itself in the background (not a function: its pid would be a subshell's).
+"$bin" "$cmd" "$cfg" "${extra[@]}" --threads 2 --quiet --out "$out/resumed" > "$out/killed.log" 2>&1 &
 pid=$!
 sleep "$wait_s"
 kill -9 "$pid"
 wait "$pid" 2>/dev/null || true
+if kill -0 "$pid" 2>/dev/null; then echo "error: pid $pid still runs" >&2; exit 1; fi
 kept=$(($(wc -l < "$out/resumed/journal.jsonl") - 1))
 total=$(($(wc -l < "$out/plain/journal.jsonl") - 1))
 echo "kill -9 after $wait_s s: $kept of $total journal records kept"
