@@ -14,10 +14,10 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 sed "s#\.\./data/#$PWD/data/#" configs/560C.toml > "$tmp/560.toml"
 printf '\n[profile]\npredict_stress_MPa = [70]\n' >> "$tmp/560.toml"
-# A phase's seconds, read inside "timings_s" ("calibration" and "combinations" are also
-# top-level keys of summary.json holding other things).
-field() { sed -n '/"timings_s"/,/}/p' "$tmp/out/summary.json" | grep -o "\"$1\": [0-9.e-]*" | head -1 | awk '{printf "%.2f", $2}'; }
+# A phase's seconds, read inside "timings_s" of timings.json.
+field() { sed -n '/"timings_s"/,/}/p' "$tmp/out/timings.json" | grep -o "\"$1\": [0-9.e-]*" | head -1 | awk '{printf "%.2f", $2}'; }
 for i in $(seq "$runs"); do
+    rm -rf "$tmp/out"  # else the run resumes from the previous one's journal
     start=$(date +%s.%N)
     ./target/release/creepfit profile "$tmp/560.toml" --threads 2 --out "$tmp/out" > /dev/null
     end=$(date +%s.%N)

@@ -22,9 +22,10 @@ for cfg in "$@"; do
     mkdir -p "$out"
     "$bin" holdout "$cfg" --temperature "$t" "${starts[@]}" --out "$out" >"$out/run.log" 2>&1 \
       || { echo "$stem $t: failed, see $out/run.log"; continue; }
-    python3 - "$out/summary.json" "$stem" "$t" <<'PY'
+    python3 - "$out/summary.json" "$stem" "$t" "$out/timings.json" <<'PY'
 import json, sys
 s = json.load(open(sys.argv[1]))
+s["wall_s"] = json.load(open(sys.argv[4]))["wall_s"]  # this run's (a rerun resumes the fits)
 b = s.get("one_to_beat")
 best = f"{b['name']} {b['mean_abs_log10_err']:.3f}" if b else "none"
 print(f"{sys.argv[2]:<28} {sys.argv[3]:>6} {s['tests']:>6} {s['model_mean_abs_log10_err']:>12.3f} "
