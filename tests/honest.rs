@@ -874,6 +874,9 @@ fn a_failed_run_leaves_its_folder_marked_incomplete() {
         .iter()
         .map(|f| (f.clone(), std::fs::read(out.join(f)).unwrap()))
         .collect();
+    // Another run's journal would be refused (naming the differing setting): the folder is
+    // taken over by a new run once its journal is removed, as the refusal says.
+    std::fs::remove_file(out.join("journal.jsonl")).unwrap();
     let o = Command::new(env!("CARGO_BIN_EXE_creepfit"))
         .args([
             "profile",
