@@ -825,6 +825,90 @@ fn print_sweep(h: &sweep::Header, a: &sweep::Analysis) {
     }
 }
 
+/// `summary.json`'s `activation_energy`: the model's apparent activation energies at every
+/// tested load, and the data's own where one stress was tested at several temperatures.
+#[derive(serde::Serialize)]
+struct Activation {
+    model: Vec<crate::activation::Apparent>,
+    data: Vec<crate::activation::Measured>,
+}
+
+fn activation_energies(
+    run: &crate::fit::FitRun,
+    best: &crate::fit::LocalFit,
+    curves: &[crate::data::Curve],
+) -> Activation {
+    let longest = curves.iter().map(|c| c.life_h()).fold(1.0f64, f64::max);
+    let mut loads: Vec<(f64, f64)> = curves
+        .iter()
+        .map(|c| (c.temperature_c, c.stress_mpa))
+        .collect();
+    loads.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    loads.dedup();
+    let model = loads
+        .iter()
+        .map(|&(t, s)| {
+            crate::activation::apparent(
+                run.model.as_ref(),
+                &best.params,
+                t,
+                s,
+                run.settings.omega_f,
+                &run.settings.ode,
+                100.0 * longest,
+            )
+        })
+        .collect();
+    Activation {
+        model,
+        data: crate::activation::from_data(curves),
+    }
+}
+
+fn print_activation(a: &Activation) {
+    let range = |v: Vec<f64>| -> String {
+        let v: Vec<f64> = v.into_iter().filter(|x| x.is_finite()).collect();
+        if v.is_empty() {
+            return "-".into();
+        }
+        let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        format!("{lo:.0}–{hi:.0}")
+    };
+    println!(
+        "apparent activation energy (kJ/mol; −R ∂ln ε̇_min/∂(1/T), R ∂ln t_r/∂(1/T) at the tested loads; summary.json: activation_energy): model: min rate {}, rupture time {}; data (a stress tested at several temperatures): min rate {}, rupture time {}",
+        range(a.model.iter().map(|x| x.q_min_rate_kj_mol).collect()),
+        range(a.model.iter().map(|x| x.q_rupture_time_kj_mol).collect()),
+        range(a.data.iter().map(|x| x.q_min_rate_kj_mol).collect()),
+        range(a.data.iter().map(|x| x.q_rupture_time_kj_mol).collect()),
+    );
+}
+
+/// The scatter between specimens a likelihood fit found, in words.
+fn print_specimens(sp: &crate::fit::FitSpecimens) {
+    if let Some(f) = &sp.fit {
+        for (j, k) in f.kinds.iter().enumerate() {
+            let what = match k {
+                crate::likelihood::EffectKind::Rate => "creep rate",
+                crate::likelihood::EffectKind::Ductility => "rupture strain (ductility)",
+            };
+            println!(
+                "specimens: the {what} varies {:.0} % between specimens (sd of ln factor {:.3}, 95 % {:.3}–{:.3}; specimens.csv: each specimen's factor)",
+                tables::lognormal_cv_pct(f.scatter[j]),
+                f.scatter[j],
+                f.scatter_lo95[j],
+                f.scatter_hi95[j]
+            );
+        }
+        for k in &f.dropped {
+            println!("specimens: no {k:?} scatter supported by the data (estimated at zero)");
+        }
+    }
+    if let Some(n) = &sp.note {
+        println!("specimens: {n}");
+    }
+}
+
 fn fit(config: &Path, cli: &Overrides) -> Result<()> {
     let (cfg, data) = load(config, cli)?;
     let out = cfg.out_dir("fit");
@@ -849,7 +933,19 @@ fn fit_into(cfg: &RunConfig, data: &Dataset, out: &Path) -> Result<()> {
     let rows = tables::error_rows(best, curves);
     tables::write_errors(&out.join("errors.csv"), &rows)?;
     tables::write_fit_curves(&out.join("curves.csv"), best, curves)?;
-    let summary = tables::fit_summary(cfg, &run, curves);
+    let mut summary = tables::fit_summary(cfg, &run, curves);
+    let activation = cfg
+        .has_laws()
+        .then(|| activation_energies(&run, best, curves));
+    if let Some(a) = &activation {
+        summary["activation_energy"] = serde_json::to_value(a).expect("plain values");
+    }
+    if run.settings.kind == crate::config::ObjectiveKind::Likelihood {
+        summary["specimens"] = tables::specimens_json(&run.specimens);
+        if let Some(sp) = &run.specimens.fit {
+            tables::write_specimens(&out.join("specimens.csv"), sp, curves)?;
+        }
+    }
     write_text(
         &out.join("summary.json"),
         &serde_json::to_string_pretty(&summary).expect("JSON of plain values"),
@@ -888,6 +984,10 @@ fn fit_into(cfg: &RunConfig, data: &Dataset, out: &Path) -> Result<()> {
         );
     }
     print!("{}", tables::error_table(&rows, run.used_min_rate));
+    print_specimens(&run.specimens);
+    if let Some(a) = &activation {
+        print_activation(a);
+    }
     let per_t = crate::fit::errors_per_temperature(best, curves);
     if per_t.len() > 1 {
         for e in &per_t {

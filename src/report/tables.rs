@@ -568,3 +568,98 @@ pub fn fit_summary(cfg: &RunConfig, run: &FitRun, curves: &[Curve]) -> Value {
     }
     summary
 }
+
+/// Coefficient of variation (%) of a log-normal factor whose ln has sd `s`: what "the creep
+/// rate varies 23 % between specimens" means.
+pub fn lognormal_cv_pct(s: f64) -> f64 {
+    100.0 * (s * s).exp_m1().sqrt()
+}
+
+/// The kinds of specimen effect, in the order of `specimens.csv` and `summary.json`.
+const EFFECT_KINDS: [(crate::likelihood::EffectKind, &str); 2] = [
+    (crate::likelihood::EffectKind::Rate, "rate"),
+    (crate::likelihood::EffectKind::Ductility, "ductility"),
+];
+
+/// `summary.json`'s `specimens`: the scatter between specimens the likelihood fit found (per
+/// kind: sd of the ln factor, its 95 % interval, the coefficient of variation), or why there
+/// is none.
+pub fn specimens_json(sp: &crate::fit::FitSpecimens) -> Value {
+    let scatter: serde_json::Map<String, Value> = sp
+        .fit
+        .iter()
+        .flat_map(|f| {
+            f.kinds.iter().enumerate().map(move |(j, k)| {
+                let name = EFFECT_KINDS.iter().find(|e| e.0 == *k).map_or("?", |e| e.1);
+                (
+                    name.to_string(),
+                    json!({
+                        "sd_ln": jnum(f.scatter[j]),
+                        "sd_ln_lo95": jnum(f.scatter_lo95[j]),
+                        "sd_ln_hi95": jnum(f.scatter_hi95[j]),
+                        "cv_pct": jnum(lognormal_cv_pct(f.scatter[j])),
+                    }),
+                )
+            })
+        })
+        .collect();
+    json!({
+        "fitted": sp.fit.is_some(),
+        "scatter": scatter,
+        "dropped": sp.fit.as_ref().map(|f| f.dropped.clone()).unwrap_or_default(),
+        "neg2ll_without_effects": jnum(sp.plain_neg2ll),
+        "replicate_curves": sp.replicate_curves,
+        "replicate_sd_ln_rupture_time": sp.replicate_sd_ln_life.map(jnum),
+        "note": sp.note,
+    })
+}
+
+/// `specimens.csv`: each curve's specimen factors (the conditional mode e^η of the factor
+/// on the creep rate, and on the rupture strain, with e^(η ± 1.96 sd)), empty for a kind the
+/// fit does not carry.
+pub fn write_specimens(
+    path: &Path,
+    fit: &crate::likelihood::SpecimenFit,
+    curves: &[Curve],
+) -> Result<()> {
+    let rows: Vec<Vec<String>> = curves
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let mut row = vec![
+                (i + 1).to_string(),
+                num(c.temperature_c),
+                num(c.stress_mpa),
+                c.specimen.clone().unwrap_or_default(),
+            ];
+            for (kind, _) in EFFECT_KINDS {
+                match fit.kinds.iter().position(|k| *k == kind) {
+                    Some(j) => {
+                        let (e, sd) = (fit.effects[j][i], fit.effects_sd[j][i]);
+                        row.push(num(e.exp()));
+                        row.push(num((e - 1.96 * sd).exp()));
+                        row.push(num((e + 1.96 * sd).exp()));
+                    }
+                    None => row.extend([String::new(), String::new(), String::new()]),
+                }
+            }
+            row
+        })
+        .collect();
+    write_csv(
+        path,
+        &[
+            "curve",
+            "temperature_C",
+            "stress_MPa",
+            "specimen",
+            "rate_factor",
+            "rate_factor_lo95",
+            "rate_factor_hi95",
+            "ductility_factor",
+            "ductility_factor_lo95",
+            "ductility_factor_hi95",
+        ],
+        &rows,
+    )
+}
