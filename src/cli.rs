@@ -513,7 +513,17 @@ fn with_threads<T: Send>(
 
 fn diagnose_cmd(config: &Path, cli: &Overrides) -> Result<()> {
     let (cfg, data) = load(config, cli)?;
-    let temps = temperatures(&data);
+    diagnose_check(&cfg, &data)?;
+    let out = cfg.out_dir("diagnose");
+    let mut folder = RunFolder::begin(&out, "diagnose")?;
+    note_data(&mut folder, &data);
+    folder.finish(diagnose_into(&cfg, &data, &out))
+}
+
+/// What `diagnose` refuses before it starts: data at several temperatures without a
+/// temperature law.
+pub fn diagnose_check(cfg: &RunConfig, data: &Dataset) -> Result<()> {
+    let temps = temperatures(data);
     if temps.len() > 1 && !cfg.has_laws() {
         return Err(Error::config(
             &cfg.path,
@@ -524,10 +534,7 @@ fn diagnose_cmd(config: &Path, cli: &Overrides) -> Result<()> {
             ),
         ));
     }
-    let out = cfg.out_dir("diagnose");
-    let mut folder = RunFolder::begin(&out, "diagnose")?;
-    note_data(&mut folder, &data);
-    folder.finish(diagnose_into(&cfg, &data, &out))
+    Ok(())
 }
 
 /// `diagnose`'s computation and outputs into `out`.
@@ -1007,27 +1014,11 @@ pub(crate) fn curve_plots(
 
 fn predict_cmd(config: &Path, constants: &Path, cli: &Overrides) -> Result<()> {
     let (cfg, data) = load(config, cli)?;
-    if cfg.predict.at.is_empty() {
-        return Err(Error::config(
-            &cfg.path,
-            "predict.at: no conditions to predict: give --at T:stress[,T:stress…] or [predict] at",
-        ));
-    }
+    crate::predict::check_asked(&cfg)?;
     let model = cfg.build_model()?;
     let params = tables::read_constants_for(constants, &cfg, model.as_ref())?;
     // What the configuration can predict: refused before anything is written.
-    let tested = crate::predict::Tested::of(&data, cfg.has_laws());
-    let from_cli = cli.predict_at.is_some();
-    for (k, c) in cfg.predict.at.iter().enumerate() {
-        if let Err(why) = tested.classify(*c) {
-            let at = format!("{}:{}", c.temperature_c, c.stress_mpa);
-            return Err(if from_cli {
-                Error::Invalid(format!("--at {at}: {why}"))
-            } else {
-                cfg.error_at(&format!("predict.at[{k}]"), format!("\"{at}\": {why}"))
-            });
-        }
-    }
+    crate::predict::check_conditions(&cfg, &data, cli.predict_at.is_some())?;
     let out = cfg.out_dir("predict");
     let mut folder = RunFolder::begin(&out, "predict")?;
     note_data(&mut folder, &data);
@@ -1048,20 +1039,7 @@ fn predict_into(
     for n in crate::predict::extrapolation_notes(&tested, &cfg.predict.at) {
         eprintln!("warning: {n}");
     }
-    let given = crate::predict::predict(cfg, data, model, params, &cfg.predict.at);
-    let run = if cfg.predict.intervals {
-        let loads: Vec<crate::model::Load> = cfg
-            .predict
-            .at
-            .iter()
-            .map(|c| crate::model::Load::new(c.stress_mpa, c.temperature_c, cfg.objective.omega_f))
-            .collect();
-        let iv = crate::uncertainty::predict::intervals_at(cfg, model, data, params, &loads)?;
-        let centre = crate::predict::predict(cfg, data, model, &iv.refit.params, &cfg.predict.at);
-        crate::predict::centre_on_intervals(centre, iv, given.predictions)
-    } else {
-        given
-    };
+    let run = crate::predict::run(cfg, data, model, params)?;
     println!("{}: model {}", cfg.name, model.name());
     let names: Vec<&str> = model.constants().iter().map(|c| c.name).collect();
     print!("{}", crate::predict::table(&run, &names));
