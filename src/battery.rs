@@ -47,14 +47,17 @@ pub struct SetResult {
     /// Material family.
     pub family: String,
     /// Effect size (see [`crate::synth::Effect::size`]).
+    #[serde(deserialize_with = "de_f64")]
     pub size: f64,
     /// Sampling (`digitised` or `logged`).
     pub sampling: String,
     /// AR(1) correlation of the reading error.
+    #[serde(deserialize_with = "de_f64")]
     pub noise_phi: f64,
     /// Number of curves.
     pub curves: usize,
     /// Oracle noncentrality λ (0 for no effect by construction: NaN if the oracle failed).
+    #[serde(deserialize_with = "de_f64")]
     pub lambda: f64,
     /// λ ≥ [`DETECTABLE_LAMBDA`].
     pub detectable: bool,
@@ -63,11 +66,14 @@ pub struct SetResult {
     pub cause: Option<String>,
     pub closest: Option<String>,
     /// Bootstrap p-values per extension, and of the base goodness of fit.
+    #[serde(deserialize_with = "de_named_f64")]
     pub p_values: Vec<(String, f64)>,
+    #[serde(deserialize_with = "de_vec_f64")]
     pub gof_p: Vec<f64>,
     /// Bootstrap replicates drawn.
     pub replicates: usize,
     /// Wall time of `diagnose`, s.
+    #[serde(deserialize_with = "de_f64")]
     pub wall_s: f64,
     /// The world the set comes from.
     #[serde(default)]
@@ -78,14 +84,36 @@ pub struct SetResult {
     pub scatter_true: Vec<f64>,
     /// The base model's estimated scatter per kind (rate, ductility; 0 where the fit carries
     /// none) and its 95 % interval.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "de_vec_f64")]
     pub scatter_est: Vec<f64>,
-    #[serde(default)]
+    #[serde(default, deserialize_with = "de_vec_f64")]
     pub scatter_lo95: Vec<f64>,
-    #[serde(default)]
+    #[serde(default, deserialize_with = "de_vec_f64")]
     pub scatter_hi95: Vec<f64>,
     /// Why the set could not be generated or diagnosed, if so.
     pub error: Option<String>,
+}
+
+/// Numbers JSON wrote as `null` (NaN: a p-value not computed, an interval not known) read
+/// back as NaN.
+fn de_vec_f64<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Vec<f64>, D::Error> {
+    let v = Vec::<Option<f64>>::deserialize(d)?;
+    Ok(v.into_iter().map(|x| x.unwrap_or(f64::NAN)).collect())
+}
+
+/// A number JSON wrote as `null` (NaN) reads back as NaN.
+fn de_f64<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
+}
+
+/// [`de_vec_f64`] for named numbers.
+fn de_named_f64<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> std::result::Result<Vec<(String, f64)>, D::Error> {
+    let v = Vec::<(String, Option<f64>)>::deserialize(d)?;
+    Ok(v.into_iter()
+        .map(|(n, x)| (n, x.unwrap_or(f64::NAN)))
+        .collect())
 }
 
 impl SetResult {
@@ -735,4 +763,60 @@ pub fn write_reports(dir: &Path, results: &[SetResult], first_seed: u64) -> Resu
         "named correctly, % of sets",
     )?;
     Ok(r)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A set whose numbers are not known (NaN: an oracle that failed, a p-value not
+    /// computed, a scatter interval of a dropped kind) reads back from its JSON line: a
+    /// resumed battery failed on exactly this (`null` where an f64 was expected).
+    #[test]
+    fn unknown_numbers_survive_the_results_file() {
+        let mut r = run_one_skeleton();
+        r.p_values = vec![("constant_load".into(), f64::NAN), ("x".into(), 0.25)];
+        r.gof_p = vec![f64::NAN, 0.5];
+        r.scatter_est = vec![0.2, 0.0];
+        r.scatter_lo95 = vec![0.1, f64::NAN];
+        r.scatter_hi95 = vec![0.3, f64::NAN];
+        let line = serde_json::to_string(&r).unwrap();
+        assert!(line.contains("null"));
+        let back: SetResult = serde_json::from_str(&line).unwrap();
+        assert!(back.lambda.is_nan() && back.size.is_nan() && back.wall_s.is_nan());
+        assert!(back.p_values[0].1.is_nan() && back.p_values[1].1 == 0.25);
+        assert!(back.gof_p[0].is_nan() && back.gof_p[1] == 0.5);
+        assert!(back.scatter_lo95[1].is_nan() && back.scatter_hi95[0] == 0.3);
+        // Written again, it is the same line.
+        assert_eq!(serde_json::to_string(&back).unwrap(), line);
+    }
+
+    fn run_one_skeleton() -> SetResult {
+        // A set whose generator numbers are not known.
+        SetResult {
+            name: "set-1".into(),
+            seed: 1,
+            scenario: "none".into(),
+            family: String::new(),
+            size: f64::NAN,
+            sampling: String::new(),
+            noise_phi: 0.3,
+            curves: 0,
+            lambda: f64::NAN,
+            detectable: false,
+            verdict: None,
+            cause: None,
+            closest: None,
+            p_values: vec![],
+            gof_p: vec![],
+            replicates: 0,
+            wall_s: f64::NAN,
+            world: World::Specimens,
+            scatter_true: vec![0.2, 0.08],
+            scatter_est: vec![],
+            scatter_lo95: vec![],
+            scatter_hi95: vec![],
+            error: Some("not generated".into()),
+        }
+    }
 }

@@ -1,0 +1,316 @@
+//! Specimen effects (random effects) of the likelihood: the Laplace approximation against a
+//! brute-force integral, the scatter recovered from generated specimens, and `diagnose` on
+//! generated data with specimen scatter (a null set and a hidden effect).
+
+use creepfit::config::{LifetimeTerm, ObjectiveKind};
+use creepfit::data::{estimate_min_rate, Curve};
+use creepfit::errmodel::{Ar1, ErrorModel};
+use creepfit::fit::FitSettings;
+use creepfit::likelihood::{
+    laplace_at, ml_fit, raw_objective, scatter_intervals, split_residuals, EffectKind,
+    EffectLayout, MlOptions, SpecimenOptions,
+};
+use creepfit::lsq::LmOptions;
+use creepfit::model::{registry, Load, Model, Scale};
+use creepfit::objective::{CurveFactors, JacobianMethod, ParamSpace};
+use creepfit::ode::OdeOptions;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+
+/// The seed steel's 560 °C constants (`creepfit fit configs/560C.toml`).
+const TRUTH: [f64; 6] = [1.0e-10, 0.1749, 0.563, 5.9e4, 2.21e-5, 4.03];
+
+/// A wide box around them.
+fn space() -> ParamSpace {
+    ParamSpace::new(
+        vec![1e-12, 0.05, 0.2, 1e3, 1e-7, 1.0],
+        vec![1e-8, 0.4, 0.9, 1e6, 1e-3, 15.0],
+        vec![
+            Scale::Log,
+            Scale::Linear,
+            Scale::Linear,
+            Scale::Log,
+            Scale::Log,
+            Scale::Linear,
+        ],
+    )
+}
+
+fn settings() -> FitSettings {
+    FitSettings {
+        lm: LmOptions {
+            max_iterations: 200,
+            ftol: 1e-10,
+            ..LmOptions::default()
+        },
+        ode: OdeOptions {
+            rtol: 1e-10,
+            atol: 1e-14,
+            ..OdeOptions::default()
+        },
+        omega_f: 1.0 / 3.0,
+        lifetime: LifetimeTerm::Both,
+        jacobian: JacobianMethod::Sensitivity,
+        kind: ObjectiveKind::Likelihood,
+        lifetime_sd_floor: 0.01,
+    }
+}
+
+/// One specimen's curve at `stress` (MPa): the truth with its rate × e^η and rupture strain
+/// × e^ζ, `n` points evenly in time to 97 % of its life, white reading error `sd` (strain
+/// fraction), its rupture time scattered by 1 %.
+fn specimen(
+    model: &dyn Model,
+    stress: f64,
+    eta: f64,
+    zeta: f64,
+    n: usize,
+    sd: f64,
+    rng: &mut ChaCha8Rng,
+) -> Curve {
+    let mut p = TRUTH.to_vec();
+    p[0] *= eta.exp();
+    p[5] /= zeta.exp();
+    let load = Load::new(stress, 560.0, 1.0 / 3.0);
+    let ode = settings().ode;
+    let r = model.simulate(&p, &load, &[], &mut [], &ode);
+    assert!(r.ruptured());
+    let times: Vec<f64> = (0..n)
+        .map(|k| 0.97 * r.t_end * k as f64 / (n - 1) as f64)
+        .collect();
+    let mut e = vec![0.0; n];
+    model.simulate(&p, &load, &times, &mut e, &ode);
+    for v in e.iter_mut().skip(1) {
+        let z: f64 = StandardNormal.sample(rng);
+        *v += sd * z;
+    }
+    let z: f64 = StandardNormal.sample(rng);
+    let tf = r.t_end * (0.01 * z).exp();
+    Curve {
+        temperature_c: 560.0,
+        stress_mpa: stress,
+        specimen: None,
+        min_rate_estimated: estimate_min_rate(&times, &e, tf),
+        rupture_strain: *e.last().unwrap(),
+        times_h: times,
+        strains: e,
+        rupture_time_h: Some(tf),
+        min_rate_measured: None,
+    }
+}
+
+/// −2 ln ∫ p(y | θ, η) N(η; 0, diag τ²) dη by the trapezoidal rule on a grid of ±8 τ per
+/// kind (`steps` intervals each), log-sum-exp.
+fn brute_force(
+    model: &dyn Model,
+    curves: &[Curve],
+    kinds: &[(usize, f64)],
+    tau: &[f64],
+    noise: &ErrorModel,
+    steps: usize,
+) -> f64 {
+    let s = settings();
+    let nll = |eta: &[f64]| -> f64 {
+        let f = CurveFactors {
+            index: kinds.iter().map(|k| k.0).collect(),
+            factors: vec![kinds
+                .iter()
+                .zip(eta)
+                .map(|((_, sign), e)| (sign * e).exp())
+                .collect()],
+        };
+        let obj = raw_objective(model, curves, &s).with_factors(Some(f));
+        let mut r = vec![0.0; obj.n_residuals()];
+        obj.residuals(&TRUTH, &mut r).expect("evaluable");
+        noise.neg2ll(&split_residuals(curves, &r))
+    };
+    let grid = |t: f64| -> Vec<f64> {
+        (0..=steps)
+            .map(|i| -8.0 * t + 16.0 * t * i as f64 / steps as f64)
+            .collect()
+    };
+    let weight = |i: usize| if i == 0 || i == steps { 0.5 } else { 1.0 };
+    // log of the integrand at every grid point, with its quadrature weight.
+    let mut terms: Vec<f64> = Vec::new();
+    let g0 = grid(tau[0]);
+    let h0 = g0[1] - g0[0];
+    let log_norm =
+        |e: f64, t: f64| -0.5 * (e / t).powi(2) - (t * (2.0 * std::f64::consts::PI).sqrt()).ln();
+    if tau.len() == 1 {
+        for (i, &e) in g0.iter().enumerate() {
+            terms.push((weight(i) * h0).ln() - 0.5 * nll(&[e]) + log_norm(e, tau[0]));
+        }
+    } else {
+        let g1 = grid(tau[1]);
+        let h1 = g1[1] - g1[0];
+        for (i, &e) in g0.iter().enumerate() {
+            for (j, &z) in g1.iter().enumerate() {
+                terms.push(
+                    (weight(i) * weight(j) * h0 * h1).ln() - 0.5 * nll(&[e, z])
+                        + log_norm(e, tau[0])
+                        + log_norm(z, tau[1]),
+                );
+            }
+        }
+    }
+    let m = terms.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+    -2.0 * (m + terms.iter().map(|t| (t - m).exp()).sum::<f64>().ln())
+}
+
+/// The Laplace approximation and the brute-force integral of one specimen's curve of `n`
+/// points, its rate (and ductility, if `both`) scattering with `tau`.
+fn laplace_and_brute(n: usize, sd: f64, tau: &[f64], both: bool, seed: u64) -> (f64, f64) {
+    let model = registry("khd").unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let curves = vec![specimen(
+        model.as_ref(),
+        100.0,
+        0.15,
+        if both { -0.05 } else { 0.0 },
+        n,
+        sd,
+        &mut rng,
+    )];
+    let kinds = if both {
+        vec![EffectKind::Rate, EffectKind::Ductility]
+    } else {
+        vec![EffectKind::Rate]
+    };
+    let sp = space();
+    let (layout, dropped) = EffectLayout::new(model.as_ref(), &curves, &sp, &kinds);
+    assert!(dropped.is_empty());
+    let layout = layout.unwrap();
+    let noise = ErrorModel {
+        strain: vec![Ar1::white(sd)],
+        lifetime_sd: 0.01,
+    };
+    let (lap, _) = laplace_at(
+        model.as_ref(),
+        &curves,
+        &sp,
+        &TRUTH,
+        &layout,
+        tau,
+        &noise,
+        &settings(),
+    )
+    .unwrap();
+    let signs: Vec<(usize, f64)> = if both {
+        vec![(0, 1.0), (5, -1.0)]
+    } else {
+        vec![(0, 1.0)]
+    };
+    let brute = brute_force(
+        model.as_ref(),
+        &curves,
+        &signs,
+        tau,
+        &noise,
+        if both { 160 } else { 4000 },
+    );
+    (lap, brute)
+}
+
+#[test]
+fn laplace_matches_a_brute_force_integral_and_converges_with_the_points() {
+    // One specimen's rate effect, τ = 0.3, white reading error of 0.2 % strain: the
+    // conditional posterior of η is nearly Gaussian and narrows as points are added, so the
+    // Laplace approximation's error (O(1/n) in −2 ln L for a smooth model) falls with n.
+    let mut errs = vec![];
+    for n in [6, 24, 96] {
+        let (lap, brute) = laplace_and_brute(n, 2e-3, &[0.3], false, 3);
+        eprintln!(
+            "n = {n}: Laplace {lap:.6}, brute force {brute:.6}, difference {:.2e}",
+            lap - brute
+        );
+        errs.push((lap - brute).abs());
+    }
+    assert!(errs[2] < errs[0], "{errs:?}");
+    // Below the bootstrap's tie tolerance (0.01 of −2 ln L): no decision can depend on it.
+    assert!(errs[2] < 0.01, "{errs:?}");
+}
+
+#[test]
+fn laplace_matches_a_two_dimensional_integral() {
+    // Rate and ductility of one specimen: a 161 × 161 grid over ±8 τ.
+    let (lap, brute) = laplace_and_brute(60, 2e-3, &[0.3, 0.1], true, 5);
+    eprintln!("2-D: Laplace {lap:.6}, brute force {brute:.6}");
+    assert!((lap - brute).abs() < 0.01, "{lap} vs {brute}");
+}
+
+#[test]
+fn the_scatter_of_generated_specimens_is_recovered() {
+    // 16 specimens at 4 stresses (4 replicates each), creep rate scattering with τ = 0.2,
+    // ductility with 0.08, 40 points each with 0.02 % strain white reading error.
+    let model = registry("khd").unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(21);
+    let (tr, td) = (0.2, 0.08);
+    let mut curves = vec![];
+    let mut true_eta = vec![];
+    for s in [85.0, 95.0, 105.0, 115.0] {
+        for _ in 0..4 {
+            let e: f64 = StandardNormal.sample(&mut rng);
+            let z: f64 = StandardNormal.sample(&mut rng);
+            true_eta.push(tr * e);
+            curves.push(specimen(
+                model.as_ref(),
+                s,
+                tr * e,
+                td * z,
+                40,
+                2e-4,
+                &mut rng,
+            ));
+        }
+    }
+    let sp = space();
+    let opts = MlOptions {
+        specimen: SpecimenOptions::BOTH,
+        ..MlOptions::default()
+    };
+    let mut fit = ml_fit(model.as_ref(), &curves, &sp, &TRUTH, &settings(), &opts);
+    scatter_intervals(&mut fit, model.as_ref(), &curves, &sp, &settings(), &opts);
+    let f = fit.specimen.as_ref().expect("scatter found");
+    eprintln!(
+        "scatter {:?} [{:?}, {:?}], −2 ln L {:.2}",
+        f.scatter, f.scatter_lo95, f.scatter_hi95, fit.neg2ll
+    );
+    assert_eq!(f.kinds, [EffectKind::Rate, EffectKind::Ductility]);
+    for (k, t) in [tr, td].iter().enumerate() {
+        assert!(
+            f.scatter_lo95[k] <= *t && *t <= f.scatter_hi95[k],
+            "kind {k}: {t} outside [{}, {}]",
+            f.scatter_lo95[k],
+            f.scatter_hi95[k]
+        );
+    }
+    // The specimens' own rate factors follow the truth's up to what the constants take (the
+    // mean, and a trend with stress): their correlation.
+    let est = &f.effects[0];
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    let (me, mt) = (mean(est), mean(&true_eta));
+    let cov: f64 = est
+        .iter()
+        .zip(&true_eta)
+        .map(|(a, b)| (a - me) * (b - mt))
+        .sum();
+    let va: f64 = est.iter().map(|a| (a - me).powi(2)).sum();
+    let vb: f64 = true_eta.iter().map(|b| (b - mt).powi(2)).sum();
+    let corr = cov / (va * vb).sqrt();
+    eprintln!("correlation of the rate effects with the truth's: {corr:.3}");
+    let plain = ml_fit(
+        model.as_ref(),
+        &curves,
+        &sp,
+        &TRUTH,
+        &settings(),
+        &MlOptions::default(),
+    );
+    assert!(
+        fit.neg2ll < plain.neg2ll - 100.0,
+        "{} vs {}",
+        fit.neg2ll,
+        plain.neg2ll
+    );
+}
