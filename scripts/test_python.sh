@@ -11,7 +11,21 @@ venv=python/.venv
 python="${PYTHON:-python3}"
 pip_q=(--quiet --disable-pip-version-check)
 if [ ! -x "$venv/bin/python" ]; then
-    "$python" -m venv "$venv"
+    if ! "$python" -m venv "$venv"; then
+        # An interpreter without venv/ensurepip (Debian's python3 without python3-venv):
+        # as root (CI), install Debian's python3-venv and use Debian's python3; else say how.
+        rm -rf "$venv"
+        if [ "$(id -u)" -eq 0 ] && command -v apt-get >/dev/null; then
+            echo "python package: $python has no venv; installing Debian's python3-venv"
+            apt-get update -qq
+            DEBIAN_FRONTEND=noninteractive apt-get install -y -qq python3-venv python3-pip >/dev/null
+            python=/usr/bin/python3
+            "$python" -m venv "$venv"
+        else
+            echo "error: $python -m venv failed: install python3-venv (Debian) or set PYTHON" >&2
+            exit 1
+        fi
+    fi
 fi
 t0=$(date +%s)
 "$venv/bin/python" -m pip install "${pip_q[@]}" pandas tqdm pytest
