@@ -8,7 +8,7 @@
 //! of nickel alloys' creep refers to, and what the data give directly where one stress was
 //! tested at several temperatures ([`from_data`]).
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::data::Curve;
 use crate::model::{Load, Model};
@@ -21,7 +21,7 @@ const DT_K: f64 = 5.0;
 
 /// Apparent activation energies of the model at one condition (kJ/mol; NaN where a
 /// simulation did not give the quantity at T ± 5 K).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Apparent {
     #[serde(rename = "temperature_C")]
     pub temperature_c: f64,
@@ -63,7 +63,7 @@ pub fn apparent(
 }
 
 /// An activation energy measured directly: one stress tested at two or more temperatures.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Measured {
     #[serde(rename = "stress_MPa")]
     pub stress_mpa: f64,
@@ -127,6 +127,40 @@ pub fn from_data(curves: &[Curve]) -> Vec<Measured> {
             })
         })
         .collect()
+}
+
+/// A fit's `summary.json` → `activation_energy`: the model's apparent activation energies
+/// at every tested load, and the data's own where one stress was tested at several
+/// temperatures.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ForFit {
+    pub model: Vec<Apparent>,
+    pub data: Vec<Measured>,
+}
+
+/// [`ForFit`] of constants `params` of `model` fitted to `curves` (simulations up to 100 × the
+/// longest measured life).
+pub fn for_fit(
+    model: &dyn Model,
+    params: &[f64],
+    curves: &[Curve],
+    omega_f: f64,
+    ode: &OdeOptions,
+) -> ForFit {
+    let longest = curves.iter().map(|c| c.life_h()).fold(1.0f64, f64::max);
+    let mut loads: Vec<(f64, f64)> = curves
+        .iter()
+        .map(|c| (c.temperature_c, c.stress_mpa))
+        .collect();
+    loads.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    loads.dedup();
+    ForFit {
+        model: loads
+            .iter()
+            .map(|&(t, s)| apparent(model, params, t, s, omega_f, ode, 100.0 * longest))
+            .collect(),
+        data: from_data(curves),
+    }
 }
 
 #[cfg(test)]

@@ -513,7 +513,17 @@ fn with_threads<T: Send>(
 
 fn diagnose_cmd(config: &Path, cli: &Overrides) -> Result<()> {
     let (cfg, data) = load(config, cli)?;
-    let temps = temperatures(&data);
+    diagnose_check(&cfg, &data)?;
+    let out = cfg.out_dir("diagnose");
+    let mut folder = RunFolder::begin(&out, "diagnose")?;
+    note_data(&mut folder, &data);
+    folder.finish(diagnose_into(&cfg, &data, &out))
+}
+
+/// What `diagnose` refuses before it starts: data at several temperatures without a
+/// temperature law.
+pub fn diagnose_check(cfg: &RunConfig, data: &Dataset) -> Result<()> {
+    let temps = temperatures(data);
     if temps.len() > 1 && !cfg.has_laws() {
         return Err(Error::config(
             &cfg.path,
@@ -524,10 +534,7 @@ fn diagnose_cmd(config: &Path, cli: &Overrides) -> Result<()> {
             ),
         ));
     }
-    let out = cfg.out_dir("diagnose");
-    let mut folder = RunFolder::begin(&out, "diagnose")?;
-    note_data(&mut folder, &data);
-    folder.finish(diagnose_into(&cfg, &data, &out))
+    Ok(())
 }
 
 /// `diagnose`'s computation and outputs into `out`.
@@ -825,49 +832,13 @@ fn print_sweep(h: &sweep::Header, a: &sweep::Analysis) {
     }
 }
 
-/// `summary.json`'s `activation_energy`: the model's apparent activation energies at every
-/// tested load, and the data's own where one stress was tested at several temperatures.
-#[derive(serde::Serialize)]
-struct Activation {
-    model: Vec<crate::activation::Apparent>,
-    data: Vec<crate::activation::Measured>,
-}
-
-fn activation_energies(
-    run: &crate::fit::FitRun,
-    best: &crate::fit::LocalFit,
-    curves: &[crate::data::Curve],
-) -> Activation {
-    let longest = curves.iter().map(|c| c.life_h()).fold(1.0f64, f64::max);
-    let mut loads: Vec<(f64, f64)> = curves
-        .iter()
-        .map(|c| (c.temperature_c, c.stress_mpa))
-        .collect();
-    loads.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
-    loads.dedup();
-    let model = loads
-        .iter()
-        .map(|&(t, s)| {
-            crate::activation::apparent(
-                run.model.as_ref(),
-                &best.params,
-                t,
-                s,
-                run.settings.omega_f,
-                &run.settings.ode,
-                100.0 * longest,
-            )
-        })
-        .collect();
-    Activation {
-        model,
-        data: crate::activation::from_data(curves),
-    }
-}
-
-fn print_activation(a: &Activation) {
-    let range = |v: Vec<f64>| -> String {
-        let v: Vec<f64> = v.into_iter().filter(|x| x.is_finite()).collect();
+/// `summary.json`'s `activation_energy` in one line: the ranges over the tested loads.
+fn print_activation(a: &serde_json::Value) {
+    let range = |side: &str, key: &str| -> String {
+        let v: Vec<f64> = a[side]
+            .as_array()
+            .map(|v| v.iter().filter_map(|x| x[key].as_f64()).collect())
+            .unwrap_or_default();
         if v.is_empty() {
             return "-".into();
         }
@@ -877,10 +848,10 @@ fn print_activation(a: &Activation) {
     };
     println!(
         "apparent activation energy (kJ/mol; −R ∂ln ε̇_min/∂(1/T), R ∂ln t_r/∂(1/T) at the tested loads; summary.json: activation_energy): model: min rate {}, rupture time {}; data (a stress tested at several temperatures): min rate {}, rupture time {}",
-        range(a.model.iter().map(|x| x.q_min_rate_kj_mol).collect()),
-        range(a.model.iter().map(|x| x.q_rupture_time_kj_mol).collect()),
-        range(a.data.iter().map(|x| x.q_min_rate_kj_mol).collect()),
-        range(a.data.iter().map(|x| x.q_rupture_time_kj_mol).collect()),
+        range("model", "q_min_rate_kj_mol"),
+        range("model", "q_rupture_time_kj_mol"),
+        range("data", "q_min_rate_kj_mol"),
+        range("data", "q_rupture_time_kj_mol"),
     );
 }
 
@@ -933,18 +904,9 @@ fn fit_into(cfg: &RunConfig, data: &Dataset, out: &Path) -> Result<()> {
     let rows = tables::error_rows(best, curves);
     tables::write_errors(&out.join("errors.csv"), &rows)?;
     tables::write_fit_curves(&out.join("curves.csv"), best, curves)?;
-    let mut summary = tables::fit_summary(cfg, &run, curves);
-    let activation = cfg
-        .has_laws()
-        .then(|| activation_energies(&run, best, curves));
-    if let Some(a) = &activation {
-        summary["activation_energy"] = serde_json::to_value(a).expect("plain values");
-    }
-    if run.settings.kind == crate::config::ObjectiveKind::Likelihood {
-        summary["specimens"] = tables::specimens_json(&run.specimens);
-        if let Some(sp) = &run.specimens.fit {
-            tables::write_specimens(&out.join("specimens.csv"), sp, curves)?;
-        }
+    let summary = tables::fit_summary(cfg, &run, curves);
+    if let Some(sp) = &run.specimens.fit {
+        tables::write_specimens(&out.join("specimens.csv"), sp, curves)?;
     }
     write_text(
         &out.join("summary.json"),
@@ -985,7 +947,7 @@ fn fit_into(cfg: &RunConfig, data: &Dataset, out: &Path) -> Result<()> {
     }
     print!("{}", tables::error_table(&rows, run.used_min_rate));
     print_specimens(&run.specimens);
-    if let Some(a) = &activation {
+    if let Some(a) = summary.get("activation_energy") {
         print_activation(a);
     }
     let per_t = crate::fit::errors_per_temperature(best, curves);
@@ -1107,27 +1069,11 @@ pub(crate) fn curve_plots(
 
 fn predict_cmd(config: &Path, constants: &Path, cli: &Overrides) -> Result<()> {
     let (cfg, data) = load(config, cli)?;
-    if cfg.predict.at.is_empty() {
-        return Err(Error::config(
-            &cfg.path,
-            "predict.at: no conditions to predict: give --at T:stress[,T:stress…] or [predict] at",
-        ));
-    }
+    crate::predict::check_asked(&cfg)?;
     let model = cfg.build_model()?;
     let params = tables::read_constants_for(constants, &cfg, model.as_ref())?;
     // What the configuration can predict: refused before anything is written.
-    let tested = crate::predict::Tested::of(&data, cfg.has_laws());
-    let from_cli = cli.predict_at.is_some();
-    for (k, c) in cfg.predict.at.iter().enumerate() {
-        if let Err(why) = tested.classify(*c) {
-            let at = format!("{}:{}", c.temperature_c, c.stress_mpa);
-            return Err(if from_cli {
-                Error::Invalid(format!("--at {at}: {why}"))
-            } else {
-                cfg.error_at(&format!("predict.at[{k}]"), format!("\"{at}\": {why}"))
-            });
-        }
-    }
+    crate::predict::check_conditions(&cfg, &data, cli.predict_at.is_some())?;
     let out = cfg.out_dir("predict");
     let mut folder = RunFolder::begin(&out, "predict")?;
     note_data(&mut folder, &data);
@@ -1148,20 +1094,7 @@ fn predict_into(
     for n in crate::predict::extrapolation_notes(&tested, &cfg.predict.at) {
         eprintln!("warning: {n}");
     }
-    let given = crate::predict::predict(cfg, data, model, params, &cfg.predict.at);
-    let run = if cfg.predict.intervals {
-        let loads: Vec<crate::model::Load> = cfg
-            .predict
-            .at
-            .iter()
-            .map(|c| crate::model::Load::new(c.stress_mpa, c.temperature_c, cfg.objective.omega_f))
-            .collect();
-        let iv = crate::uncertainty::predict::intervals_at(cfg, model, data, params, &loads)?;
-        let centre = crate::predict::predict(cfg, data, model, &iv.refit.params, &cfg.predict.at);
-        crate::predict::centre_on_intervals(centre, iv, given.predictions)
-    } else {
-        given
-    };
+    let run = crate::predict::run(cfg, data, model, params)?;
     println!("{}: model {}", cfg.name, model.name());
     let names: Vec<&str> = model.constants().iter().map(|c| c.name).collect();
     print!("{}", crate::predict::table(&run, &names));
