@@ -569,17 +569,7 @@ fn with_threads<T: Send>(
 
 fn diagnose_cmd(config: &Path, cli: &Overrides) -> Result<()> {
     let (cfg, data) = load(config, cli)?;
-    let temps = temperatures(&data);
-    if temps.len() > 1 && !cfg.has_laws() {
-        return Err(Error::config(
-            &cfg.path,
-            format!(
-                "temperature_C: diagnose works at one temperature unless a constant follows a temperature law; the data have {} ({} °C): set temperature_C",
-                temps.len(),
-                temps.iter().map(|t| t.to_string()).collect::<Vec<_>>().join(", ")
-            ),
-        ));
-    }
+    diagnose_check(&cfg, &data)?;
     let out = cfg.out_dir("diagnose");
     let (mut folder, journal) =
         take_with_journal(&out, "diagnose", &crate::diagnose::hooks::identity(&cfg))?;
@@ -592,6 +582,23 @@ fn diagnose_cmd(config: &Path, cli: &Overrides) -> Result<()> {
     };
     let outcome = diagnose_into(&cfg, &data, &out, &hooks, &bars);
     folder.finish(outcome)
+}
+
+/// What `diagnose` refuses before it starts: data at several temperatures without a
+/// temperature law.
+pub fn diagnose_check(cfg: &RunConfig, data: &Dataset) -> Result<()> {
+    let temps = temperatures(data);
+    if temps.len() > 1 && !cfg.has_laws() {
+        return Err(Error::config(
+            &cfg.path,
+            format!(
+                "temperature_C: diagnose works at one temperature unless a constant follows a temperature law; the data have {} ({} °C): set temperature_C",
+                temps.len(),
+                temps.iter().map(|t| t.to_string()).collect::<Vec<_>>().join(", ")
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Take the output folder `out` over for a resumable run of `command` with run identity `id`:
@@ -971,6 +978,54 @@ fn print_sweep(h: &sweep::Header, a: &sweep::Analysis) {
     }
 }
 
+/// `summary.json`'s `activation_energy` in one line: the ranges over the tested loads.
+fn print_activation(a: &serde_json::Value) {
+    let range = |side: &str, key: &str| -> String {
+        let v: Vec<f64> = a[side]
+            .as_array()
+            .map(|v| v.iter().filter_map(|x| x[key].as_f64()).collect())
+            .unwrap_or_default();
+        if v.is_empty() {
+            return "-".into();
+        }
+        let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        format!("{lo:.0}–{hi:.0}")
+    };
+    println!(
+        "apparent activation energy (kJ/mol; −R ∂ln ε̇_min/∂(1/T), R ∂ln t_r/∂(1/T) at the tested loads; summary.json: activation_energy): model: min rate {}, rupture time {}; data (a stress tested at several temperatures): min rate {}, rupture time {}",
+        range("model", "q_min_rate_kj_mol"),
+        range("model", "q_rupture_time_kj_mol"),
+        range("data", "q_min_rate_kj_mol"),
+        range("data", "q_rupture_time_kj_mol"),
+    );
+}
+
+/// The scatter between specimens a likelihood fit found, in words.
+fn print_specimens(sp: &crate::fit::FitSpecimens) {
+    if let Some(f) = &sp.fit {
+        for (j, k) in f.kinds.iter().enumerate() {
+            let what = match k {
+                crate::likelihood::EffectKind::Rate => "creep rate",
+                crate::likelihood::EffectKind::Ductility => "rupture strain (ductility)",
+            };
+            println!(
+                "specimens: the {what} varies {:.0} % between specimens (sd of ln factor {:.3}, 95 % {:.3}–{:.3}; specimens.csv: each specimen's factor)",
+                tables::lognormal_cv_pct(f.scatter[j]),
+                f.scatter[j],
+                f.scatter_lo95[j],
+                f.scatter_hi95[j]
+            );
+        }
+        for k in &f.dropped {
+            println!("specimens: no {k:?} scatter supported by the data (estimated at zero)");
+        }
+    }
+    if let Some(n) = &sp.note {
+        println!("specimens: {n}");
+    }
+}
+
 fn fit(config: &Path, cli: &Overrides) -> Result<()> {
     let (cfg, data) = load(config, cli)?;
     let out = cfg.out_dir("fit");
@@ -1003,6 +1058,9 @@ fn fit_into(cfg: &RunConfig, data: &Dataset, out: &Path) -> Result<()> {
     tables::write_errors(&out.join("errors.csv"), &rows)?;
     tables::write_fit_curves(&out.join("curves.csv"), best, curves)?;
     let summary = tables::fit_summary(cfg, &run, curves);
+    if let Some(sp) = &run.specimens.fit {
+        tables::write_specimens(&out.join("specimens.csv"), sp, curves)?;
+    }
     write_text(
         &out.join("summary.json"),
         &serde_json::to_string_pretty(&summary).expect("JSON of plain values"),
@@ -1041,6 +1099,10 @@ fn fit_into(cfg: &RunConfig, data: &Dataset, out: &Path) -> Result<()> {
         );
     }
     print!("{}", tables::error_table(&rows, run.used_min_rate));
+    print_specimens(&run.specimens);
+    if let Some(a) = summary.get("activation_energy") {
+        print_activation(a);
+    }
     let per_t = crate::fit::errors_per_temperature(best, curves);
     if per_t.len() > 1 {
         for e in &per_t {
@@ -1160,27 +1222,11 @@ pub(crate) fn curve_plots(
 
 fn predict_cmd(config: &Path, constants: &Path, cli: &Overrides) -> Result<()> {
     let (cfg, data) = load(config, cli)?;
-    if cfg.predict.at.is_empty() {
-        return Err(Error::config(
-            &cfg.path,
-            "predict.at: no conditions to predict: give --at T:stress[,T:stress…] or [predict] at",
-        ));
-    }
+    crate::predict::check_asked(&cfg)?;
     let model = cfg.build_model()?;
     let params = tables::read_constants_for(constants, &cfg, model.as_ref())?;
     // What the configuration can predict: refused before anything is written.
-    let tested = crate::predict::Tested::of(&data, cfg.has_laws());
-    let from_cli = cli.predict_at.is_some();
-    for (k, c) in cfg.predict.at.iter().enumerate() {
-        if let Err(why) = tested.classify(*c) {
-            let at = format!("{}:{}", c.temperature_c, c.stress_mpa);
-            return Err(if from_cli {
-                Error::Invalid(format!("--at {at}: {why}"))
-            } else {
-                cfg.error_at(&format!("predict.at[{k}]"), format!("\"{at}\": {why}"))
-            });
-        }
-    }
+    crate::predict::check_conditions(&cfg, &data, cli.predict_at.is_some())?;
     let out = cfg.out_dir("predict");
     let mut folder = RunFolder::begin(&out, "predict")?;
     note_data(&mut folder, &data);
@@ -1201,29 +1247,14 @@ fn predict_into(
     for n in crate::predict::extrapolation_notes(&tested, &cfg.predict.at) {
         eprintln!("warning: {n}");
     }
-    let given = crate::predict::predict(cfg, data, model, params, &cfg.predict.at);
-    let run = if cfg.predict.intervals {
-        let loads: Vec<crate::model::Load> = cfg
-            .predict
-            .at
-            .iter()
-            .map(|c| crate::model::Load::new(c.stress_mpa, c.temperature_c, cfg.objective.omega_f))
-            .collect();
-        let bars = Bars::new(!cfg.run.progress);
-        let hooks = crate::progress::Hooks {
-            observer: &bars,
-            journal: None,
-        };
-        let iv = crate::uncertainty::predict::intervals_at_observed(
-            cfg, model, data, params, &loads, &hooks,
-        );
-        bars.clear();
-        let iv = iv?;
-        let centre = crate::predict::predict(cfg, data, model, &iv.refit.params, &cfg.predict.at);
-        crate::predict::centre_on_intervals(centre, iv, given.predictions)
-    } else {
-        given
+    let bars = Bars::new(!cfg.run.progress);
+    let hooks = crate::progress::Hooks {
+        observer: &bars,
+        journal: None,
     };
+    let run = crate::predict::run_observed(cfg, data, model, params, &hooks);
+    bars.clear();
+    let run = run?;
     println!("{}: model {}", cfg.name, model.name());
     let names: Vec<&str> = model.constants().iter().map(|c| c.name).collect();
     print!("{}", crate::predict::table(&run, &names));

@@ -1341,13 +1341,32 @@ impl RunConfig {
     /// Load the run's data ([`data::load`] with [`RunConfig::load_options`]), each curve
     /// averaged down to `objective.max_points` points when that is set.
     pub fn load_data(&self) -> Result<Dataset> {
-        let mut data = data::load(&self.curves, &self.ruptures, &self.load_options())?;
+        let data = data::load(&self.curves, &self.ruptures, &self.load_options())?;
+        Ok(self.binned(data))
+    }
+
+    /// [`RunConfig::load_data`] from the two tables' CSV text in memory instead of the
+    /// configured files ([`data::load_bytes`]; `curves` and `ruptures` name them in errors).
+    pub fn load_data_from(
+        &self,
+        curves: &Path,
+        curves_csv: &[u8],
+        ruptures: &Path,
+        ruptures_csv: &[u8],
+    ) -> Result<Dataset> {
+        let opts = self.load_options();
+        let data = data::load_bytes(curves, curves_csv, ruptures, ruptures_csv, &opts)?;
+        Ok(self.binned(data))
+    }
+
+    /// `data` with each curve averaged down to `objective.max_points` points when that is set.
+    fn binned(&self, mut data: Dataset) -> Dataset {
         if self.objective.max_points > 0 {
             for c in &mut data.curves {
                 *c = crate::diagnose::binned(c, self.objective.max_points);
             }
         }
-        Ok(data)
+        data
     }
 
     /// The start vector (model order) if every constant has a start, else `None`.

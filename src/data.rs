@@ -492,9 +492,36 @@ pub struct RuptureRecord {
 /// with curves that match no curve give a warning. A test declared interrupted gets no
 /// rupture time even if a record exists (the record is then ignored, with a warning).
 pub fn load(curves: &Path, ruptures: &Path, opts: &LoadOptions) -> Result<Dataset> {
-    let (raw, mut warnings) = read_curves(curves)?;
+    let (raw, warnings) = read_curves(curves)?;
     let records = read_ruptures(ruptures)?;
+    load_read(raw, warnings, records, curves, ruptures, opts)
+}
 
+/// [`load`] from the two files' contents in memory (CSV text, same format and rules) instead
+/// of from files: what a caller that holds the tables itself (the Python package's
+/// DataFrames) uses. `curves` and `ruptures` are the names that errors and warnings give for
+/// the tables, with their lines counted as in a file (the header is line 1).
+pub fn load_bytes(
+    curves: &Path,
+    curves_csv: &[u8],
+    ruptures: &Path,
+    ruptures_csv: &[u8],
+    opts: &LoadOptions,
+) -> Result<Dataset> {
+    let (raw, warnings) = read_curves_from(curves, curves_csv, None)?;
+    let records = read_ruptures_from(ruptures, ruptures_csv, None)?;
+    load_read(raw, warnings, records, curves, ruptures, opts)
+}
+
+/// The part of [`load`] after both tables are read.
+fn load_read(
+    raw: Vec<RawCurve>,
+    mut warnings: Vec<String>,
+    records: Vec<RuptureRecord>,
+    curves: &Path,
+    ruptures: &Path,
+    opts: &LoadOptions,
+) -> Result<Dataset> {
     let raw: Vec<RawCurve> = match opts.temperature_c {
         Some(t) => raw
             .into_iter()
@@ -954,7 +981,16 @@ impl Field<'_> {
 /// specimens: the error names both line ranges and asks for a `specimen` column.
 pub fn read_curves(path: &Path) -> Result<(Vec<RawCurve>, Vec<String>)> {
     let (bytes, progress) = table::read_file(path)?;
-    let mut table = Table::open(path, &bytes, CURVE_COLUMNS, progress)?;
+    read_curves_from(path, &bytes, progress)
+}
+
+/// [`read_curves`] of the file's bytes, named `path` in errors.
+fn read_curves_from(
+    path: &Path,
+    bytes: &[u8],
+    progress: Option<indicatif::ProgressBar>,
+) -> Result<(Vec<RawCurve>, Vec<String>)> {
+    let mut table = Table::open(path, bytes, CURVE_COLUMNS, progress)?;
     let ct = table.col("temperature_C").unwrap();
     let cs = table.col("stress_MPa").unwrap();
     let cti = table.col("time_h").unwrap();
@@ -1291,7 +1327,16 @@ fn sort_and_dedup(c: &mut RawCurve, dups: &mut Duplicates) {
 /// rupture time, non-positive rupture strain or minimum rate when given.
 pub fn read_ruptures(path: &Path) -> Result<Vec<RuptureRecord>> {
     let (bytes, progress) = table::read_file(path)?;
-    let mut table = Table::open(path, &bytes, RUPTURE_COLUMNS, progress)?;
+    read_ruptures_from(path, &bytes, progress)
+}
+
+/// [`read_ruptures`] of the file's bytes, named `path` in errors.
+fn read_ruptures_from(
+    path: &Path,
+    bytes: &[u8],
+    progress: Option<indicatif::ProgressBar>,
+) -> Result<Vec<RuptureRecord>> {
+    let mut table = Table::open(path, bytes, RUPTURE_COLUMNS, progress)?;
     let ct = table.col("temperature_C").unwrap();
     let cs = table.col("stress_MPa").unwrap();
     let ctf = table.col("rupture_time_h").unwrap();
@@ -1350,6 +1395,38 @@ mod tests {
             self.0 ^= self.0 << 17;
             (self.0 >> 11) as f64 / (1u64 << 53) as f64
         }
+    }
+
+    #[test]
+    fn tables_in_memory_load_as_the_files() {
+        let dir = tempfile::tempdir().unwrap();
+        let curves = "temperature_C,stress_MPa,time_h,strain_pct,specimen\n\
+            560,100,0,0,a\n560,100,10,1.5,a\n560,100,10,1.5,a\n560,100,20,3,a\n560,100,30,7.25,a\n";
+        let ruptures =
+            "temperature_C,stress_MPa,rupture_time_h,rupture_strain_pct\n560,100,31,7.5\n";
+        let (c, r) = (
+            write(dir.path(), "c.csv", curves),
+            write(dir.path(), "r.csv", ruptures),
+        );
+        let opts = LoadOptions::default();
+        let from_files = load(&c, &r, &opts).unwrap();
+        let from_memory =
+            load_bytes(&c, curves.as_bytes(), &r, ruptures.as_bytes(), &opts).unwrap();
+        // Same curves bit for bit, same warnings (the duplicate on line 4) naming the same table.
+        assert_eq!(from_memory, from_files);
+        assert!(from_memory.warnings[0].contains("c.csv:4: duplicate point"));
+        // Errors name the table as given, with its line.
+        let bad = curves.replace("560,100,20,3,a", "560,100,-20,3,a");
+        let e = load_bytes(
+            Path::new("<t>"),
+            bad.as_bytes(),
+            &r,
+            ruptures.as_bytes(),
+            &opts,
+        )
+        .unwrap_err()
+        .to_string();
+        assert_eq!(e, "<t>:5: column 'time_h': must not be negative (got -20)");
     }
 
     #[test]

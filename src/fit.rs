@@ -259,9 +259,28 @@ fn likelihood_fit(
         ..Default::default()
     };
     let ml = crate::likelihood::ml_fit(model, curves, space, start, settings, &opts);
-    let mut eval = ml.eval.clone().unwrap_or_else(|| {
-        crate::likelihood::raw_objective(model, curves, settings).evaluate(&ml.params)
-    });
+    from_ml(ml, model, curves, space, start, start_label, settings, t0)
+}
+
+/// A [`LocalFit`] of the maximum-likelihood fit `ml`: its errors and predictions are the
+/// population's (the median specimen's: constants.csv's), its objective −2 ln L.
+#[allow(clippy::too_many_arguments)]
+fn from_ml(
+    ml: crate::likelihood::MlFit,
+    model: &dyn Model,
+    curves: &[Curve],
+    space: &ParamSpace,
+    start: &[f64],
+    start_label: &str,
+    settings: &FitSettings,
+    t0: Instant,
+) -> LocalFit {
+    // With specimen effects `ml.eval` is at each specimen's own constants; the outputs of a
+    // fit are the population's.
+    let mut eval = match (&ml.eval, &ml.specimen) {
+        (Some(e), None) => e.clone(),
+        _ => crate::likelihood::raw_objective(model, curves, settings).evaluate(&ml.params),
+    };
     eval.objective = ml.neg2ll;
     LocalFit {
         start_label: start_label.to_string(),
@@ -425,8 +444,58 @@ pub struct FitRun {
     pub used_min_rate: bool,
     /// Settings used.
     pub settings: FitSettings,
+    /// Specimen-to-specimen scatter under the likelihood objective ([`FitSpecimens`]).
+    pub specimens: FitSpecimens,
     /// Total wall time, s.
     pub wall_s: f64,
+}
+
+/// What `fit` found about the scatter between specimens (likelihood objective only).
+#[derive(Debug, Clone, Default)]
+pub struct FitSpecimens {
+    /// The specimen effects the chosen fit carries: the scatter of each kind, each specimen's
+    /// factor (`None`: none asked for, none supported by the data, or no better likelihood).
+    pub fit: Option<crate::likelihood::SpecimenFit>,
+    /// −2 ln L of the best fit without specimen effects (NaN when none were tried).
+    pub plain_neg2ll: f64,
+    /// Why there are none, or what the data cannot separate, for the user.
+    pub note: Option<String>,
+    /// Curves in replicate groups (two or more at one temperature and stress).
+    pub replicate_curves: usize,
+    /// The replicates' own pooled within-group sd of ln rupture time (model-free; `None`
+    /// without replicates): every rate scales with a specimen's rate factor, so under the
+    /// model this is the rate scatter.
+    pub replicate_sd_ln_life: Option<f64>,
+}
+
+/// Curves in replicate groups and the pooled within-group sd of their ln rupture times.
+pub fn replicate_scatter(curves: &[Curve]) -> (usize, Option<f64>) {
+    let mut groups: Vec<((f64, f64), Vec<f64>)> = Vec::new();
+    for c in curves {
+        let key = (c.temperature_c, c.stress_mpa);
+        let v = c.rupture_time_h.map(f64::ln);
+        match groups.iter_mut().find(|g| g.0 == key) {
+            Some(g) => g.1.extend(v),
+            None => groups.push((key, v.into_iter().collect())),
+        }
+    }
+    let n = curves
+        .iter()
+        .filter(|c| {
+            curves
+                .iter()
+                .filter(|d| d.temperature_c == c.temperature_c && d.stress_mpa == c.stress_mpa)
+                .count()
+                > 1
+        })
+        .count();
+    let (mut ss, mut dof) = (0.0, 0usize);
+    for (_, v) in groups.iter().filter(|g| g.1.len() > 1) {
+        let m = v.iter().sum::<f64>() / v.len() as f64;
+        ss += v.iter().map(|x| (x - m).powi(2)).sum::<f64>();
+        dof += v.len() - 1;
+    }
+    (n, (dof > 0).then(|| (ss / dof as f64).sqrt()))
 }
 
 /// The paper's procedure on a configuration and its data: the initial guess, and — from the
@@ -567,7 +636,77 @@ pub fn run_fit_observed(
                 .unwrap_or_default()
         ))
     })?;
-    let chosen = fits.swap_remove(best);
+    let mut chosen = fits.swap_remove(best);
+    let specimens = if settings.kind == ObjectiveKind::Likelihood {
+        let (kinds, note) = cfg.objective.specimen_effects.resolve(curves);
+        let (replicate_curves, replicate_sd_ln_life) = replicate_scatter(curves);
+        let mut sp = FitSpecimens {
+            fit: None,
+            plain_neg2ll: f64::NAN,
+            note,
+            replicate_curves,
+            replicate_sd_ln_life,
+        };
+        if kinds.any() {
+            let opts = crate::likelihood::MlOptions {
+                lifetime_sd_floor: settings.lifetime_sd_floor,
+                white_first: false,
+                specimen: kinds,
+            };
+            let t1 = Instant::now();
+            let mut h = crate::likelihood::ml_fit_from(
+                model.as_ref(),
+                curves,
+                &space,
+                &chosen.params,
+                None,
+                &settings,
+                &opts,
+            );
+            sp.plain_neg2ll = chosen.eval.objective;
+            if h.ok() && h.specimen.is_some() && h.neg2ll < chosen.eval.objective {
+                crate::likelihood::scatter_intervals(
+                    &mut h,
+                    model.as_ref(),
+                    curves,
+                    &space,
+                    &settings,
+                    &opts,
+                );
+                sp.fit = h.specimen.clone();
+                if 2 * replicate_curves < curves.len() {
+                    sp.note = Some(format!(
+                        "{replicate_curves} of {} specimens are replicates (two or more at one temperature and stress); a specimen's factor also takes up what the constants miss from one stress to another, which only the replicates tell apart from scatter: read the scatter as an upper bound where the model misfits (the replicates' own spread of ln rupture time: {})",
+                        curves.len(),
+                        replicate_sd_ln_life.map_or("none ruptured".into(), |v| format!("{v:.3}"))
+                    ));
+                }
+                let (iters, evals) = (chosen.lm.iterations, chosen.lm.evaluations);
+                let start = chosen.start.clone();
+                let label = format!("{}+specimens", chosen.start_label);
+                chosen = from_ml(
+                    h,
+                    model.as_ref(),
+                    curves,
+                    &space,
+                    &start,
+                    &label,
+                    &settings,
+                    t1,
+                );
+                chosen.lm.iterations += iters;
+                chosen.lm.evaluations += evals;
+            } else {
+                sp.note = Some(format!(
+                    "specimen effects did not raise the likelihood (the scatter between specimens went to zero or the fit failed: {}); the constants are those of identical specimens",
+                    h.failure.as_deref().unwrap_or("no scatter")
+                ));
+            }
+        }
+        sp
+    } else {
+        FitSpecimens::default()
+    };
     fits.push(with_predictions(chosen, model.as_ref(), curves, &settings));
     let last = fits.len() - 1;
     fits.swap(best, last);
@@ -579,6 +718,7 @@ pub fn run_fit_observed(
         best,
         used_min_rate,
         settings,
+        specimens,
         wall_s: t0.elapsed().as_secs_f64(),
     })
 }

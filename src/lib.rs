@@ -8,6 +8,7 @@
 // Numerical loops index several arrays with one index; iterator chains would obscure them.
 #![allow(clippy::needless_range_loop)]
 
+pub mod activation;
 pub mod baseline;
 pub mod battery;
 pub mod cli;

@@ -12,7 +12,7 @@
 use std::path::Path;
 
 use serde::{Deserialize, Serialize};
-use serde_json::json;
+use serde_json::{json, Value};
 
 pub use crate::baseline::Extrapolation;
 use crate::baseline::{self, Baseline, BaselineKind, BaselineSettings};
@@ -445,6 +445,74 @@ pub fn predict(
     }
 }
 
+/// `predict`'s computation at the configuration's conditions (`[predict] at`): at the given
+/// constants `params`, or under `[predict] intervals` at the maximum-likelihood refit the
+/// intervals are centred on ([`centre_on_intervals`]; the given constants' predictions
+/// beside).
+pub fn run(
+    cfg: &RunConfig,
+    data: &Dataset,
+    model: &dyn Model,
+    params: &[f64],
+) -> Result<PredictRun> {
+    run_observed(cfg, data, model, params, &crate::progress::Hooks::default())
+}
+
+/// [`run`] reporting the phases of the intervals to `hooks.observer`.
+pub fn run_observed(
+    cfg: &RunConfig,
+    data: &Dataset,
+    model: &dyn Model,
+    params: &[f64],
+    hooks: &crate::progress::Hooks,
+) -> Result<PredictRun> {
+    let given = predict(cfg, data, model, params, &cfg.predict.at);
+    if !cfg.predict.intervals {
+        return Ok(given);
+    }
+    let loads: Vec<Load> = cfg
+        .predict
+        .at
+        .iter()
+        .map(|c| Load::new(c.stress_mpa, c.temperature_c, cfg.objective.omega_f))
+        .collect();
+    let iv = crate::uncertainty::predict::intervals_at_observed(
+        cfg, model, data, params, &loads, hooks,
+    )?;
+    let centre = predict(cfg, data, model, &iv.refit.params, &cfg.predict.at);
+    Ok(centre_on_intervals(centre, iv, given.predictions))
+}
+
+/// At least one condition to predict: else the error says where to give them (`--at` or
+/// `[predict] at`).
+pub fn check_asked(cfg: &RunConfig) -> Result<()> {
+    if cfg.predict.at.is_empty() {
+        return Err(Error::config(
+            &cfg.path,
+            "predict.at: no conditions to predict: give --at T:stress[,T:stress…] or [predict] at",
+        ));
+    }
+    Ok(())
+}
+
+/// Every condition of `[predict] at` within what the data can predict ([`Tested::classify`]):
+/// else an error naming the first one (as `--at` when `from_cli`, else as the configuration's
+/// field).
+pub fn check_conditions(cfg: &RunConfig, data: &Dataset, from_cli: bool) -> Result<()> {
+    let tested = Tested::of(data, cfg.has_laws());
+    for (k, c) in cfg.predict.at.iter().enumerate() {
+        if let Err(why) = tested.classify(*c) {
+            let at = format!("{}:{}", c.temperature_c, c.stress_mpa);
+            return Err(if from_cli {
+                Error::Invalid(format!("--at {at}: {why}"))
+            } else {
+                cfg.error_at(&format!("predict.at[{k}]"), format!("\"{at}\": {why}"))
+            });
+        }
+    }
+    Ok(())
+}
+
 /// `run` (the predictions at the refit of `iv`) centred on its intervals: each predicted
 /// quantity that has an interval takes the interval's own centre (the same constants; the
 /// minimum rate integrated more finely there), so that every row's numbers and intervals
@@ -666,62 +734,7 @@ pub fn write_outputs(
     run: &PredictRun,
 ) -> Result<Vec<String>> {
     let params = &run.params[..];
-    let rows: Vec<Vec<String>> = run
-        .predictions
-        .iter()
-        .enumerate()
-        .map(|(k, p)| {
-            let mut row = vec![
-                num(p.condition.temperature_c),
-                num(p.condition.stress_mpa),
-                num(p.rupture_time_h),
-                num(100.0 * p.rupture_strain),
-                num(100.0 * p.min_rate),
-            ];
-            if let Some(iv) = &run.intervals {
-                for (_, q, conf, hi) in INTERVAL_COLUMNS {
-                    let v = iv[k].get(q).map_or(f64::NAN, |i| match (conf, hi) {
-                        (false, false) => i.pred_lo95,
-                        (false, true) => i.pred_hi95,
-                        (true, false) => i.conf_lo95,
-                        (true, true) => i.conf_hi95,
-                    });
-                    row.push(num(v));
-                }
-            }
-            row.push(
-                run.extrapolation
-                    .get(k)
-                    .map_or("", |x| x.as_str())
-                    .to_string(),
-            );
-            row.push(p.outcome.as_str().to_string());
-            row.push(run.source.as_str().to_string());
-            if let Some(g) = run.given.as_ref().and_then(|g| g.get(k)) {
-                row.extend([
-                    num(g.rupture_time_h),
-                    num(100.0 * g.rupture_strain),
-                    num(100.0 * g.min_rate),
-                    g.outcome.as_str().to_string(),
-                ]);
-            }
-            row
-        })
-        .collect();
-    let mut header = vec![
-        "temperature_C",
-        "stress_MPa",
-        "rupture_time_h",
-        "rupture_strain_pct",
-        "min_rate_pct_per_h",
-    ];
-    if run.intervals.is_some() {
-        header.extend(INTERVAL_COLUMNS.iter().map(|c| c.0));
-    }
-    header.extend(ROW_COLUMNS);
-    if run.given.is_some() {
-        header.extend(GIVEN_COLUMNS);
-    }
+    let (header, rows) = predictions_table(run);
     write_csv(&out.join("predictions.csv"), &header, &rows)?;
     let lmp_rows: Vec<Vec<String>> = run
         .predictions
@@ -794,6 +807,17 @@ pub fn write_outputs(
             .collect();
         write_csv(&out.join("band.csv"), &BAND_COLUMNS, &rows)?;
     }
+    let summary = summary_json(cfg, data, model, run);
+    write_text(
+        &out.join("summary.json"),
+        &serde_json::to_string_pretty(&summary).expect("JSON of plain values"),
+    )?;
+    Ok(plots(out, cfg, data, model, params, run))
+}
+
+/// `predict`'s `summary.json` ([`write_outputs`]).
+pub fn summary_json(cfg: &RunConfig, data: &Dataset, model: &dyn Model, run: &PredictRun) -> Value {
+    let params = &run.params[..];
     let names: Vec<&str> = model.inner_constants().iter().map(|c| c.name).collect();
     let all_names: Vec<&str> = model.constants().iter().map(|c| c.name).collect();
     let given_row = |p: Option<&Prediction>| {
@@ -808,7 +832,7 @@ pub fn write_outputs(
     };
     let tested = Tested::of(data, cfg.has_laws());
     let (t0, t1) = tested.temperature_range();
-    let summary = json!({
+    json!({
         "model": model.name(),
         "T_ref_C": cfg.t_ref,
         "constants_source": run.source,
@@ -860,12 +884,68 @@ pub fn write_outputs(
         },
         "baselines": run.baselines.iter().map(Baseline::to_json).collect::<Vec<_>>(),
         "extrapolation": extrapolation_notes(&tested, &run.predictions.iter().map(|p| p.condition).collect::<Vec<_>>()),
-    });
-    write_text(
-        &out.join("summary.json"),
-        &serde_json::to_string_pretty(&summary).expect("JSON of plain values"),
-    )?;
-    Ok(plots(out, cfg, data, model, params, run))
+    })
+}
+
+/// The header and rows of `predictions.csv` ([`write_outputs`]).
+pub fn predictions_table(run: &PredictRun) -> (Vec<&'static str>, Vec<Vec<String>>) {
+    let rows: Vec<Vec<String>> = run
+        .predictions
+        .iter()
+        .enumerate()
+        .map(|(k, p)| {
+            let mut row = vec![
+                num(p.condition.temperature_c),
+                num(p.condition.stress_mpa),
+                num(p.rupture_time_h),
+                num(100.0 * p.rupture_strain),
+                num(100.0 * p.min_rate),
+            ];
+            if let Some(iv) = &run.intervals {
+                for (_, q, conf, hi) in INTERVAL_COLUMNS {
+                    let v = iv[k].get(q).map_or(f64::NAN, |i| match (conf, hi) {
+                        (false, false) => i.pred_lo95,
+                        (false, true) => i.pred_hi95,
+                        (true, false) => i.conf_lo95,
+                        (true, true) => i.conf_hi95,
+                    });
+                    row.push(num(v));
+                }
+            }
+            row.push(
+                run.extrapolation
+                    .get(k)
+                    .map_or("", |x| x.as_str())
+                    .to_string(),
+            );
+            row.push(p.outcome.as_str().to_string());
+            row.push(run.source.as_str().to_string());
+            if let Some(g) = run.given.as_ref().and_then(|g| g.get(k)) {
+                row.extend([
+                    num(g.rupture_time_h),
+                    num(100.0 * g.rupture_strain),
+                    num(100.0 * g.min_rate),
+                    g.outcome.as_str().to_string(),
+                ]);
+            }
+            row
+        })
+        .collect();
+    let mut header = vec![
+        "temperature_C",
+        "stress_MPa",
+        "rupture_time_h",
+        "rupture_strain_pct",
+        "min_rate_pct_per_h",
+    ];
+    if run.intervals.is_some() {
+        header.extend(INTERVAL_COLUMNS.iter().map(|c| c.0));
+    }
+    header.extend(ROW_COLUMNS);
+    if run.given.is_some() {
+        header.extend(GIVEN_COLUMNS);
+    }
+    (header, rows)
 }
 
 /// `predictions.csv`'s columns after the contract's (and the interval columns): where the
@@ -1082,6 +1162,11 @@ fn plots(
 /// if the file has one.
 pub fn constants_t_ref(path: &Path) -> Result<Option<(f64, usize)>> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    constants_t_ref_text(path, &text)
+}
+
+/// [`constants_t_ref`] of a constants table's text in memory, named `path` in errors.
+pub fn constants_t_ref_text(path: &Path, text: &str) -> Result<Option<(f64, usize)>> {
     for (i, line) in text.lines().enumerate() {
         let mut f = line.split(',');
         if f.next().map(str::trim) == Some(tables::T_REF_ROW) {
@@ -1102,7 +1187,13 @@ pub fn constants_t_ref(path: &Path) -> Result<Option<(f64, usize)>> {
 /// Constants fitted about another reference temperature than the configuration's mean
 /// different constants: an error naming both.
 pub fn check_t_ref(path: &Path, cfg: &RunConfig) -> Result<()> {
-    if let Some((t, line)) = constants_t_ref(path)? {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    check_t_ref_text(path, &text, cfg)
+}
+
+/// [`check_t_ref`] of a constants table's text in memory, named `path` in errors.
+pub fn check_t_ref_text(path: &Path, text: &str, cfg: &RunConfig) -> Result<()> {
+    if let Some((t, line)) = constants_t_ref_text(path, text)? {
         match cfg.t_ref {
             Some(c) if c == t => {}
             other => {

@@ -9,8 +9,9 @@
 //!   file fits CI's budget: the 40-set run took 19 min on 2 cores. The sets cycle through the
 //!   eight scenarios, so 20 sets still hold 5 no-effect sets and 2–3 of every effect; README's
 //!   full battery, `creepfit battery`, uses seeds that were not used while developing).
-//! - Real laboratory curves (Alloy 617, `data/alloy617/`) at every temperature: the verdict
-//!   and the cause are the same on all points and on every 10th point.
+//! - Real laboratory curves (Alloy 617, `data/alloy617/`): the verdict and the cause are the
+//!   same on all points and on every 10th point (CI: 850 °C; every temperature with
+//!   `-- --ignored`).
 //! - The contract of `diagnosis.json` on the seed's 560 °C data.
 
 use std::path::{Path, PathBuf};
@@ -124,11 +125,24 @@ fn every_tenth(dir: &Path) -> PathBuf {
     p
 }
 
+/// At 850 °C (replicates: the hierarchical error model): CI's share of the check below.
 #[test]
 fn alloy617_verdict_does_not_depend_on_the_logging_density() {
+    same_verdict_on_every_tenth_point(&[850]);
+}
+
+/// All four temperatures (8 diagnoses, ~13 min on 2 cores): `cargo test --release --test
+/// diagnose -- --ignored`.
+#[test]
+#[ignore = "long: 8 diagnoses of Alloy 617"]
+fn alloy617_verdict_does_not_depend_on_the_logging_density_at_any_temperature() {
+    same_verdict_on_every_tenth_point(&[750, 850, 900, 950]);
+}
+
+fn same_verdict_on_every_tenth_point(temps: &[u32]) {
     let dir = TempDir::new().unwrap();
     let thin = every_tenth(dir.path());
-    for t in [750, 850, 900, 950] {
+    for &t in temps {
         let cfg = root().join(format!("configs/alloy617-{t}C.toml"));
         let text = std::fs::read_to_string(&cfg)
             .unwrap()

@@ -67,6 +67,8 @@ fn candidates(v: &Value) -> Vec<Value> {
             .map(|x| json!(x))
             .collect();
             c.push(json!(format!("{s}0")));
+            // A word that may also be a list (`specimen_effects = "auto"` or `["rate"]`).
+            c.push(json!(["rate"]));
             c
         }
         Value::Null => vec![json!(560.0), json!(0.5), json!(1.0)],

@@ -314,3 +314,75 @@ fn the_scatter_of_generated_specimens_is_recovered() {
         plain.neg2ll
     );
 }
+
+/// One generated set of the specimens world (`creepfit battery --world specimens`): scenario
+/// by `index` (0: none, 2: loading_strain), diagnosed with the default settings.
+fn diagnose_generated(index: usize, seed: u64) -> creepfit::battery::SetResult {
+    let dir = tempfile::TempDir::new().unwrap();
+    let r = creepfit::battery::run_one(dir.path(), index, seed, creepfit::synth::World::Specimens);
+    eprintln!(
+        "set-{seed} {}: {} curves, true scatter {:?}, estimated {:?} (95 % {:?}–{:?}), λ {:.1} → {} in {:.0} s",
+        r.scenario,
+        r.curves,
+        r.scatter_true,
+        r.scatter_est,
+        r.scatter_lo95,
+        r.scatter_hi95,
+        r.lambda,
+        r.outcome(),
+        r.wall_s
+    );
+    assert_eq!(r.error, None);
+    r
+}
+
+/// A set with specimen scatter and no hidden effect (fresh seed 95001, not used while
+/// developing): the hierarchical base model is adequate — before the specimen effects
+/// 28 of 30 such sets were `unexplained`.
+#[test]
+fn a_null_set_with_specimen_scatter_is_adequate() {
+    let r = diagnose_generated(0, 95001);
+    assert_eq!(r.scenario, "none");
+    assert!(r.scatter_true[0] >= 0.1, "the set carries scatter");
+    assert_eq!(r.outcome(), "adequate");
+}
+
+/// A catalogued effect (a loading strain) hidden under specimen scatter, clearly
+/// detectable: the first fresh seed from 95101 whose set the oracle gives λ ≥ 100 (four
+/// times the detectability threshold; chosen by the generator's truth, never by the
+/// verdict). Seed 95101 itself (λ 43, just detectable) came out `adequate`: README's
+/// battery measures the power over sizes.
+///
+/// FAILS today, kept as the open measurement (issue 20): seed 95102 (λ 1592, rate scatter
+/// 0.28) comes out `adequate` — loading_strain LR 850 but bootstrap p 0.168, because the
+/// null replicates, drawn with the base fit's AR(1) reading error (φ 1.00: the misfit taken
+/// up as correlated noise), give the extensions LRs of hundreds too. Run it with
+/// `cargo test --release --test specimen -- --ignored`.
+#[test]
+#[ignore = "fails: power under specimen scatter (issue 20, see the doc comment)"]
+fn an_effect_under_specimen_scatter_is_named() {
+    let dir = tempfile::TempDir::new().unwrap();
+    let seed = (95101..95121)
+        .find(|&seed| {
+            let name = format!("probe-{seed}");
+            let set = creepfit::synth::generate_in(
+                &name,
+                "loading_strain",
+                None,
+                seed,
+                creepfit::synth::World::Specimens,
+            )
+            .unwrap();
+            let folder = dir.path().join(&name);
+            creepfit::synth::write_set(&set, &folder).unwrap();
+            let cfg = creepfit::config::RunConfig::load(&folder.join("config.toml")).unwrap();
+            let lambda = creepfit::battery::oracle_lambda(&cfg, &set.truth);
+            eprintln!("seed {seed}: λ {lambda:.1}");
+            lambda >= 100.0
+        })
+        .expect("a clearly detectable set among 20 seeds");
+    let r = diagnose_generated(2, seed);
+    assert_eq!(r.scenario, "loading_strain");
+    assert!(r.lambda >= 100.0, "oracle λ {}", r.lambda);
+    assert_eq!(r.outcome(), "extension:loading_strain");
+}

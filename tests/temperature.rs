@@ -618,3 +618,32 @@ fn models_with_extensions_carry_the_laws() {
         );
     }
 }
+
+/// The apparent activation energy of a joint calibration: when every rate of the model
+/// follows one Arrhenius law (A and Kc with the same Q, nothing else depending on T), the
+/// whole solution's time scale does, so the minimum creep rate and the rupture time have
+/// exactly that Q at every stress; with Kc's Q at zero they do not.
+#[test]
+fn apparent_activation_energy_of_a_shared_arrhenius_law_is_its_q() {
+    use creepfit::model::LawKind::{Arrhenius, Constant};
+    let kinds = [Arrhenius, Constant, Constant, Constant, Arrhenius, Constant];
+    let m = with_laws(build("khd", &[]).unwrap(), &kinds, T_REF);
+    // The seed steel's 560 °C constants, A.Q = Kc.Q = 300 kJ/mol.
+    let base = [1.1e-9, 0.1083, 0.3, 2.0e5, 6.86e-6, 5.5];
+    let ode = OdeOptions::default();
+    for (qk, exact) in [(300.0, true), (0.0, false)] {
+        let mut x = base.to_vec();
+        x.extend([300.0, qk]);
+        for (t, s) in [(560.0, 100.0), (575.0, 130.0), (600.0, 80.0)] {
+            let a = creepfit::activation::apparent(m.as_ref(), &x, t, s, 1.0 / 3.0, &ode, 1e9);
+            let (qr, ql) = (a.q_min_rate_kj_mol, a.q_rupture_time_kj_mol);
+            eprintln!("Kc.Q {qk}: {t} °C {s} MPa: Q_app rate {qr:.4}, life {ql:.4}");
+            if exact {
+                assert!((qr - 300.0).abs() < 0.3, "{qr}");
+                assert!((ql - 300.0).abs() < 0.3, "{ql}");
+            } else {
+                assert!((ql - 300.0).abs() > 1.0, "{ql}");
+            }
+        }
+    }
+}

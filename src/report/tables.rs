@@ -47,6 +47,21 @@ where
     })
 }
 
+/// The text of the CSV file that [`write_csv_rows`] writes, kept in memory: for callers that
+/// hand the tables on instead of writing them (the Python package's DataFrames).
+pub fn csv_text<R, I>(header: &[&str], rows: I) -> String
+where
+    R: AsRef<[String]>,
+    I: Iterator<Item = R>,
+{
+    let mut c = csv::Writer::from_writer(Vec::new());
+    c.write_record(header).expect("CSV into memory");
+    for r in rows {
+        c.write_record(r.as_ref()).expect("CSV into memory");
+    }
+    String::from_utf8(c.into_inner().expect("CSV into memory")).expect("UTF-8 cells")
+}
+
 fn csv_io(e: csv::Error) -> std::io::Error {
     match e.into_kind() {
         csv::ErrorKind::Io(e) => e,
@@ -86,6 +101,20 @@ pub fn write_constants(
     params: &[f64],
     t_ref_c: Option<f64>,
 ) -> Result<()> {
+    let rows = constants_rows(model, space, params, t_ref_c);
+    write_csv(path, &CONSTANTS_COLUMNS, &rows)
+}
+
+/// `constants.csv`'s columns.
+pub const CONSTANTS_COLUMNS: [&str; 5] = ["name", "value", "unit", "lb", "ub"];
+
+/// The rows of `constants.csv` ([`write_constants`]).
+pub fn constants_rows(
+    model: &dyn Model,
+    space: &ParamSpace,
+    params: &[f64],
+    t_ref_c: Option<f64>,
+) -> Vec<Vec<String>> {
     let mut rows: Vec<Vec<String>> = model
         .constants()
         .iter()
@@ -109,7 +138,7 @@ pub fn write_constants(
             num(t),
         ]);
     }
-    write_csv(path, &["name", "value", "unit", "lb", "ub"], &rows)
+    rows
 }
 
 /// Read a `constants.csv` (columns `name,value`, any order, extra columns ignored) into the
@@ -129,7 +158,32 @@ pub fn read_constants(path: &Path, model: &dyn Model) -> Result<Vec<f64>> {
 pub fn read_constants_for(path: &Path, cfg: &RunConfig, model: &dyn Model) -> Result<Vec<f64>> {
     crate::predict::check_t_ref(path, cfg)?;
     let (values, lines) = read_constants_lines(path, model)?;
-    for ((v, line), c) in values.iter().zip(&lines).zip(&cfg.constants) {
+    within_bounds(path, values, &lines, cfg)
+}
+
+/// [`read_constants_for`] of a constants table's CSV text in memory, named `path` in errors
+/// (the Python package's constants).
+pub fn read_constants_bytes(
+    path: &Path,
+    csv: &[u8],
+    cfg: &RunConfig,
+    model: &dyn Model,
+) -> Result<Vec<f64>> {
+    let text = std::str::from_utf8(csv)
+        .map_err(|e| Error::data(path, 0, format!("not UTF-8 text: {e}")))?;
+    crate::predict::check_t_ref_text(path, text, cfg)?;
+    let (values, lines) = constants_lines(path, csv, None, model)?;
+    within_bounds(path, values, &lines, cfg)
+}
+
+/// `values` (read from `lines` of `path`) if each is inside the configuration's bounds.
+fn within_bounds(
+    path: &Path,
+    values: Vec<f64>,
+    lines: &[usize],
+    cfg: &RunConfig,
+) -> Result<Vec<f64>> {
+    for ((v, line), c) in values.iter().zip(lines).zip(&cfg.constants) {
         if !(c.lb <= *v && *v <= c.ub) {
             return Err(Error::data(
                 path,
@@ -151,7 +205,17 @@ pub fn read_constants_for(path: &Path, cfg: &RunConfig, model: &dyn Model) -> Re
 /// The values of [`read_constants`] and the line each was read from.
 fn read_constants_lines(path: &Path, model: &dyn Model) -> Result<(Vec<f64>, Vec<usize>)> {
     let (bytes, progress) = crate::data::read_file(path)?;
-    let mut table = crate::data::Table::open(path, &bytes, &["name", "value"], progress)?;
+    constants_lines(path, &bytes, progress, model)
+}
+
+/// [`read_constants_lines`] of the file's bytes.
+fn constants_lines(
+    path: &Path,
+    bytes: &[u8],
+    progress: Option<indicatif::ProgressBar>,
+    model: &dyn Model,
+) -> Result<(Vec<f64>, Vec<usize>)> {
+    let mut table = crate::data::Table::open(path, bytes, &["name", "value"], progress)?;
     let (ci, cv) = (table.col("name").unwrap(), table.col("value").unwrap());
     let specs = model.constants();
     let mut values = vec![f64::NAN; specs.len()];
@@ -288,6 +352,12 @@ pub fn with_specimen<'a>(header: &[&'a str], specimens: bool) -> Vec<&'a str> {
 
 /// `errors.csv` (plus a last `specimen` column when some row has one).
 pub fn write_errors(path: &Path, rows: &[ErrorRow]) -> Result<()> {
+    let (header, rows) = errors_table(rows);
+    write_csv(path, &header, &rows)
+}
+
+/// The header and rows of `errors.csv` ([`write_errors`]).
+pub fn errors_table(rows: &[ErrorRow]) -> (Vec<&'static str>, Vec<Vec<String>>) {
     let specimens = rows.iter().any(|r| r.specimen.is_some());
     let header = [
         "temperature_C",
@@ -322,14 +392,23 @@ pub fn write_errors(path: &Path, rows: &[ErrorRow]) -> Result<()> {
             .collect()
         })
         .collect();
-    write_csv(path, &with_specimen(&header, specimens), &rows)
+    (with_specimen(&header, specimens), rows)
 }
 
 /// `curves.csv` of a fit: measured and predicted strain at every measured time (plus a last
 /// `specimen` column when some curve has one).
 pub fn write_fit_curves(path: &Path, fit: &LocalFit, curves: &[Curve]) -> Result<()> {
+    let (header, rows) = fit_curves_table(fit, curves);
+    write_csv_rows(path, &header, rows)
+}
+
+/// The header and rows (made one at a time) of a fit's `curves.csv` ([`write_fit_curves`]).
+pub fn fit_curves_table<'a>(
+    fit: &'a LocalFit,
+    curves: &'a [Curve],
+) -> (Vec<&'static str>, impl Iterator<Item = Vec<String>> + 'a) {
     let specimens = has_specimens(curves);
-    let rows = curves.iter().enumerate().flat_map(|(i, c)| {
+    let rows = curves.iter().enumerate().flat_map(move |(i, c)| {
         c.times_h.iter().enumerate().map(move |(k, &t)| {
             let mut row = vec![
                 num(c.temperature_c),
@@ -351,7 +430,7 @@ pub fn write_fit_curves(path: &Path, fit: &LocalFit, curves: &[Curve]) -> Result
         "strain_exp_pct",
         "strain_pred_pct",
     ];
-    write_csv_rows(path, &with_specimen(&header, specimens), rows)
+    (with_specimen(&header, specimens), rows)
 }
 
 /// At most about `max` of `points`, evenly spaced in index, first and last kept: what a plot
@@ -566,5 +645,134 @@ pub fn fit_summary(cfg: &RunConfig, run: &FitRun, curves: &[Curve]) -> Value {
             .map(|(t, p)| json!({"temperature_C": t, "constants": inner.iter().zip(p).map(|(n, x)| (n.to_string(), jnum(*x))).collect::<serde_json::Map<_, _>>()}))
             .collect::<Vec<_>>());
     }
+    if cfg.has_laws() {
+        let a = crate::activation::for_fit(
+            run.model.as_ref(),
+            &best.params,
+            curves,
+            run.settings.omega_f,
+            &run.settings.ode,
+        );
+        summary["activation_energy"] = serde_json::to_value(a).expect("plain values");
+    }
+    if run.settings.kind == crate::config::ObjectiveKind::Likelihood {
+        summary["specimens"] = specimens_json(&run.specimens);
+    }
     summary
+}
+
+/// Coefficient of variation (%) of a log-normal factor whose ln has sd `s`: what "the creep
+/// rate varies 23 % between specimens" means.
+pub fn lognormal_cv_pct(s: f64) -> f64 {
+    100.0 * (s * s).exp_m1().sqrt()
+}
+
+/// The kinds of specimen effect, in the order of `specimens.csv` and `summary.json`.
+const EFFECT_KINDS: [(crate::likelihood::EffectKind, &str); 2] = [
+    (crate::likelihood::EffectKind::Rate, "rate"),
+    (crate::likelihood::EffectKind::Ductility, "ductility"),
+];
+
+/// `summary.json`'s `specimens`: the scatter between specimens the likelihood fit found (per
+/// kind: sd of the ln factor, its 95 % interval, the coefficient of variation), or why there
+/// is none.
+pub fn specimens_json(sp: &crate::fit::FitSpecimens) -> Value {
+    let scatter: serde_json::Map<String, Value> = sp
+        .fit
+        .iter()
+        .flat_map(|f| {
+            f.kinds.iter().enumerate().map(move |(j, k)| {
+                let name = EFFECT_KINDS.iter().find(|e| e.0 == *k).map_or("?", |e| e.1);
+                (
+                    name.to_string(),
+                    json!({
+                        "sd_ln": jnum(f.scatter[j]),
+                        "sd_ln_lo95": jnum(f.scatter_lo95[j]),
+                        "sd_ln_hi95": jnum(f.scatter_hi95[j]),
+                        "cv_pct": jnum(lognormal_cv_pct(f.scatter[j])),
+                    }),
+                )
+            })
+        })
+        .collect();
+    json!({
+        "fitted": sp.fit.is_some(),
+        "scatter": scatter,
+        "dropped": sp.fit.as_ref().map(|f| f.dropped.clone()).unwrap_or_default(),
+        "neg2ll_without_effects": jnum(sp.plain_neg2ll),
+        "replicate_curves": sp.replicate_curves,
+        "replicate_sd_ln_rupture_time": sp.replicate_sd_ln_life.map(jnum),
+        "note": sp.note,
+    })
+}
+
+/// `specimens.csv`: each curve's specimen factors (the conditional mode e^η of the factor
+/// on the creep rate, and on the rupture strain, with e^(η ± 1.96 sd)), empty for a kind the
+/// fit does not carry.
+pub fn write_specimens(
+    path: &Path,
+    fit: &crate::likelihood::SpecimenFit,
+    curves: &[Curve],
+) -> Result<()> {
+    let rows: Vec<Vec<String>> = curves
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let mut row = vec![
+                (i + 1).to_string(),
+                num(c.temperature_c),
+                num(c.stress_mpa),
+                c.specimen.clone().unwrap_or_default(),
+            ];
+            for (kind, _) in EFFECT_KINDS {
+                match fit.kinds.iter().position(|k| *k == kind) {
+                    Some(j) => {
+                        let (e, sd) = (fit.effects[j][i], fit.effects_sd[j][i]);
+                        row.push(num(e.exp()));
+                        row.push(num((e - 1.96 * sd).exp()));
+                        row.push(num((e + 1.96 * sd).exp()));
+                    }
+                    None => row.extend([String::new(), String::new(), String::new()]),
+                }
+            }
+            row
+        })
+        .collect();
+    write_csv(
+        path,
+        &[
+            "curve",
+            "temperature_C",
+            "stress_MPa",
+            "specimen",
+            "rate_factor",
+            "rate_factor_lo95",
+            "rate_factor_hi95",
+            "ductility_factor",
+            "ductility_factor_lo95",
+            "ductility_factor_hi95",
+        ],
+        &rows,
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn csv_text_is_the_file_text() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("t.csv");
+        let header = ["name", "value", "note"];
+        let rows = vec![
+            vec!["A".to_string(), num(1e-10), "a, quoted".to_string()],
+            vec!["B".to_string(), num(f64::NAN), String::new()],
+            vec!["C".to_string(), num(0.1 + 0.2), "line\nbreak".to_string()],
+        ];
+        write_csv(&path, &header, &rows).unwrap();
+        let file = std::fs::read_to_string(&path).unwrap();
+        assert_eq!(csv_text(&header, rows.iter()), file);
+        assert!(file.starts_with("name,value,note\nA,0.0000000001,\"a, quoted\"\nB,,\n"));
+    }
 }

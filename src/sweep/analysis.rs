@@ -269,6 +269,54 @@ pub fn write(
     wall_s: f64,
     threads: usize,
 ) -> Result<Vec<String>> {
+    let (head, rows) = ranked_table(header, a);
+    write_csv(&out.join("ranked.csv"), &head, &rows)?;
+    let (mhead, mrows) = minima_table(header, a);
+    write_csv(&out.join("minima.csv"), &mhead, &mrows)?;
+
+    write_text(
+        &out.join("summary.json"),
+        &serde_json::to_string_pretty(&summary(header, a, coverage, missing, wall_s, threads))
+            .expect("plain JSON"),
+    )?;
+
+    // Plots last: a failure is reported after the numbers are safely in place. The
+    // waterfall gets every fit, failed ones (no objective, ranked last) included, so that
+    // its counts add up.
+    let mut failures = Vec::new();
+    let objs: Vec<f64> = a.ranked.iter().map(|s| s.objective).collect();
+    let scaled: Vec<Vec<f64>> = a
+        .ranked
+        .iter()
+        .filter(|s| s.ok())
+        .take(PLOT_BEST_K)
+        .map(|s| {
+            (0..header.names.len())
+                .map(|j| header.to_unit(j, s.params[j]))
+                .collect()
+        })
+        .collect();
+    let title = &header.name;
+    if let Err(e) = plot_waterfall(
+        &out.join("waterfall.png"),
+        &format!("{title}: sorted local minima"),
+        &objs,
+    ) {
+        failures.push(e.to_string());
+    }
+    if let Err(e) = plot_parameters(
+        &out.join("parameters.png"),
+        &format!("{title}: best {} solutions within the bounds", scaled.len()),
+        &header.names,
+        &scaled,
+    ) {
+        failures.push(e.to_string());
+    }
+    Ok(failures)
+}
+
+/// The header and rows of `ranked.csv` ([`write`]).
+pub fn ranked_table<'a>(header: &'a Header, a: &Analysis) -> (Vec<&'a str>, Vec<Vec<String>>) {
     let mut head: Vec<&str> = vec![
         "rank",
         "start_id",
@@ -311,8 +359,11 @@ pub fn write(
             r
         })
         .collect();
-    write_csv(&out.join("ranked.csv"), &head, &rows)?;
+    (head, rows)
+}
 
+/// The header and rows of `minima.csv` ([`write`]).
+pub fn minima_table<'a>(header: &'a Header, a: &Analysis) -> (Vec<&'a str>, Vec<Vec<String>>) {
     let mut mhead: Vec<&str> = vec!["cluster", "size", "fraction", "best_objective"];
     mhead.extend(header.names.iter().map(|s| s.as_str()));
     let mrows: Vec<Vec<String>> = a
@@ -330,47 +381,7 @@ pub fn write(
             r
         })
         .collect();
-    write_csv(&out.join("minima.csv"), &mhead, &mrows)?;
-
-    write_text(
-        &out.join("summary.json"),
-        &serde_json::to_string_pretty(&summary(header, a, coverage, missing, wall_s, threads))
-            .expect("plain JSON"),
-    )?;
-
-    // Plots last: a failure is reported after the numbers are safely in place. The
-    // waterfall gets every fit, failed ones (no objective, ranked last) included, so that
-    // its counts add up.
-    let mut failures = Vec::new();
-    let objs: Vec<f64> = a.ranked.iter().map(|s| s.objective).collect();
-    let scaled: Vec<Vec<f64>> = a
-        .ranked
-        .iter()
-        .filter(|s| s.ok())
-        .take(PLOT_BEST_K)
-        .map(|s| {
-            (0..header.names.len())
-                .map(|j| header.to_unit(j, s.params[j]))
-                .collect()
-        })
-        .collect();
-    let title = &header.name;
-    if let Err(e) = plot_waterfall(
-        &out.join("waterfall.png"),
-        &format!("{title}: sorted local minima"),
-        &objs,
-    ) {
-        failures.push(e.to_string());
-    }
-    if let Err(e) = plot_parameters(
-        &out.join("parameters.png"),
-        &format!("{title}: best {} solutions within the bounds", scaled.len()),
-        &header.names,
-        &scaled,
-    ) {
-        failures.push(e.to_string());
-    }
-    Ok(failures)
+    (mhead, mrows)
 }
 
 fn constants_json(header: &Header, p: &[f64]) -> Value {

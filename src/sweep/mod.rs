@@ -18,7 +18,7 @@ mod analysis;
 pub mod array;
 mod journal;
 
-pub use analysis::{analyse, Analysis, Cluster, Spread};
+pub use analysis::{analyse, minima_table, ranked_table, summary, Analysis, Cluster, Spread};
 /// Read a sweep journal (`None` when the file does not exist): for tests and tools.
 pub use journal::read as read_journal;
 pub use journal::{Header, Solution};
@@ -271,32 +271,7 @@ pub fn run_sweep(cfg: &RunConfig, data: &Dataset) -> Result<(Plan, SweepRun)> {
                     return;
                 }
             }
-            let fit = local_fit(
-                model.as_ref(),
-                &data.curves,
-                &space,
-                &plan.ws[wi],
-                &plan.starts[s],
-                "",
-                &settings,
-            );
-            let sol = Solution {
-                start_id: s,
-                w_idx: wi,
-                objective: fit.eval.objective,
-                norm_residual: fit.eval.norm_residual,
-                lifetime_err_pct: mean_abs(&fit.lifetime_err_pct),
-                min_rate_err_pct: mean_abs(&fit.min_rate_err_pct),
-                lifetime_errs_pct: fit.lifetime_err_pct.clone(),
-                status: if fit.eval.objective.is_finite() {
-                    fit.lm.termination.as_str().to_string()
-                } else {
-                    "simulation_failure".to_string()
-                },
-                iterations: fit.lm.iterations,
-                evaluations: fit.lm.evaluations,
-                params: fit.params.clone(),
-            };
+            let sol = solve(model.as_ref(), data, &space, &settings, &plan, (s, wi));
             if let Err(e) = writer.lock().unwrap().append(&sol) {
                 write_error.lock().unwrap().get_or_insert(e);
                 STOP.store(true, Ordering::SeqCst);
@@ -324,6 +299,106 @@ pub fn run_sweep(cfg: &RunConfig, data: &Dataset) -> Result<(Plan, SweepRun)> {
             folder,
         },
     ))
+}
+
+/// The local fit of start `s` at w candidate `wi` of `plan`, as a journal entry.
+fn solve(
+    model: &dyn crate::model::Model,
+    data: &Dataset,
+    space: &crate::objective::ParamSpace,
+    settings: &FitSettings,
+    plan: &Plan,
+    (s, wi): (usize, usize),
+) -> Solution {
+    let fit = local_fit(
+        model,
+        &data.curves,
+        space,
+        &plan.ws[wi],
+        &plan.starts[s],
+        "",
+        settings,
+    );
+    Solution {
+        start_id: s,
+        w_idx: wi,
+        objective: fit.eval.objective,
+        norm_residual: fit.eval.norm_residual,
+        lifetime_err_pct: mean_abs(&fit.lifetime_err_pct),
+        min_rate_err_pct: mean_abs(&fit.min_rate_err_pct),
+        lifetime_errs_pct: fit.lifetime_err_pct.clone(),
+        status: if fit.eval.objective.is_finite() {
+            fit.lm.termination.as_str().to_string()
+        } else {
+            "simulation_failure".to_string()
+        },
+        iterations: fit.lm.iterations,
+        evaluations: fit.lm.evaluations,
+        params: fit.params,
+    }
+}
+
+/// What [`run_in_memory`] computed.
+pub struct MemoryRun {
+    /// The starts and w candidates.
+    pub plan: Plan,
+    /// The solutions computed, unordered.
+    pub solutions: Vec<Solution>,
+    /// Fits not computed because `stop` was raised.
+    pub missing: usize,
+    /// Wall time, s.
+    pub wall_s: f64,
+    /// Threads used.
+    pub threads: usize,
+}
+
+/// The whole sweep of the resolved configuration `cfg` (bound to `data`) in memory: the same
+/// starts and fits as [`run_sweep`] (so the same files from [`write_outputs`]), without an
+/// output folder, journal or shards. `on_fit` is called after each fit (from the worker
+/// threads) with the number done and the total: a progress hook. Raising `stop` starts no
+/// new fit (the running ones finish); [`MemoryRun::missing`] then counts the rest.
+pub fn run_in_memory(
+    cfg: &RunConfig,
+    data: &Dataset,
+    stop: &AtomicBool,
+    on_fit: &(dyn Fn(usize, usize) + Sync),
+) -> Result<MemoryRun> {
+    let t0 = Instant::now();
+    check_bound(cfg, data)?;
+    let plan = plan(cfg, data)?;
+    let model = cfg.build_model()?;
+    let space = param_space(cfg);
+    let settings = FitSettings::from_config(cfg);
+    let jobs = missing(&plan.header, &[]);
+    let threads = cfg
+        .run
+        .threads
+        .unwrap_or_else(rayon::current_num_threads)
+        .max(1);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| Error::Invalid(format!("thread pool: {e}")))?;
+    let done = AtomicUsize::new(0);
+    let solutions: Vec<Solution> = pool.install(|| {
+        jobs.par_iter()
+            .filter_map(|&job| {
+                if stop.load(Ordering::SeqCst) {
+                    return None;
+                }
+                let sol = solve(model.as_ref(), data, &space, &settings, &plan, job);
+                on_fit(done.fetch_add(1, Ordering::SeqCst) + 1, jobs.len());
+                Some(sol)
+            })
+            .collect()
+    });
+    Ok(MemoryRun {
+        missing: jobs.len() - solutions.len(),
+        plan,
+        solutions,
+        wall_s: t0.elapsed().as_secs_f64(),
+        threads,
+    })
 }
 
 /// The configuration must have been resolved on these very data (its `data_hash`).

@@ -13,7 +13,9 @@
 //!   ln t_f (the root mean square of the lifetime residuals, floored; or the pooled scatter
 //!   within groups of replicate tests at one load, where there are replicates and it is
 //!   larger), for the minimum rate and the rupture strain the root mean square of the log
-//!   residuals of the measured (or, where the ruptures file has none, estimated) values.
+//!   residuals of the measured (or, where the ruptures file has none, estimated) values;
+//!   where the error model carries specimen effects (`[objective] specimen_effects`), the
+//!   hierarchical fit's scatter of a new specimen's factors where it is wider.
 //!
 //! The functions take the model, the fitted constants with their error model (a
 //! [`Reference`]) and a [`Load`]: a temperature carried by the load reaches the model through
@@ -28,6 +30,7 @@ use super::constrained::{Predicted, Quantity};
 use super::profile::{quantity_interval, QuantityInterval};
 use super::{normal_quantile, Context, Reference, Thresholds};
 use crate::diagnose::bootstrap::{replicate_data, replicate_rng};
+use crate::likelihood::EffectKind;
 use crate::model::Load;
 
 /// Random stream of the prediction bootstrap.
@@ -122,11 +125,58 @@ pub fn specimen_scatter(ctx: &Context, reference: &Reference) -> [(f64, usize); 
         .map(|(c, p)| (p.rupture_strain / c.rupture_strain).ln())
         .filter(|v| v.is_finite())
         .collect();
+    let (mut s_r, mut s_e) = (rms(&rates), rms(&strains));
+    // With specimen effects in the error model (replicates in the data, or asked for), the
+    // hierarchical fit's scatter of a new specimen's creep-rate factor carries over exactly
+    // to ln t_r and ln ε̇_min (every rate of the model scales with A, so the time scale does),
+    // the ductility factor's to ln ε_r; each is used where it is wider than the residuals'.
+    if let Some(sp) = new_specimen_scatter(ctx, reference) {
+        for (k, tau) in sp.kinds.iter().zip(&sp.scatter) {
+            match k {
+                EffectKind::Rate => {
+                    s_t = s_t.max(*tau);
+                    s_r = if s_r.is_finite() { s_r.max(*tau) } else { *tau };
+                }
+                EffectKind::Ductility => {
+                    s_e = if s_e.is_finite() { s_e.max(*tau) } else { *tau };
+                }
+            }
+        }
+    }
     [
         (s_t, lifetimes.len()),
-        (rms(&rates), rates.len()),
-        (rms(&strains), strains.len()),
+        (s_r, rates.len()),
+        (s_e, strains.len()),
     ]
+}
+
+/// The specimen effects of the hierarchical fit from `reference`'s constants, when the
+/// context's error model carries any (`None` otherwise, or when the fit finds no scatter).
+pub fn new_specimen_scatter(
+    ctx: &Context,
+    reference: &Reference,
+) -> Option<crate::likelihood::SpecimenFit> {
+    if !ctx.ml.specimen.any() {
+        return None;
+    }
+    let opts = crate::likelihood::MlOptions {
+        white_first: false,
+        ..ctx.ml
+    };
+    let h = crate::likelihood::ml_fit_from(
+        ctx.model,
+        ctx.curves,
+        &ctx.space,
+        &reference.params,
+        None,
+        &ctx.warm,
+        &opts,
+    );
+    if h.ok() {
+        h.specimen
+    } else {
+        None
+    }
 }
 
 /// A prediction interval from a confidence interval on the ln scale: each half-width

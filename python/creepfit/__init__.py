@@ -1,0 +1,396 @@
+"""creepfit from Python: calibrate continuum-damage creep equations on pandas DataFrames.
+
+The functions call the Rust library the ``creepfit`` command line calls, with the same
+configuration (a TOML file's path, TOML text, or a dict with the TOML file's keys, see
+docs/FORMATS.md) and the same data rules, and return the command's output files as
+DataFrames (their columns and numbers, to the last digit) and dicts (their JSON).
+
+Units: time in h, stress in MPa, temperature in °C, strain in percent (as in the files).
+
+Data: ``curves`` has the columns ``temperature_C, stress_MPa, time_h, strain_pct[, specimen]``,
+``ruptures`` ``temperature_C, stress_MPa, rupture_time_h[, rupture_strain_pct]
+[, min_rate_pct_per_h][, specimen]``; other columns and the index are ignored, an empty cell
+(NaN) is an empty cell of the file. Without them the configuration's files are read, as the
+command line does. Errors name a DataFrame's row as a file's line: the header is line 1, so
+the row at position k (``df.iloc[k]``) is line k + 2.
+
+Bad input raises :class:`CreepfitError` (a ``ValueError``) with the library's one-line
+message; the library's warnings are issued as :class:`CreepfitWarning`.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import os
+import warnings
+from typing import Any, Callable, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
+
+import pandas as pd
+
+from . import _native
+from ._native import CreepfitError
+
+__all__ = [
+    "CreepfitError",
+    "CreepfitWarning",
+    "Diagnosis",
+    "FitResult",
+    "SweepResult",
+    "diagnose",
+    "fit",
+    "predict",
+    "sweep",
+]
+
+__version__ = "0.1.0"
+
+Config = Union[str, "os.PathLike[str]", Mapping[str, Any]]
+"""A TOML file's path, TOML text (a str with a line break), or a dict of the TOML keys."""
+
+Progress = Union[bool, Callable[[int, int], Any], None]
+"""True: a tqdm bar (notebook or terminal); a callable: called with (done, total) about every
+0.1 s (total 0 while the library reports no count); False or None: nothing."""
+
+CURVE_COLUMNS = ("temperature_C", "stress_MPa", "time_h", "strain_pct", "specimen")
+RUPTURE_COLUMNS = (
+    "temperature_C",
+    "stress_MPa",
+    "rupture_time_h",
+    "rupture_strain_pct",
+    "min_rate_pct_per_h",
+    "specimen",
+)
+# Text columns of the outputs (everything else is read as numbers where it parses).
+_TEXT_COLUMNS = ("name", "unit", "specimen", "status", "w", "extrapolation", "outcome",
+                 "constants", "given_outcome")
+
+
+class CreepfitWarning(UserWarning):
+    """A non-fatal finding of the library (dropped duplicate points, an unused rupture
+    record, an extrapolation, …), one line each, as the command line prints them."""
+
+
+def _config(config: Config) -> Tuple[str, str]:
+    """(text, kind) of a configuration for the native module."""
+    if isinstance(config, Mapping):
+        try:
+            text = json.dumps(config, default=_json_default, allow_nan=False)
+        except (TypeError, ValueError) as e:
+            raise CreepfitError(f"<config>: {e}") from None
+        return text, "json"
+    if isinstance(config, os.PathLike):
+        return os.fspath(config), "path"
+    if isinstance(config, str):
+        if "\n" in config or ("=" in config and not os.path.exists(config)):
+            return config, "toml"
+        return config, "path"
+    raise TypeError(f"config: expected a path, TOML text or a dict, not {type(config).__name__}")
+
+
+def _json_default(v: Any) -> Any:
+    """numpy scalars and arrays, paths and tuples in a config dict as JSON values."""
+    if hasattr(v, "tolist"):
+        return v.tolist()
+    if isinstance(v, os.PathLike):
+        return os.fspath(v)
+    raise TypeError(f"{v!r} ({type(v).__name__}) has no TOML form")
+
+
+def _csv(df: Any, columns: Sequence[str], what: str) -> str:
+    """The CSV text of a table's known columns (floats in their shortest round-trip form, an
+    empty cell for NaN): what the library reads from a file."""
+    if not isinstance(df, pd.DataFrame):
+        try:
+            df = pd.DataFrame(df)
+        except Exception as e:  # noqa: BLE001 - any construction failure is bad input
+            raise CreepfitError(f"<{what} DataFrame>: not a table: {e}") from None
+    keep = [c for c in df.columns if c in columns]
+    return df.loc[:, keep].to_csv(index=False, lineterminator="\n")
+
+
+def _tables(curves: Any, ruptures: Any) -> Tuple[Optional[str], Optional[str]]:
+    if curves is None and ruptures is None:
+        return None, None
+    if curves is None or ruptures is None:
+        raise CreepfitError(
+            "give both the curves and the ruptures DataFrames, or neither (the configuration's files)"
+        )
+    return _csv(curves, CURVE_COLUMNS, "curves"), _csv(ruptures, RUPTURE_COLUMNS, "ruptures")
+
+
+# pandas before 3.0 parses floats exactly only when asked; 3.0 does by default and deprecates
+# the option.
+_EXACT: Dict[str, Any] = (
+    {} if int(pd.__version__.split(".")[0]) >= 3 else {"float_precision": "round_trip"}
+)
+
+
+def _frame(text: str) -> pd.DataFrame:
+    """An output table's CSV text as a DataFrame: numbers exactly as written (round-trip
+    parsing), only empty cells missing, text columns as text."""
+    header = next(csv.reader(io.StringIO(text)), [])
+    dtype = {c: str for c in header if c in _TEXT_COLUMNS}
+    return pd.read_csv(
+        io.StringIO(text),
+        keep_default_na=False,
+        na_values=[""],
+        dtype=dtype,
+        **_EXACT,
+    )
+
+
+def _warn(lines: Iterable[str]) -> List[str]:
+    lines = list(lines)
+    for w in lines:
+        warnings.warn(w, CreepfitWarning, stacklevel=3)
+    return lines
+
+
+def _progress(
+    progress: Progress, what: str, unit: str
+) -> Tuple[Optional[Callable[[int, int], Any]], Callable[[], None]]:
+    """(callback for the native module, closer) of a `progress` argument."""
+    if progress is None or progress is False:
+        return None, lambda: None
+    if callable(progress):
+        return progress, lambda: None
+    try:
+        from tqdm.auto import tqdm
+    except ImportError:  # tqdm is a dependency, but a bar is never worth a failure
+        return None, lambda: None
+    state: Dict[str, Any] = {"bar": None}
+
+    def update(done: int, total: int) -> None:
+        bar = state["bar"]
+        if bar is None:
+            # Without counts (diagnose) the bar shows the elapsed time alone.
+            fmt = None if total else "{desc}: {elapsed} elapsed"
+            bar = tqdm(total=total or None, desc=what, unit=unit, leave=False, bar_format=fmt)
+            state["bar"] = bar
+        if total and bar.total != total:
+            bar.total = total
+        bar.n = done
+        bar.refresh()
+
+    def close() -> None:
+        if state["bar"] is not None:
+            state["bar"].close()
+
+    return update, close
+
+
+class FitResult:
+    """What ``creepfit fit`` writes: the best fit of the paper's procedure.
+
+    Attributes:
+        constants: constants.csv (name, value, unit, lb, ub; a last ``T_ref`` row with
+            temperature laws).
+        errors: errors.csv (per curve: rupture time, minimum rate and rupture strain,
+            measured and predicted, and the errors in %).
+        curves: curves.csv (measured and predicted strain, %, at every measured time).
+        summary: summary.json.
+        warnings: the library's warnings, one line each.
+    """
+
+    def __init__(self, out: Mapping[str, str], warnings: List[str]):
+        self.constants: pd.DataFrame = _frame(out["constants"])
+        self.errors: pd.DataFrame = _frame(out["errors"])
+        self.curves: pd.DataFrame = _frame(out["curves"])
+        self.summary: Dict[str, Any] = json.loads(out["summary"])
+        self.warnings: List[str] = warnings
+
+    @property
+    def params(self) -> Dict[str, float]:
+        """The fitted constants by name (the ``T_ref`` row left out)."""
+        c = self.constants[self.constants["name"] != "T_ref"]
+        return dict(zip(c["name"], c["value"].astype(float)))
+
+    def __repr__(self) -> str:
+        return f"FitResult({self.summary.get('name')!r}, constants={self.params})"
+
+
+class SweepResult:
+    """What ``creepfit sweep`` writes: ranked.csv (every fit, best first), minima.csv (the
+    distinct minima) and summary.json."""
+
+    def __init__(self, out: Mapping[str, str], warnings: List[str]):
+        self.ranked: pd.DataFrame = _frame(out["ranked"])
+        self.minima: pd.DataFrame = _frame(out["minima"])
+        self.summary: Dict[str, Any] = json.loads(out["summary"])
+        self.warnings: List[str] = warnings
+
+    def __repr__(self) -> str:
+        s = self.summary
+        return (f"SweepResult({s.get('name')!r}, fits={s.get('fits')}, "
+                f"distinct_minima={s.get('distinct_minima')})")
+
+
+class Diagnosis(dict):
+    """diagnosis.json as a dict (verdict, cause, base, candidates, …), with the candidates
+    as a table."""
+
+    warnings: List[str]
+
+    def table(self) -> pd.DataFrame:
+        """One row per model (the base model first, then every extension tried), indexed by
+        name, with each candidate's scalar fields (model, status, k, objective = −2 ln L,
+        aic, lr, p_value, p_holm, significant, delta_bic, loo_rmse, gain_pct, …)."""
+        rows = [self["base"], *self["candidates"]]
+        scalar = (str, int, float, bool, type(None))
+        table = pd.DataFrame(
+            [{k: v for k, v in r.items() if isinstance(v, scalar)} for r in rows]
+        )
+        return table.set_index("name")
+
+
+def fit(
+    config: Config,
+    curves: Any = None,
+    ruptures: Any = None,
+    *,
+    start: str = "both",
+    w: Optional[float] = None,
+) -> FitResult:
+    """``creepfit fit``: the initial guess, a local bounded fit for every lifetime weight w,
+    the best one.
+
+    Args:
+        config: a TOML file's path, TOML text, or a dict with the TOML file's keys.
+        curves, ruptures: the data as DataFrames (default: the configuration's files).
+        start: the start points: ``"config"``, ``"guess"`` or ``"both"`` (``--start``).
+        w: one lifetime weight for every curve instead of the configured grid (``--w``).
+    """
+    text, kind = _config(config)
+    c, r = _tables(curves, ruptures)
+    out, warns = _native.fit(text, kind, c, r, start, None if w is None else float(w))
+    return FitResult(out, _warn(warns))
+
+
+def sweep(
+    config: Config,
+    curves: Any = None,
+    ruptures: Any = None,
+    *,
+    starts: Optional[int] = None,
+    seed: Optional[int] = None,
+    threads: Optional[int] = None,
+    progress: Progress = True,
+) -> SweepResult:
+    """``creepfit sweep``: Latin-hypercube starts × w candidates, a local fit from each, in
+    parallel; ranked, with the Pareto set and the distinct minima. In memory: no journal,
+    no output folder. Ctrl-C (KeyboardInterrupt) stops it: no new fit starts, the running
+    ones finish, and KeyboardInterrupt is raised.
+
+    Args:
+        starts, seed: the Latin-hypercube starts and their seed (default: ``[sweep]``'s).
+        threads: worker threads (default: all cores).
+        progress: a bar (True), a callback ``(done, total)``, or nothing.
+    """
+    text, kind = _config(config)
+    c, r = _tables(curves, ruptures)
+    cb, close = _progress(progress, "sweep", "fit")
+    try:
+        out, warns = _native.sweep(text, kind, c, r, starts, seed, threads, cb)
+    finally:
+        close()
+    return SweepResult(out, _warn(warns))
+
+
+def diagnose(
+    config: Config,
+    curves: Any = None,
+    ruptures: Any = None,
+    *,
+    starts: Optional[int] = None,
+    seed: Optional[int] = None,
+    bootstrap: Optional[int] = None,
+    alpha: Optional[float] = None,
+    threads: Optional[int] = None,
+    progress: Progress = True,
+) -> Diagnosis:
+    """``creepfit diagnose``: what the calibrated model misses, the named cause, and what an
+    extension gains; diagnosis.json as a :class:`Diagnosis` (a dict with ``.table()``).
+    Ctrl-C raises KeyboardInterrupt only once the work ends (the library's diagnose has no
+    stop hook yet; ``fit`` and ``predict`` likewise).
+
+    Args:
+        starts, seed, bootstrap, alpha: ``[diagnose]``'s settings (default: the file's).
+        threads: worker threads (default: all cores).
+        progress: a bar (True; the elapsed time: the library reports no counts yet), a
+            callback ``(done, total)``, or nothing.
+    """
+    text, kind = _config(config)
+    c, r = _tables(curves, ruptures)
+    cb, close = _progress(progress, "diagnose", "s")
+    try:
+        out, warns = _native.diagnose(
+            text, kind, c, r, starts, seed, bootstrap,
+            None if alpha is None else float(alpha), threads, cb,
+        )
+    finally:
+        close()
+    d = Diagnosis(json.loads(out["diagnosis"]))
+    d.warnings = _warn(warns)
+    return d
+
+
+def _constants(constants: Any) -> Tuple[str, Optional[str]]:
+    """(CSV text, name in errors) of constants given as a FitResult, a DataFrame with name
+    and value columns, a dict name -> value, or a constants.csv path."""
+    if isinstance(constants, FitResult):
+        constants = constants.constants
+    if isinstance(constants, (str, os.PathLike)):
+        path = os.fspath(constants)
+        try:
+            with open(path, encoding="utf-8", newline="") as f:
+                return f.read(), path
+        except OSError as e:
+            raise CreepfitError(f"{path}: {e.strerror}") from None
+    if isinstance(constants, Mapping):
+        constants = pd.DataFrame({"name": list(constants), "value": list(constants.values())})
+    if isinstance(constants, pd.DataFrame):
+        return constants.to_csv(index=False, lineterminator="\n"), None
+    raise TypeError(
+        "constants: expected a FitResult, a DataFrame (name, value), a dict or a path, "
+        f"not {type(constants).__name__}"
+    )
+
+
+def predict(
+    config: Config,
+    constants: Any,
+    curves: Any = None,
+    ruptures: Any = None,
+    *,
+    at: Optional[Iterable[Tuple[float, float]]] = None,
+    intervals: Optional[bool] = None,
+) -> pd.DataFrame:
+    """``creepfit predict``: rupture time, rupture strain and minimum creep rate at untested
+    conditions; predictions.csv as a DataFrame, summary.json in ``.attrs["summary"]``.
+
+    Args:
+        constants: a :class:`FitResult`, a DataFrame (name, value), a dict or a
+            constants.csv path.
+        at: conditions ``[(T °C, stress MPa), ...]`` (default: ``[predict] at``).
+        intervals: add the 95 % intervals (``--intervals``; default: ``[predict]``'s).
+    """
+    text, kind = _config(config)
+    c, r = _tables(curves, ruptures)
+    ctext, cname = _constants(constants)
+    at_text = None
+    if at is not None:
+        pairs = []
+        for cond in at:
+            t, s = cond
+            pairs.append(f"{float(t)!r}:{float(s)!r}")
+        at_text = ",".join(pairs)
+    out, warns = _native.predict(
+        text, kind, ctext, cname, c, r, at_text, None if intervals is None else bool(intervals)
+    )
+    _warn(warns)
+    df = _frame(out["predictions"])
+    df.attrs["summary"] = json.loads(out["summary"])
+    return df
+

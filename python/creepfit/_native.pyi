@@ -1,0 +1,57 @@
+"""Type stubs of the native module creepfit._native (python/src/lib.rs).
+
+Every function takes the configuration as ``(config, kind)``: ``kind`` is ``"path"`` (a TOML
+file), ``"toml"`` (TOML text) or ``"json"`` (the JSON of a dict with the TOML keys); the data
+tables, when given, as CSV text. Each returns the output files' texts by name and the
+library's warnings.
+"""
+
+from typing import Callable, Dict, List, Optional, Tuple
+
+_Outputs = Tuple[Dict[str, str], List[str]]
+_Progress = Optional[Callable[[int, int], object]]
+
+class CreepfitError(ValueError):
+    path: Optional[str]
+    line: Optional[int]
+
+def fit(
+    config: str,
+    kind: str,
+    curves: Optional[str] = None,
+    ruptures: Optional[str] = None,
+    start: Optional[str] = None,
+    w: Optional[float] = None,
+) -> _Outputs: ...
+def sweep(
+    config: str,
+    kind: str,
+    curves: Optional[str] = None,
+    ruptures: Optional[str] = None,
+    starts: Optional[int] = None,
+    seed: Optional[int] = None,
+    threads: Optional[int] = None,
+    progress: _Progress = None,
+) -> _Outputs: ...
+def diagnose(
+    config: str,
+    kind: str,
+    curves: Optional[str] = None,
+    ruptures: Optional[str] = None,
+    starts: Optional[int] = None,
+    seed: Optional[int] = None,
+    bootstrap: Optional[int] = None,
+    alpha: Optional[float] = None,
+    threads: Optional[int] = None,
+    progress: _Progress = None,
+) -> _Outputs: ...
+def predict(
+    config: str,
+    kind: str,
+    constants: str,
+    constants_name: Optional[str] = None,
+    curves: Optional[str] = None,
+    ruptures: Optional[str] = None,
+    at: Optional[str] = None,
+    intervals: Optional[bool] = None,
+) -> _Outputs: ...

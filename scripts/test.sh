@@ -1,0 +1,10 @@
+#!/usr/bin/env bash
+# The project's one test command (README "Tests"; .ci/run calls it): the Rust suite
+# (`cargo test --release`), then the Python package (scripts/test_python.sh: the wheel built
+# into a virtualenv, its pytest suite against the binary the Rust suite built).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+echo "== cargo test --release"
+cargo test --release
+echo "== Python package (scripts/test_python.sh)"
+scripts/test_python.sh
