@@ -5,9 +5,10 @@
 //!   a strain limit, white or AR(1) reading error, 1 % scatter of rupture times, shuffled rows;
 //!   every catalogued effect over a range of sizes, no effect, and two effects outside the
 //!   catalogue): false alarms on the no-effect sets and the share of detectable catalogued
-//!   effects named correctly. Fixed seeds 1001–1020 (development seeds; 20 sets so that the
-//!   file fits CI's budget: the 40-set run took 19 min on 2 cores. The sets cycle through the
-//!   eight scenarios, so 20 sets still hold 5 no-effect sets and 2–3 of every effect; README's
+//!   effects named correctly. Fixed seeds 1001–1016 (development seeds; 16 sets so that the
+//!   file fits CI's budget: the 40-set run took 19 min on 2 cores, 20 sets 17 min on a loaded
+//!   machine. The sets cycle through the eight scenarios, so 16 sets hold 4 no-effect sets and
+//!   2 of every effect; README's
 //!   full battery, `creepfit battery`, uses seeds that were not used while developing).
 //! - Real laboratory curves (Alloy 617, `data/alloy617/`): the verdict and the cause are the
 //!   same on all points and on every 10th point (CI: 850 °C; every temperature with
@@ -37,17 +38,17 @@ fn json(path: &Path) -> serde_json::Value {
 }
 
 #[test]
-fn battery_of_20_generated_sets() {
+fn battery_of_16_generated_sets() {
     let dir = TempDir::new().unwrap();
     let results = run_battery(
         dir.path(),
         1001,
-        20,
+        16,
         creepfit::synth::World::Identical,
         false,
     )
     .unwrap();
-    assert_eq!(results.len(), 20);
+    assert_eq!(results.len(), 16);
     let r = write_reports(dir.path(), &results, 1001).unwrap();
     for (i, res) in results.iter().enumerate() {
         eprintln!(
@@ -61,15 +62,15 @@ fn battery_of_20_generated_sets() {
         );
     }
     assert_eq!(r.errors, 0, "every set generated and diagnosed");
-    assert_eq!(r.null_sets, 5);
-    // At most one of five (the 40-set bound was two of ten).
+    assert_eq!(r.null_sets, 4);
+    // At most one of four (the 40-set bound was two of ten).
     assert!(
         r.false_alarms <= 1,
-        "false alarms on no-effect data: {} of 5",
+        "false alarms on no-effect data: {} of 4",
         r.false_alarms
     );
     let (det, named): (usize, usize) = r.named.iter().fold((0, 0), |(d, k), e| (d + e.2, k + e.3));
-    assert!(det >= 5, "too few detectable catalogued sets: {det}"); // the 40-set bound halved
+    assert!(det >= 4, "too few detectable catalogued sets: {det}"); // the 40-set bound, scaled
     assert!(
         named as f64 >= 0.8 * det as f64,
         "detectable catalogued effects named correctly: {named} of {det}"
@@ -81,13 +82,13 @@ fn battery_of_20_generated_sets() {
         .skip(1)
         .flat_map(|l| l.split(',').skip(1).map(|v| v.parse::<usize>().unwrap()))
         .sum();
-    assert_eq!(total, 20);
+    assert_eq!(total, 16);
     assert!(dir.path().join("power.png").exists());
     // Resuming a finished battery recomputes nothing and gives the same results.
     let again = run_battery(
         dir.path(),
         1001,
-        20,
+        16,
         creepfit::synth::World::Identical,
         false,
     )
