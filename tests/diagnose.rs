@@ -178,6 +178,8 @@ fn same_verdict_on_every_tenth_point(temps: &[u32]) {
             verdicts.push((d["verdict"].clone(), d["cause"].clone()));
             let md = std::fs::read_to_string(out.join("report.md")).unwrap();
             assert!(md.contains("What the calibrated base model gets wrong"));
+            // 850 °C has replicates: the report gives the scatter and each specimen's factor.
+            assert!(md.contains("## Specimens") && md.contains("between specimens"));
         }
         assert_eq!(verdicts[0], verdicts[1], "{t} °C: all points vs every 10th");
     }
@@ -223,6 +225,9 @@ fn diagnosis_json_keeps_its_contract() {
     assert_eq!(gof.len(), 2);
     assert!(gof.iter().all(|g| g["p_value"].as_f64().unwrap() > 0.0));
     assert!(out.join("report.md").exists());
+    // No replicates at 560 °C: the report says why the base model carries no specimen scatter.
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(md.contains("## Specimens") && md.contains("no two specimens share"));
     assert!(out.join("residuals_base.png").exists());
     // Identical for any thread count.
     let out1 = dir.path().join("d1");

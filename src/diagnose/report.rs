@@ -207,6 +207,7 @@ pub fn report_md(cfg: &RunConfig, d: &Diagnosis) -> String {
             100.0 * d.settings.lifetime_sd_floor
         );
     }
+    s += &specimens_md(d, cfg);
     if d.bootstrap.failed_base_refits > 0
         || d.bootstrap.failed_extension_refits.iter().any(|f| f.1 > 0)
     {
@@ -247,5 +248,64 @@ pub fn report_md(cfg: &RunConfig, d: &Diagnosis) -> String {
             _ => "not needed here".into(),
         }
     );
+    s
+}
+
+/// The report's section on the scatter between specimens: what the base fit estimated (and
+/// each specimen's factors), or why it carries none.
+fn specimens_md(d: &Diagnosis, cfg: &RunConfig) -> String {
+    use crate::likelihood::EffectKind;
+    let mut s = String::from("\n## Specimens\n\n");
+    let Some(sp) = &d.base.specimen else {
+        let cs = &d.base.curves;
+        let replicates = cs.iter().enumerate().any(|(i, a)| {
+            cs[i + 1..]
+                .iter()
+                .any(|b| a.temperature_c == b.temperature_c && a.stress_mpa == b.stress_mpa)
+        });
+        let auto = cfg.objective.specimen_effects
+            == crate::config::SpecimenEffects::Auto(crate::config::AutoWord::Auto);
+        let why = if auto && !replicates {
+            "no two specimens share a temperature and stress, so specimen-to-specimen scatter cannot be told from the stress dependence of the constants ([objective] specimen_effects fits it anyway)".to_string()
+        } else {
+            "the base fit found no scatter between specimens, or none was asked for".to_string()
+        };
+        s += &format!("The base model treats every specimen as the population's: {why}.\n");
+        return s;
+    };
+    for (j, k) in sp.kinds.iter().enumerate() {
+        let what = match k {
+            EffectKind::Rate => "creep rate",
+            EffectKind::Ductility => "rupture strain (ductility)",
+        };
+        s += &format!(
+            "- The {what} varies {:.0} % between specimens (sd of the ln factor {:.3}, 95 % {:.3}–{:.3}).\n",
+            crate::report::tables::lognormal_cv_pct(sp.scatter[j]),
+            sp.scatter[j],
+            sp.scatter_lo95[j],
+            sp.scatter_hi95[j]
+        );
+    }
+    s += "\nEach specimen's factor (its value over the population's; the null bootstrap draws new specimens from this scatter):\n\n| stress MPa | specimen |";
+    for k in &sp.kinds {
+        s += match k {
+            EffectKind::Rate => " creep-rate factor |",
+            EffectKind::Ductility => " ductility factor |",
+        };
+    }
+    s += "\n|---|---|";
+    s += &"---|".repeat(sp.kinds.len());
+    s += "\n";
+    for (i, c) in d.base.curves.iter().enumerate() {
+        s += &format!(
+            "| {} | {} |",
+            c.stress_mpa,
+            c.specimen.as_deref().unwrap_or("-")
+        );
+        for e in &sp.effects {
+            s += &format!(" {:.3} |", e.get(i).copied().unwrap_or(f64::NAN).exp());
+        }
+        s += "\n";
+    }
     s
 }
