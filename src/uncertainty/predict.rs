@@ -85,24 +85,8 @@ pub fn specimen_scatter(ctx: &Context, reference: &Reference) -> [(f64, usize); 
         .collect();
     let mut s_t = reference.noise.lifetime_sd;
     // Replicates: pooled within-group scatter of ln t_f at one (temperature, stress).
-    let mut groups: Vec<((f64, f64), Vec<f64>)> = Vec::new();
-    for c in ctx.curves {
-        if let Some(t) = c.rupture_time_h {
-            let key = (c.temperature_c, c.stress_mpa);
-            match groups.iter_mut().find(|g| g.0 == key) {
-                Some(g) => g.1.push(t.ln()),
-                None => groups.push((key, vec![t.ln()])),
-            }
-        }
-    }
-    let (mut ss, mut dof) = (0.0, 0usize);
-    for (_, v) in groups.iter().filter(|g| g.1.len() > 1) {
-        let m = v.iter().sum::<f64>() / v.len() as f64;
-        ss += v.iter().map(|x| (x - m).powi(2)).sum::<f64>();
-        dof += v.len() - 1;
-    }
-    if dof > 0 {
-        s_t = s_t.max((ss / dof as f64).sqrt());
+    if let Some(r) = crate::fit::replicate_scatter(ctx.curves).1 {
+        s_t = s_t.max(r);
     }
     let rms = |v: &[f64]| {
         if v.is_empty() {
