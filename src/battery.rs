@@ -216,6 +216,18 @@ pub fn oracle_lambda(cfg: &RunConfig, truth: &Truth) -> f64 {
 
 /// Generate set `seed` into `dir/sets/set-<seed>/`, diagnose it, and compute its oracle λ.
 pub fn run_one(dir: &Path, index: usize, seed: u64, world: World) -> SetResult {
+    run_one_diagnosed(dir, index, seed, world).0
+}
+
+/// [`run_one`] with the diagnosis itself (`None` where the set could not be generated or
+/// diagnosed: the result's `error` says why).
+pub fn run_one_diagnosed(
+    dir: &Path,
+    index: usize,
+    seed: u64,
+    world: World,
+) -> (SetResult, Option<crate::diagnose::Diagnosis>) {
+    let mut diagnosis = None;
     let scenario = scenario_of(index);
     let name = format!("set-{seed}");
     let mut r = SetResult {
@@ -272,6 +284,7 @@ pub fn run_one(dir: &Path, index: usize, seed: u64, world: World) -> SetResult {
         r.gof_p = d.gof.iter().map(|g| g.p_value).collect();
         r.replicates = d.bootstrap.replicates;
         r.wall_s = d.wall_s;
+        diagnosis = Some(d.clone());
         if let Some(sp) = &t.specimens {
             r.scatter_true = vec![sp.rate_sd, sp.ductility_sd];
         }
@@ -294,7 +307,7 @@ pub fn run_one(dir: &Path, index: usize, seed: u64, world: World) -> SetResult {
     if let Err(e) = res {
         r.error = Some(e.to_string());
     }
-    r
+    (r, diagnosis)
 }
 
 /// Results already in `dir/results.jsonl` (an interrupted battery), by seed.

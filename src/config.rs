@@ -237,6 +237,10 @@ pub struct SweepConfig {
     pub seed: u64,
     /// Also start from the configured start / initial guess. Default true.
     pub include_guess: bool,
+    /// Move starts that cannot be evaluated toward an evaluable point
+    /// ([`crate::fit::repair_starts`]). Default true; false keeps every Latin-hypercube
+    /// point where it was drawn (its fit then fails at the start and is reported as failed).
+    pub repair: bool,
 }
 
 impl Default for SweepConfig {
@@ -245,6 +249,7 @@ impl Default for SweepConfig {
             starts: 256,
             seed: 1,
             include_guess: true,
+            repair: true,
         }
     }
 }

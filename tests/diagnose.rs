@@ -5,50 +5,37 @@
 //!   a strain limit, white or AR(1) reading error, 1 % scatter of rupture times, shuffled rows;
 //!   every catalogued effect over a range of sizes, no effect, and two effects outside the
 //!   catalogue): false alarms on the no-effect sets and the share of detectable catalogued
-//!   effects named correctly. Fixed seeds 1001–1016 (development seeds; 16 sets so that the
-//!   file fits CI's budget: the 40-set run took 19 min on 2 cores, 20 sets 17 min on a loaded
-//!   machine. The sets cycle through the eight scenarios, so 16 sets hold 4 no-effect sets and
-//!   2 of every effect; README's
-//!   full battery, `creepfit battery`, uses seeds that were not used while developing).
+//!   effects named correctly. Fixed seeds 1001–1008 (development seeds; 8 sets so that the
+//!   statistical tests fit CI's budget of 8 min: the 40-set run took 19 min on 2 cores, 16
+//!   sets 9 min. The sets cycle through the eight scenarios, so 8 sets hold 2 no-effect sets
+//!   and one of every effect. The calibration itself — false-alarm rate and power over many
+//!   sets, on seeds not used while developing — is `creepfit battery`, run by
+//!   `scripts/bench_battery.sh`).
 //! - Real laboratory curves (Alloy 617, `data/alloy617/`): the verdict and the cause are the
-//!   same on all points and on every 10th point (CI: 850 °C; every temperature with
-//!   `-- --ignored`).
+//!   same on all points and on every 10th point, at every temperature (`-- --ignored`: eight
+//!   diagnoses of Alloy 617, 4 min).
 //! - The contract of `diagnosis.json` on the seed's 560 °C data.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use creepfit::battery::{rates, run_battery, write_reports};
 use tempfile::TempDir;
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn creepfit(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_creepfit"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .expect("binary runs")
-}
-
-fn json(path: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
-}
+mod common;
+use common::*;
 
 #[test]
-fn battery_of_16_generated_sets() {
+fn battery_of_8_generated_sets() {
     let dir = TempDir::new().unwrap();
     let results = run_battery(
         dir.path(),
         1001,
-        16,
+        8,
         creepfit::synth::World::Identical,
         false,
     )
     .unwrap();
-    assert_eq!(results.len(), 16);
+    assert_eq!(results.len(), 8);
     let r = write_reports(dir.path(), &results, 1001).unwrap();
     for (i, res) in results.iter().enumerate() {
         eprintln!(
@@ -62,15 +49,15 @@ fn battery_of_16_generated_sets() {
         );
     }
     assert_eq!(r.errors, 0, "every set generated and diagnosed");
-    assert_eq!(r.null_sets, 4);
-    // At most one of four (the 40-set bound was two of ten).
-    assert!(
-        r.false_alarms <= 1,
-        "false alarms on no-effect data: {} of 4",
+    assert_eq!(r.null_sets, 2);
+    // None of two (at the 5 % level 0.1 expected; the 40-set bound was two of ten).
+    assert_eq!(
+        r.false_alarms, 0,
+        "false alarms on no-effect data: {} of 2",
         r.false_alarms
     );
     let (det, named): (usize, usize) = r.named.iter().fold((0, 0), |(d, k), e| (d + e.2, k + e.3));
-    assert!(det >= 4, "too few detectable catalogued sets: {det}"); // the 40-set bound, scaled
+    assert!(det >= 2, "too few detectable catalogued sets: {det}"); // the 40-set bound, scaled
     assert!(
         named as f64 >= 0.8 * det as f64,
         "detectable catalogued effects named correctly: {named} of {det}"
@@ -82,13 +69,13 @@ fn battery_of_16_generated_sets() {
         .skip(1)
         .flat_map(|l| l.split(',').skip(1).map(|v| v.parse::<usize>().unwrap()))
         .sum();
-    assert_eq!(total, 16);
+    assert_eq!(total, 8);
     assert!(dir.path().join("power.png").exists());
     // Resuming a finished battery recomputes nothing and gives the same results.
     let again = run_battery(
         dir.path(),
         1001,
-        16,
+        8,
         creepfit::synth::World::Identical,
         false,
     )
@@ -126,14 +113,8 @@ fn every_tenth(dir: &Path) -> PathBuf {
     p
 }
 
-/// At 850 °C (replicates: the hierarchical error model): CI's share of the check below.
-#[test]
-fn alloy617_verdict_does_not_depend_on_the_logging_density() {
-    same_verdict_on_every_tenth_point(&[850]);
-}
-
-/// All four temperatures (8 diagnoses, ~13 min on 2 cores): `cargo test --release --test
-/// diagnose -- --ignored`.
+/// All four temperatures (8 diagnoses, ~5 min on 2 cores): `cargo test --release --test
+/// diagnose -- --ignored` (out of CI's budget; scripts/bench_battery.sh runs it).
 #[test]
 #[ignore = "long: 8 diagnoses of Alloy 617"]
 fn alloy617_verdict_does_not_depend_on_the_logging_density_at_any_temperature() {
@@ -178,8 +159,11 @@ fn same_verdict_on_every_tenth_point(temps: &[u32]) {
             verdicts.push((d["verdict"].clone(), d["cause"].clone()));
             let md = std::fs::read_to_string(out.join("report.md")).unwrap();
             assert!(md.contains("What the calibrated base model gets wrong"));
-            // 850 °C has replicates: the report gives the scatter and each specimen's factor.
-            assert!(md.contains("## Specimens") && md.contains("between specimens"));
+            assert!(md.contains("## Specimens"));
+            if t == 850 {
+                // 850 °C has replicates: the report gives the scatter and each specimen's factor.
+                assert!(md.contains("between specimens"));
+            }
         }
         assert_eq!(verdicts[0], verdicts[1], "{t} °C: all points vs every 10th");
     }
@@ -201,6 +185,9 @@ fn diagnosis_json_keeps_its_contract() {
     assert_eq!(d["cause"].is_null(), d["verdict"] != "extension");
     assert_eq!(d["alpha"], 0.05);
     assert!(d["evidence"].is_array());
+    // A caution is a sentence or null (the 560 °C base fit's reading error is not correlated
+    // to its bound on half of the curves).
+    assert!(d["caution"].is_null() || d["caution"].is_string());
     let cands = d["candidates"].as_array().unwrap();
     assert_eq!(cands.len(), creepfit::model::ext::CATALOGUE.len());
     for c in cands.iter().chain(std::iter::once(&d["base"])) {

@@ -5,21 +5,12 @@
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
 
 use tempfile::TempDir;
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn creepfit(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_creepfit"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .expect("binary runs")
-}
+mod common;
+use common::*;
 
 /// Run and require success; stdout.
 fn ok(args: &[&str]) -> String {
@@ -69,10 +60,6 @@ fn num(row: &HashMap<String, String>, k: &str) -> f64 {
     row[k]
         .parse()
         .unwrap_or_else(|_| panic!("{k} = {:?} is not a number", row[k]))
-}
-
-fn json(path: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
 }
 
 /// `fit configs/560C.toml` into `dir/fit`: its constants.csv.

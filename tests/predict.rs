@@ -4,7 +4,6 @@
 //! temperature predicted from synthetic curves of known constants.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use creepfit::baseline::{
     BaselineSettings, MansonHaferd, OrrSherbyDorn, RuptureParameter, TensileStrength, Wilshire,
@@ -14,17 +13,8 @@ use creepfit::model::{build, with_laws, LawKind, Load};
 use creepfit::ode::OdeOptions;
 use tempfile::TempDir;
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn creepfit(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_creepfit"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .expect("binary runs")
-}
+mod common;
+use common::*;
 
 fn ok(args: &[&str]) -> String {
     let o = creepfit(args);

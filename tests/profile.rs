@@ -3,22 +3,12 @@
 //! (README "How sure" has the full table on 200 sets with other seeds).
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use creepfit::uncertainty::coverage::{run_coverage, table, CoverageSettings};
 use tempfile::TempDir;
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn creepfit(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_creepfit"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .expect("binary runs")
-}
+mod common;
+use common::*;
 
 /// The 560 °C configuration with a `[profile]` table, written into `dir`.
 fn config_560(dir: &Path, profile: &str) -> PathBuf {

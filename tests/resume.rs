@@ -5,21 +5,12 @@
 //! the differing setting; nothing is drawn on a stderr that is not a terminal.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 use tempfile::TempDir;
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn creepfit(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_creepfit"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .expect("binary runs")
-}
+mod common;
+use common::*;
 
 fn ok(o: &Output) {
     assert!(

@@ -341,10 +341,27 @@ fn diagnose_generated(index: usize, seed: u64) -> creepfit::battery::SetResult {
 /// 28 of 30 such sets were `unexplained`.
 #[test]
 fn a_null_set_with_specimen_scatter_is_adequate() {
-    let r = diagnose_generated(0, 95001);
+    let dir = tempfile::TempDir::new().unwrap();
+    let (r, d) = creepfit::battery::run_one_diagnosed(
+        dir.path(),
+        0,
+        95001,
+        creepfit::synth::World::Specimens,
+    );
+    assert_eq!(r.error, None);
     assert_eq!(r.scenario, "none");
     assert!(r.scatter_true[0] >= 0.1, "the set carries scatter");
     assert_eq!(r.outcome(), "adequate");
+    // report.md gives the scatter between specimens and each specimen's factor.
+    let cfg =
+        creepfit::config::RunConfig::load(&dir.path().join("sets/set-95001/config.toml")).unwrap();
+    let md = creepfit::diagnose::report::report_md(&cfg, &d.unwrap());
+    assert!(md.contains("## Specimens"), "{md}");
+    assert!(
+        md.contains("varies") && md.contains("between specimens"),
+        "{md}"
+    );
+    assert!(md.contains("creep-rate factor"), "{md}");
 }
 
 /// A catalogued effect (a loading strain) hidden under specimen scatter, clearly

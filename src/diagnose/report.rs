@@ -65,6 +65,9 @@ pub fn report_md(cfg: &RunConfig, d: &Diagnosis) -> String {
             ""
         }
     );
+    if let Some(c) = &d.caution {
+        s += &format!("**Caution:** {c}.\n\n");
+    }
     if !d.indistinguishable.is_empty() {
         s += "The data cannot tell the cause apart from: ";
         s += &d

@@ -9,6 +9,7 @@
 pub mod ext;
 mod khd;
 pub mod khd_guess;
+pub mod kr;
 pub mod law;
 
 pub use ext::KhdExtended;
@@ -489,6 +490,9 @@ pub struct ModelEntry {
     /// Its initial-guess procedure, if it has one (else fits start from the configuration or
     /// the centre of the box).
     pub guess: Option<GuessFn>,
+    /// The catalogued extensions it composes with (DESIGN.md §6): what `diagnose` tests
+    /// by default. Empty for a family that takes none.
+    pub extensions: &'static [&'static str],
 }
 
 /// The registered models.
@@ -507,31 +511,53 @@ pub const REGISTRY: &[ModelEntry] = &[
         doc: "the paper's KHD model, fitted through its exact one-state reduction",
         build: build_khd,
         guess: Some(khd_guess::initial_guess),
+        extensions: ext::CATALOGUE,
     },
     ModelEntry {
         name: "khd4",
         doc: "the KHD model integrated in its four states",
         build: build_khd4,
         guess: Some(khd_guess::initial_guess),
+        extensions: &[],
     },
     ModelEntry {
         name: "khd1",
         doc: "the KHD model's one-state reduction alone",
         build: build_khd,
         guess: Some(khd_guess::initial_guess),
+        extensions: ext::CATALOGUE,
+    },
+    ModelEntry {
+        name: "kr",
+        doc: "the Kachanov–Rabotnov model: Norton creep with a damage of its own stress exponent",
+        build: |e, x| {
+            no_extensions(e, x)?;
+            Ok(Box::new(
+                Integrated::new("kr", kr::Kr, kr::constants()).with_guess(e.guess),
+            ))
+        },
+        guess: Some(kr::initial_guess),
+        extensions: &[],
     },
 ];
 
-/// Names of the registered models.
-pub const MODEL_NAMES: &[&str] = &["khd", "khd4", "khd1"];
+/// Names of the registered models, in registry order.
+pub fn model_names() -> Vec<&'static str> {
+    REGISTRY.iter().map(|e| e.name).collect()
+}
 
 fn no_extensions(e: &ModelEntry, extensions: &[String]) -> Result<()> {
     if extensions.is_empty() {
         Ok(())
     } else {
+        let takes: Vec<&str> = REGISTRY
+            .iter()
+            .filter(|m| !m.extensions.is_empty())
+            .map(|m| m.name)
+            .collect();
         Err(Error::UnknownModel(
             format!("{} with extensions", e.name),
-            "khd, khd1 (extensions apply to the KHD model)".into(),
+            format!("{} (the models that take extensions)", takes.join(", ")),
         ))
     }
 }
@@ -569,7 +595,7 @@ pub fn entry(name: &str) -> Result<&'static ModelEntry> {
     REGISTRY
         .iter()
         .find(|e| e.name == name)
-        .ok_or_else(|| Error::UnknownModel(name.to_string(), MODEL_NAMES.join(", ")))
+        .ok_or_else(|| Error::UnknownModel(name.to_string(), model_names().join(", ")))
 }
 
 /// Pick a model by its registry name (without extensions).
@@ -590,14 +616,23 @@ mod tests {
 
     #[test]
     fn registry_names_and_entries_agree() {
-        let names: Vec<&str> = REGISTRY.iter().map(|e| e.name).collect();
-        assert_eq!(names, MODEL_NAMES);
+        assert_eq!(model_names(), ["khd", "khd4", "khd1", "kr"]);
         for e in REGISTRY {
             let m = build(e.name, &[]).unwrap();
             assert_eq!(m.name(), e.name);
             assert!(m.guess_procedure().is_some());
-            assert_eq!(m.output_names(), ["H", "Phi", "omega"]);
+            let outputs: &[&str] = if e.name == "kr" {
+                &["omega"]
+            } else {
+                &["H", "Phi", "omega"]
+            };
+            assert_eq!(m.output_names(), outputs);
+            // Every catalogued extension of an entry builds with it.
+            for x in e.extensions {
+                assert!(build(e.name, &[x.to_string()]).is_ok(), "{} + {x}", e.name);
+            }
         }
+        assert!(build("kr", &["stress_ductility".to_string()]).is_err());
         let m = build("khd", &["stress_ductility".to_string()]).unwrap();
         assert_eq!(m.output_names(), ["H", "Phi", "omega"]);
         assert!(build("khd4", &["stress_ductility".to_string()]).is_err());

@@ -444,6 +444,7 @@ pub fn summary(
         "starts": header.n_starts_total(),
         "lhs_starts": header.n_starts,
         "extra_start": header.extra_start,
+        "repaired_starts": header.repaired_starts,
         "seed": header.seed,
         "w_candidates": header.w.len(),
         "fits": a.ranked.len(),

@@ -57,6 +57,10 @@ pub struct Header {
     pub stresses: Vec<f64>,
     /// (I, N) of the part this journal holds.
     pub shard: (usize, usize),
+    /// Latin-hypercube starts that could not be evaluated where they were drawn and were
+    /// pulled toward the extra start ([`super::repair_starts`]), by start_id.
+    #[serde(default)]
+    pub repaired_starts: Vec<usize>,
 }
 
 impl Header {
@@ -90,6 +94,7 @@ impl Header {
             w: w.to_vec(),
             stresses: data.curves.iter().map(|c| c.stress_mpa).collect(),
             shard: (1, 1),
+            repaired_starts: Vec::new(),
         }
     }
 

@@ -141,31 +141,70 @@ pub fn plan(cfg: &RunConfig, data: &Dataset) -> Result<Plan> {
             x
         })
         .collect();
+    // The extra start: the configuration's start values, else the model's initial guess.
+    let (label, anchor) = match cfg.starts_all_given() {
+        Some(x) => ("config", x),
+        None => (
+            "guess",
+            initial_guess(
+                model.as_ref(),
+                &data.curves,
+                &space,
+                settings.omega_f,
+                &settings.ode,
+            )
+            .params,
+        ),
+    };
+    // Starts that cannot be evaluated are moved toward the extra start, or, where that cannot
+    // be evaluated either, toward the evaluable Latin-hypercube point nearest to it (and the
+    // extra start too: its start_id is then among the repaired).
+    start_params.push(anchor);
+    let n = start_params.len();
+    let target = if crate::fit::evaluable(
+        model.as_ref(),
+        &data.curves,
+        &space,
+        &settings,
+        &start_params[n - 1],
+    ) {
+        Some(start_params[n - 1].clone())
+    } else {
+        crate::fit::evaluable_anchor(
+            model.as_ref(),
+            &data.curves,
+            &space,
+            &settings,
+            &start_params[n - 1],
+            seed,
+        )
+    };
+    let mut repaired = match &target {
+        Some(t) if cfg.sweep.repair => crate::fit::repair_starts(
+            model.as_ref(),
+            &data.curves,
+            &space,
+            &settings,
+            &mut start_params,
+            t,
+        ),
+        _ => vec![],
+    };
+    let anchor = start_params.pop().expect("pushed");
     let mut extra = None;
     if cfg.sweep.include_guess {
-        let (label, x) = match cfg.starts_all_given() {
-            Some(x) => ("config", x),
-            None => (
-                "guess",
-                initial_guess(
-                    model.as_ref(),
-                    &data.curves,
-                    &space,
-                    settings.omega_f,
-                    &settings.ode,
-                )
-                .params,
-            ),
-        };
         extra = Some(label.to_string());
-        start_params.push(x);
+        start_params.push(anchor);
+    } else {
+        repaired.retain(|&i| i < n - 1);
     }
     let names: Vec<String> = model
         .constants()
         .iter()
         .map(|c| c.name.to_string())
         .collect();
-    let header = Header::new(cfg, data, &names, &space, extra, &ws, &start_params);
+    let mut header = Header::new(cfg, data, &names, &space, extra, &ws, &start_params);
+    header.repaired_starts = repaired;
     Ok(Plan {
         header,
         starts: start_params,

@@ -1,0 +1,26 @@
+#!/usr/bin/env bash
+# The calibration of `diagnose` beyond CI's reduced check (tests/diagnose.rs runs 8 sets):
+# the full battery on evaluation seeds never used while developing, in both worlds
+# (identical specimens; specimens with scatter and replicates), then the Alloy 617
+# logging-density check at every temperature. Resumable: rerun to continue a battery.
+#
+#   scripts/bench_battery.sh [SETS] [OUT]      (default: 200 sets per world, results/battery)
+#
+# Each battery writes confusion.csv, power.csv, summary.json (false-alarm rate, power,
+# scatter coverage) into OUT/<world>-<seed>/. Takes hours on 2 cores (measured: 20–100 s
+# per set).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+sets="${1:-200}"
+out="${2:-results/battery}"
+cargo build --release --quiet
+bin=target/release/creepfit
+echo "== CPU: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), $(nproc) threads"
+for world in identical specimens; do
+    seed=$([ "$world" = identical ] && echo 80001 || echo 97001)
+    dir="$out/$world-$seed"
+    echo "== battery: $sets sets, world $world, seeds from $seed -> $dir"
+    time "$bin" battery "$dir" --sets "$sets" --seed "$seed" --world "$world"
+done
+echo "== Alloy 617: the same verdict on every 10th point, every temperature"
+cargo test --release --test diagnose -- --ignored
