@@ -13,7 +13,7 @@
 //!   `scripts/bench_battery.sh`).
 //! - Real laboratory curves (Alloy 617, `data/alloy617/`): the verdict and the cause are the
 //!   same on all points and on every 10th point, at every temperature (`-- --ignored`: eight
-//!   diagnoses of Alloy 617, 4 min).
+//!   diagnoses of Alloy 617: 516 s on 2 cores with a battery running beside it).
 //! - The contract of `diagnosis.json` on the seed's 560 °C data.
 
 use std::path::{Path, PathBuf};
@@ -113,8 +113,9 @@ fn every_tenth(dir: &Path) -> PathBuf {
     p
 }
 
-/// All four temperatures (8 diagnoses, ~5 min on 2 cores): `cargo test --release --test
-/// diagnose -- --ignored` (out of CI's budget; scripts/bench_battery.sh runs it).
+/// All four temperatures (8 diagnoses; 516 s on 2 cores with a battery running beside it):
+/// `cargo test --release --test diagnose -- --ignored` (out of CI's budget;
+/// scripts/bench_battery.sh runs it).
 #[test]
 #[ignore = "long: 8 diagnoses of Alloy 617"]
 fn alloy617_verdict_does_not_depend_on_the_logging_density_at_any_temperature() {
