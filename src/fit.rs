@@ -688,9 +688,8 @@ pub fn run_fit_observed(
     // 900 °C in its wide box, "none of the 10 local fits reached an evaluable point"): each
     // is moved toward the evaluable Latin-hypercube point nearest to the guess, to the first
     // evaluable point on the way, and its label says so (summary.json `start`).
-    let named = starts.len();
     let start_ok = |x: &[f64]| evaluable(model.as_ref(), curves, &space, &settings, x);
-    if named > 0 && !starts.iter().any(|(_, x)| start_ok(x)) {
+    if !starts.is_empty() && !starts.iter().any(|(_, x)| start_ok(x)) {
         if let Some(anchor) = evaluable_anchor(
             model.as_ref(),
             curves,

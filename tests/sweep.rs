@@ -10,9 +10,8 @@ use tempfile::TempDir;
 
 const CONFIG: &str = "tests/data/sweep_small.toml";
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
+mod common;
+use common::{creepfit, root};
 
 fn sweep(out: &Path, extra: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_creepfit"))
@@ -645,15 +644,8 @@ fn starts_that_cannot_be_evaluated_are_moved_and_marked() {
     let text = read(&root().join("configs/alloy617-900C.toml"))
         .replace("../data/", &format!("{}/data/", root().display()));
     std::fs::write(&cfg, format!("{text}\n[sweep]\nstarts = 20\nseed = 5\n")).unwrap();
-    let run = |args: &[&str]| {
-        Command::new(env!("CARGO_BIN_EXE_creepfit"))
-            .args(args)
-            .current_dir(root())
-            .output()
-            .expect("binary runs")
-    };
     let fit = d.path().join("fit");
-    ok(&run(&[
+    ok(&creepfit(&[
         "fit",
         cfg.to_str().unwrap(),
         "--out",
@@ -663,7 +655,7 @@ fn starts_that_cannot_be_evaluated_are_moved_and_marked() {
     let s = summary(&fit);
     assert_eq!(s["start"], "guess, moved to an evaluable point", "{s}");
     let sw = d.path().join("sweep");
-    ok(&run(&[
+    ok(&creepfit(&[
         "sweep",
         cfg.to_str().unwrap(),
         "--out",
