@@ -18,7 +18,7 @@
 
 use std::path::{Path, PathBuf};
 
-use creepfit::battery::{rates, run_battery, write_reports};
+use creepfit::battery::{rates, run_battery, run_battery_observed, write_reports};
 use tempfile::TempDir;
 
 mod common;
@@ -27,12 +27,12 @@ use common::*;
 #[test]
 fn battery_of_8_generated_sets() {
     let dir = TempDir::new().unwrap();
-    let results = run_battery(
+    let results = run_battery_observed(
         dir.path(),
         1001,
         8,
         creepfit::synth::World::Identical,
-        false,
+        &TestProgress::new("battery_of_8_generated_sets"),
     )
     .unwrap();
     assert_eq!(results.len(), 8);
@@ -125,6 +125,7 @@ fn alloy617_verdict_does_not_depend_on_the_logging_density_at_any_temperature() 
 fn same_verdict_on_every_tenth_point(temps: &[u32]) {
     let dir = TempDir::new().unwrap();
     let thin = every_tenth(dir.path());
+    let progress = TestProgress::new("alloy617 logging density");
     for &t in temps {
         let cfg = root().join(format!("configs/alloy617-{t}C.toml"));
         let text = std::fs::read_to_string(&cfg)
@@ -157,6 +158,7 @@ fn same_verdict_on_every_tenth_point(temps: &[u32]) {
                 String::from_utf8_lossy(&o.stderr)
             );
             let d = json(&out.join("diagnosis.json"));
+            progress.line(&format!("{t} °C {tag}: {} {}", d["verdict"], d["cause"]));
             verdicts.push((d["verdict"].clone(), d["cause"].clone()));
             let md = std::fs::read_to_string(out.join("report.md")).unwrap();
             assert!(md.contains("What the calibrated base model gets wrong"));

@@ -4,7 +4,9 @@
 
 use std::path::{Path, PathBuf};
 
-use creepfit::uncertainty::coverage::{run_coverage, table, CoverageSettings};
+use creepfit::uncertainty::coverage::{
+    run_coverage, run_coverage_observed, table, CoverageSettings,
+};
 use tempfile::TempDir;
 
 mod common;
@@ -229,7 +231,8 @@ fn bad_profile_settings_are_one_line_errors() {
 fn coverage_on_a_reduced_battery() {
     let dir = TempDir::new().unwrap();
     let s = CoverageSettings::default();
-    let results = run_coverage(dir.path(), 7001, 16, &s, false).unwrap();
+    let progress = TestProgress::new("coverage_on_a_reduced_battery");
+    let results = run_coverage_observed(dir.path(), 7001, 16, &s, &progress).unwrap();
     assert_eq!(results.len(), 16);
     for r in &results {
         assert!(r.error.is_none(), "{}: {:?}", r.name, r.error);

@@ -38,6 +38,24 @@ fn records(dir: &Path) -> u64 {
         - 1
 }
 
+/// The keys of a journal's records, in file order.
+fn keys(dir: &Path) -> Vec<String> {
+    String::from_utf8(bytes(&dir.join("journal.jsonl")))
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let v: serde_json::Value = serde_json::from_str(l).unwrap();
+            v["record"]["key"].as_str().unwrap().to_string()
+        })
+        .collect()
+}
+
+/// The side a profile step's key belongs to (`side/…/3/lower/step2` → `side/…/3/lower`).
+fn side_of(key: &str) -> Option<&str> {
+    key.rsplit_once("/step").map(|(side, _)| side)
+}
+
 /// A small diagnosis of the seed's 560 °C data: 2 random starts per model, 19 replicates
 /// (α = 0.5 so that 19 replicates can reject over the 8 tests).
 fn diagnose(out: &Path, extra: &[&str]) -> Output {
@@ -182,14 +200,49 @@ fn an_interrupted_profile_resumes_to_the_same_files() {
     let plain = d.path().join("plain");
     ok(&run(&plain, &["--threads", "2"]));
     let total = records(&plain);
-    // 10 calibration replicates and 2 sides of each of 6 constants.
-    assert_eq!(total, 22);
+    // 10 calibration replicates, 2 sides of each of 6 constants, and each side's steps.
+    let all = keys(&plain);
+    let sides = all
+        .iter()
+        .filter(|k| side_of(k).is_none() && k.starts_with("side/"));
+    assert_eq!(sides.count(), 12, "{all:?}");
+    let steps = all.iter().filter(|k| side_of(k).is_some()).count() as u64;
+    assert!(steps >= 12, "{all:?}");
+    assert_eq!(total, 22 + steps);
     let resumed = d.path().join("resumed");
-    // Stopped among the profile sides (after the 10 calibration replicates).
-    let o = run(&resumed, &["--threads", "1", "--stop-after", "14", "-q"]);
+    // Stopped inside a profile side: one thread takes the sides in order (constant 0 lower,
+    // 0 upper, 1 lower, ...); stop after the calibration replicates, the sides before the
+    // first one of several steps, and that side's first step.
+    let steps_of = |side: &str| all.iter().filter(|k| side_of(k) == Some(side)).count() as u64;
+    let mut order: Vec<&String> = all
+        .iter()
+        .filter(|k| side_of(k).is_none() && k.starts_with("side/"))
+        .collect();
+    let rank = |k: &str| {
+        let mut p = k.rsplit('/');
+        let dir = p.next().unwrap() == "upper";
+        (p.next().unwrap().parse::<usize>().unwrap(), dir)
+    };
+    order.sort_by_key(|k| rank(k));
+    let first = order
+        .iter()
+        .position(|s| steps_of(s) >= 2)
+        .expect("a side of 2 steps");
+    let before: u64 = order[..first].iter().map(|s| steps_of(s) + 1).sum();
+    let stop = (10 + before + 1).to_string();
+    let o = run(&resumed, &["--threads", "1", "--stop-after", &stop, "-q"]);
     interrupted(&o, &resumed.join("journal.jsonl"));
     let kept = records(&resumed);
-    assert!((14..total).contains(&kept), "{kept}");
+    assert!((11..total).contains(&kept), "{kept}");
+    // A side with journaled steps and no record of its own: the rerun resumes inside it.
+    let partial = keys(&resumed);
+    assert!(
+        partial
+            .iter()
+            .filter_map(|k| side_of(k))
+            .any(|s| !partial.contains(&s.to_string())),
+        "{partial:?}"
+    );
     ok(&run(&resumed, &["--threads", "2"]));
     let t = timings(&resumed);
     assert_eq!(t["journal_records_resumed"], kept);

@@ -379,6 +379,25 @@ pub fn run_coverage(
     s: &CoverageSettings,
     progress: bool,
 ) -> Result<Vec<SetCoverage>> {
+    let bars;
+    let observer: &dyn crate::progress::Observer = if progress {
+        bars = crate::progress::Bars::new(false);
+        &bars
+    } else {
+        &crate::progress::SILENT
+    };
+    run_coverage_observed(dir, first_seed, n, s, observer)
+}
+
+/// [`run_coverage`] telling `observer` of every finished set (a step, and a line with its
+/// factors and time) instead of printing.
+pub fn run_coverage_observed(
+    dir: &Path,
+    first_seed: u64,
+    n: usize,
+    s: &CoverageSettings,
+    observer: &dyn crate::progress::Observer,
+) -> Result<Vec<SetCoverage>> {
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     let done = read_results(dir)?;
     let path = dir.join("coverage.jsonl");
@@ -399,6 +418,8 @@ pub fn run_coverage(
         .map(|i| first_seed + i)
         .filter(|s| !done.contains_key(s))
         .collect();
+    observer.phase("coverage sets", Some(n as u64));
+    observer.resumed((n - todo.len()) as u64);
     let fresh: Vec<SetCoverage> = todo
         .par_iter()
         .map(|&seed| {
@@ -410,21 +431,20 @@ pub fn run_coverage(
                     .and_then(|_| f.flush())
                     .map_err(|e| Error::io(&path, e))?;
             }
-            if progress {
-                eprintln!(
-                    "{} {} {}: factor {:.2} (predictions {:.2}), {:.1} s{}",
-                    r.name,
-                    r.family,
-                    r.sampling,
-                    r.factor,
-                    r.prediction_factor,
-                    r.wall_s,
-                    r.error
-                        .as_deref()
-                        .map(|e| format!(" error: {e}"))
-                        .unwrap_or_default()
-                );
-            }
+            observer.advance(1);
+            observer.note(&format!(
+                "{} {} {}: factor {:.2} (predictions {:.2}), {:.1} s{}",
+                r.name,
+                r.family,
+                r.sampling,
+                r.factor,
+                r.prediction_factor,
+                r.wall_s,
+                r.error
+                    .as_deref()
+                    .map(|e| format!(" error: {e}"))
+                    .unwrap_or_default()
+            ));
             Ok(r)
         })
         .collect::<Result<_>>()?;

@@ -298,7 +298,43 @@ fn fit_point(
     }
 }
 
-/// One side (`dir` = −1 lower, +1 upper) of constant j's profile by continuation.
+/// Where the points of one side are kept as they finish: each step's point (predictor and
+/// corrector together) under `{key}/step{n}`, so that a run killed inside a side resumes at
+/// its last finished step. The loop's state follows from the points alone (they are exact in
+/// the journal), so a resumed side is the uninterrupted one bit for bit.
+struct PointMemo<'a> {
+    hooks: &'a Hooks<'a>,
+    key: String,
+    write_error: &'a Mutex<Option<crate::Error>>,
+}
+
+impl PointMemo<'_> {
+    /// Step n's point from the journal, else computed by `f` and journaled; `None` when it is
+    /// not journaled and the observer asks to stop (or a journal write failed).
+    fn get_or(&self, n: usize, f: impl FnOnce() -> ProfilePoint) -> Option<ProfilePoint> {
+        let k = format!("{}/step{n}", self.key);
+        let journal = self.hooks.journal;
+        if let Some(r) = journal.and_then(|jl| jl.get::<PointRecord>(&k)) {
+            return Some(r.into());
+        }
+        if self.hooks.observer.cancelled() || self.write_error.lock().is_ok_and(|e| e.is_some()) {
+            return None;
+        }
+        let p = f();
+        if let Some(jl) = journal {
+            if let Err(e) = jl.put(&k, &PointRecord::from(&p)) {
+                self.write_error
+                    .lock()
+                    .unwrap_or_else(|e| e.into_inner())
+                    .get_or_insert(e);
+            }
+        }
+        Some(p)
+    }
+}
+
+/// One side (`dir` = −1 lower, +1 upper) of constant j's profile by continuation; each
+/// step's point goes through `memo` (journal); `None` when it stopped before the end.
 fn constant_side(
     ctx: &Context,
     reference: &Reference,
@@ -306,7 +342,8 @@ fn constant_side(
     dir: f64,
     se_u: f64,
     th: &Thresholds,
-) -> Side {
+    memo: &PointMemo,
+) -> Option<Side> {
     let u_hat = ctx.space.to_unit_one(j, reference.params[j]);
     let bound = if dir < 0.0 { 0.0 } else { 1.0 };
     let mut points = Vec::new();
@@ -317,53 +354,59 @@ fn constant_side(
     let mut prev: Option<(f64, Vec<f64>)> = None;
     let mut h = (ROOT_STEP * se_u).clamp(MIN_STEP, MAX_STEP);
     let seed = 0x5eed ^ ((j as u64) << 8) ^ u64::from(dir > 0.0);
+    // Steps taken, kept or not (the journal's key of each step's point).
+    let mut n = 0;
     loop {
         if (bound - u) * dir <= 1e-12 {
-            return Side {
+            return Some(Side {
                 points,
                 end: SideEnd::Bound,
-            };
+            });
         }
         if points.len() >= MAX_POINTS {
-            return Side {
+            return Some(Side {
                 points,
                 end: SideEnd::PointLimit,
-            };
+            });
         }
         let mut u_new = u + dir * h;
         if (bound - u_new) * dir < 0.25 * h {
             u_new = bound; // land exactly on the bound
         }
         let point_seed = seed ^ (points.len() as u64) << 16;
-        let mut p = match &prev {
-            // Predictor: the others extrapolated along the last step's tangent (a ridge such
-            // as B(1−H*) = const at 590 °C is followed, not left and refound).
-            Some((u_prev, x_prev)) => {
-                let start = tangent_start(ctx, &warm, x_prev, u - u_prev, u_new - u);
-                fit_point(ctx, reference, j, u_new, &start, th.t68, point_seed)
+        let p = memo.get_or(n, || {
+            let mut p = match &prev {
+                // Predictor: the others extrapolated along the last step's tangent (a ridge such
+                // as B(1−H*) = const at 590 °C is followed, not left and refound).
+                Some((u_prev, x_prev)) => {
+                    let start = tangent_start(ctx, &warm, x_prev, u - u_prev, u_new - u);
+                    fit_point(ctx, reference, j, u_new, &start, th.t68, point_seed)
+                }
+                None => fit_point(ctx, reference, j, u_new, &warm, th.t68, point_seed),
+            };
+            if prev.is_some() && (!p.ok() || p.delta.max(0.0).sqrt() - r_prev > 2.0 * ROOT_STEP) {
+                // The corrector from the previous point itself, kept if lower.
+                let q = fit_point(ctx, reference, j, u_new, &warm, th.t68, point_seed);
+                if q.ok() && (!p.ok() || q.delta < p.delta) {
+                    p = ProfilePoint {
+                        fits: p.fits + q.fits,
+                        retried: true,
+                        ..q
+                    };
+                } else {
+                    p.fits += q.fits;
+                }
             }
-            None => fit_point(ctx, reference, j, u_new, &warm, th.t68, point_seed),
-        };
-        if prev.is_some() && (!p.ok() || p.delta.max(0.0).sqrt() - r_prev > 2.0 * ROOT_STEP) {
-            // The corrector from the previous point itself, kept if lower.
-            let q = fit_point(ctx, reference, j, u_new, &warm, th.t68, point_seed);
-            if q.ok() && (!p.ok() || q.delta < p.delta) {
-                p = ProfilePoint {
-                    fits: p.fits + q.fits,
-                    retried: true,
-                    ..q
-                };
-            } else {
-                p.fits += q.fits;
-            }
-        }
+            p
+        })?;
+        n += 1;
         if !p.ok() {
             points.push(p);
             if h <= MIN_STEP {
-                return Side {
+                return Some(Side {
                     points,
                     end: SideEnd::Failed,
-                };
+                });
             }
             h = (0.5 * h).max(MIN_STEP);
             continue;
@@ -388,10 +431,10 @@ fn constant_side(
         r_prev = r;
         points.push(p);
         if crossed {
-            return Side {
+            return Some(Side {
                 points,
                 end: SideEnd::Crossed,
-            };
+            });
         }
     }
 }
@@ -445,7 +488,8 @@ pub fn wald_se(ctx: &Context, reference: &Reference) -> Vec<f64> {
 /// Profiles of the constants `which` (indices, model order), their sides in parallel. Each
 /// side is a step of the phase `profile sides` of `hooks.observer`, journaled in
 /// `hooks.journal` as it finishes (keyed by the hash of the reference and the thresholds, the
-/// constant and the side) and read back from it; `Err` ([`crate::Error::Interrupted`]) when
+/// constant and the side), each step's point too (a side killed half-way resumes at its last
+/// point), and read back from it; `Err` ([`crate::Error::Interrupted`]) when
 /// the observer asks to stop (the finished sides are journaled).
 pub fn profile_constants(
     ctx: &Context,
@@ -478,7 +522,12 @@ pub fn profile_constants(
             if hooks.observer.cancelled() || write_error.lock().is_ok_and(|e| e.is_some()) {
                 return None;
             }
-            let side = constant_side(ctx, reference, j, dir, se[j], th);
+            let memo = PointMemo {
+                hooks,
+                key: k.clone(),
+                write_error: &write_error,
+            };
+            let side = constant_side(ctx, reference, j, dir, se[j], th, &memo)?;
             if let Some(jl) = hooks.journal {
                 if let Err(e) = jl.put(&k, &SideRecord::from(&side)) {
                     write_error
@@ -517,7 +566,7 @@ struct SideRecord {
     end: SideEnd,
 }
 
-/// A [`ProfilePoint`] as part of a [`SideRecord`].
+/// A [`ProfilePoint`] as a journal record (one step of a side, or part of a [`SideRecord`]).
 #[derive(Serialize, Deserialize)]
 struct PointRecord {
     #[serde(with = "crate::journal::exact")]
@@ -534,23 +583,40 @@ struct PointRecord {
     failure: Option<String>,
 }
 
+impl From<&ProfilePoint> for PointRecord {
+    fn from(p: &ProfilePoint) -> Self {
+        PointRecord {
+            value: p.value,
+            coord: p.coord,
+            delta: p.delta,
+            params: p.params.clone(),
+            fits: p.fits,
+            retried: p.retried,
+            termination: p.termination,
+            failure: p.failure.clone(),
+        }
+    }
+}
+
+impl From<PointRecord> for ProfilePoint {
+    fn from(p: PointRecord) -> Self {
+        ProfilePoint {
+            value: p.value,
+            coord: p.coord,
+            delta: p.delta,
+            params: p.params,
+            fits: p.fits,
+            retried: p.retried,
+            termination: p.termination,
+            failure: p.failure,
+        }
+    }
+}
+
 impl From<&Side> for SideRecord {
     fn from(s: &Side) -> Self {
         SideRecord {
-            points: s
-                .points
-                .iter()
-                .map(|p| PointRecord {
-                    value: p.value,
-                    coord: p.coord,
-                    delta: p.delta,
-                    params: p.params.clone(),
-                    fits: p.fits,
-                    retried: p.retried,
-                    termination: p.termination,
-                    failure: p.failure.clone(),
-                })
-                .collect(),
+            points: s.points.iter().map(PointRecord::from).collect(),
             end: s.end,
         }
     }
@@ -559,20 +625,7 @@ impl From<&Side> for SideRecord {
 impl From<SideRecord> for Side {
     fn from(r: SideRecord) -> Self {
         Side {
-            points: r
-                .points
-                .into_iter()
-                .map(|p| ProfilePoint {
-                    value: p.value,
-                    coord: p.coord,
-                    delta: p.delta,
-                    params: p.params,
-                    fits: p.fits,
-                    retried: p.retried,
-                    termination: p.termination,
-                    failure: p.failure,
-                })
-                .collect(),
+            points: r.points.into_iter().map(ProfilePoint::from).collect(),
             end: r.end,
         }
     }

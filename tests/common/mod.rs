@@ -22,3 +22,57 @@ pub fn creepfit(args: &[&str]) -> Output {
 pub fn json(path: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
 }
+
+/// Progress of a slow test, written straight to the process's stderr (the test harness
+/// captures `eprintln!`, not the stream itself), so that a long statistical test shows its
+/// sets as they finish: `[name] 3/8 sets 41 s: <the set's line>`.
+pub struct TestProgress {
+    name: &'static str,
+    start: std::time::Instant,
+    total: std::sync::atomic::AtomicU64,
+    done: std::sync::atomic::AtomicU64,
+}
+
+impl TestProgress {
+    /// Progress lines prefixed with the test's `name`.
+    pub fn new(name: &'static str) -> TestProgress {
+        TestProgress {
+            name,
+            start: std::time::Instant::now(),
+            total: Default::default(),
+            done: Default::default(),
+        }
+    }
+
+    /// One line on stderr, past the harness's capture.
+    pub fn line(&self, text: &str) {
+        use std::io::Write;
+        use std::sync::atomic::Ordering::Relaxed;
+        let line = format!(
+            "[{}] {}/{} {:.0} s: {text}\n",
+            self.name,
+            self.done.load(Relaxed),
+            self.total.load(Relaxed),
+            self.start.elapsed().as_secs_f64()
+        );
+        let _ = std::io::stderr().lock().write_all(line.as_bytes());
+    }
+}
+
+impl creepfit::progress::Observer for TestProgress {
+    fn phase(&self, name: &str, total: Option<u64>) {
+        use std::sync::atomic::Ordering::Relaxed;
+        self.total.store(total.unwrap_or(0), Relaxed);
+        self.done.store(0, Relaxed);
+        self.line(&format!("{name} begins"));
+    }
+    fn resumed(&self, n: u64) {
+        self.done.fetch_add(n, std::sync::atomic::Ordering::Relaxed);
+    }
+    fn advance(&self, n: u64) {
+        self.done.fetch_add(n, std::sync::atomic::Ordering::Relaxed);
+    }
+    fn note(&self, line: &str) {
+        self.line(line);
+    }
+}
