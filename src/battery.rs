@@ -400,6 +400,7 @@ pub fn run_battery_observed(
                     .map_err(|e| Error::io(&path, e))?;
             }
             let k = counter.fetch_add(1, std::sync::atomic::Ordering::SeqCst) + 1;
+            observer.advance(1);
             observer.note(&format!(
                 "[{k}/{total}] {} {}: {} (λ = {:.1}, {:.1} s)",
                 r.name,
@@ -408,7 +409,6 @@ pub fn run_battery_observed(
                 r.lambda,
                 r.wall_s
             ));
-            observer.advance(1);
             Ok(r)
         })
         .collect::<Result<_>>()?;

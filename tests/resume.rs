@@ -329,3 +329,106 @@ fn an_interrupted_holdout_resumes_to_the_same_files() {
     let summary = String::from_utf8(bytes(&plain.join("summary.json"))).unwrap();
     assert!(!summary.contains("wall_s"), "{summary}");
 }
+
+/// Runs `creepfit args` with its stderr on a pseudo-terminal (`libc::openpty`, 30 × 100):
+/// the exit status and everything it drew there.
+fn on_a_terminal(args: &[&str]) -> (std::process::ExitStatus, String) {
+    use std::io::Read;
+    use std::os::fd::{FromRawFd, OwnedFd};
+    let (mut master, mut slave) = (-1, -1);
+    let mut size = libc::winsize {
+        ws_row: 30,
+        ws_col: 100,
+        ws_xpixel: 0,
+        ws_ypixel: 0,
+    };
+    // SAFETY: openpty writes two descriptors it opened; each is owned exactly once below.
+    let rc = unsafe {
+        libc::openpty(
+            &mut master,
+            &mut slave,
+            std::ptr::null_mut(),
+            std::ptr::null(),
+            &mut size,
+        )
+    };
+    assert_eq!(rc, 0, "openpty: {}", std::io::Error::last_os_error());
+    let (mut master, slave) = unsafe {
+        (
+            std::fs::File::from_raw_fd(master),
+            OwnedFd::from_raw_fd(slave),
+        )
+    };
+    let child = {
+        let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_creepfit"));
+        cmd.args(args)
+            .current_dir(root())
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::from(slave));
+        cmd.spawn().expect("binary runs")
+        // `cmd` and with it the parent's copy of the terminal's other end are dropped here,
+        // so that reading ends once the child has exited.
+    };
+    let reader = std::thread::spawn(move || {
+        let mut out = Vec::new();
+        let mut buf = [0u8; 4096];
+        // The terminal reads until EIO once no process holds its other end.
+        while let Ok(n) = master.read(&mut buf) {
+            if n == 0 {
+                break;
+            }
+            out.extend_from_slice(&buf[..n]);
+        }
+        String::from_utf8_lossy(&out).into_owned()
+    });
+    let mut child = child;
+    let status = child.wait().unwrap();
+    (status, reader.join().unwrap())
+}
+
+/// Finding 9: long work is not silent. On a terminal, `diagnose` and `profile` draw a bar
+/// per phase with its name and count; `--quiet` draws nothing. (Off a terminal nothing is
+/// drawn: the other tests of this file read clean stderr.)
+#[test]
+fn progress_is_drawn_on_a_terminal_and_silenced_by_quiet() {
+    let d = TempDir::new().unwrap();
+    let out = d.path().join("diagnose");
+    let out_s = out.to_str().unwrap();
+    let args = [
+        "diagnose",
+        "configs/560C.toml",
+        "--starts",
+        "2",
+        "--bootstrap",
+        "19",
+        "--alpha",
+        "0.5",
+        "--out",
+        out_s,
+    ];
+    let (status, drawn) = on_a_terminal(&args);
+    assert!(status.success(), "{drawn}");
+    for phase in ["null bootstrap", "/19"] {
+        assert!(drawn.contains(phase), "no {phase:?} drawn: {drawn}");
+    }
+    let quiet = d.path().join("quiet");
+    let mut q = args.to_vec();
+    let last = q.len() - 1;
+    q[last] = quiet.to_str().unwrap();
+    q.push("--quiet");
+    let (status, drawn) = on_a_terminal(&q);
+    assert!(status.success(), "{drawn}");
+    assert!(drawn.trim().is_empty(), "--quiet drew: {drawn}");
+    let cfg = profile_config(d.path());
+    let prof = d.path().join("profile");
+    let (status, drawn) = on_a_terminal(&[
+        "profile",
+        cfg.to_str().unwrap(),
+        "--out",
+        prof.to_str().unwrap(),
+    ]);
+    assert!(status.success(), "{drawn}");
+    for phase in ["calibration", "profile sides"] {
+        assert!(drawn.contains(phase), "no {phase:?} drawn: {drawn}");
+    }
+}

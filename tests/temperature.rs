@@ -526,8 +526,8 @@ fn jacobian_of_many_constants_is_computed_by_sensitivities() {
 }
 
 /// `diagnose` with temperature laws declared on data at one temperature (the activation
-/// energies then held) is today's `diagnose`: the same verdict and every candidate's −2 ln L
-/// bit for bit.
+/// energies then held) is today's `diagnose`: the same verdict, cause and p-values, and every
+/// candidate's −2 ln L bit for bit.
 #[test]
 fn diagnose_with_laws_at_one_temperature_is_todays() {
     use creepfit::diagnose::diagnose;
@@ -541,6 +541,13 @@ fn diagnose_with_laws_at_one_temperature_is_todays() {
         "560C.toml",
     );
     assert!(laws_cfg.has_laws());
+    // A smaller diagnosis than the default (19 replicates at α = 0.5, so that they can
+    // reject): the check is that the two are the same, at any settings.
+    let (mut plain_cfg, mut laws_cfg) = (plain_cfg, laws_cfg);
+    for c in [&mut plain_cfg, &mut laws_cfg] {
+        c.diagnose.bootstrap = 19;
+        c.diagnose.alpha = 0.5;
+    }
     let plain = diagnose(&plain_cfg, &data).unwrap();
     let laws = diagnose(&laws_cfg, &laws_data).unwrap();
     assert_eq!(plain.verdict, laws.verdict);
@@ -550,6 +557,8 @@ fn diagnose_with_laws_at_one_temperature_is_todays() {
         .chain(plain.candidates.iter().zip(&laws.candidates))
     {
         assert_eq!(p.objective.to_bits(), l.objective.to_bits(), "{}", p.name);
+        let bits = |c: &creepfit::diagnose::Candidate| c.p_value.map(f64::to_bits);
+        assert_eq!(bits(p), bits(l), "{}", p.name);
     }
 }
 
