@@ -113,7 +113,7 @@ fn main() {
             );
             let mut fresh = vec![guess.params];
             let mut rng = ChaCha8Rng::seed_from_u64(1);
-            for u in creepfit::sweep::latin_hypercube(32, space.len(), &mut rng) {
+            for u in creepfit::sampling::latin_hypercube(32, space.len(), &mut rng) {
                 let mut x = vec![0.0; space.len()];
                 space.from_unit(&u, &mut x);
                 fresh.push(x);

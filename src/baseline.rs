@@ -30,7 +30,7 @@ use crate::data::Curve;
 use crate::error::{Error, Result};
 use crate::lmp::LarsonMiller;
 use crate::model::law::arrhenius::R_KJ_PER_MOL_K;
-use crate::model::ZERO_CELSIUS_K;
+use crate::data::ZERO_CELSIUS_K;
 
 /// Which classical parameter.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]

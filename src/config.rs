@@ -22,7 +22,8 @@ use crate::error::{Error, Result};
 use crate::lsq::LmOptions;
 use crate::model::law::{self as laws, LawKind};
 use crate::model::{self, Model, Scale};
-use crate::objective::JacobianMethod;
+pub use crate::objective::{LifetimeTerm, ObjectiveKind};
+use crate::objective::{FitSettings, JacobianMethod};
 use crate::ode::OdeOptions;
 use crate::predict::Condition;
 
@@ -39,31 +40,6 @@ pub const EXTENSION_NAMES: &[&str] = model::ext::CATALOGUE;
 pub const IDENTITY_EXCLUDED: &[&str] = &[
     "path", "name", "curves", "ruptures", "run", "diagnose", "predict", "profile", "outliers",
 ];
-
-/// Which side of the lifetime error enters the objective (eq. 8).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum LifetimeTerm {
-    /// Only when the prediction ruptures later than measured (the paper).
-    #[default]
-    Late,
-    /// Always.
-    Both,
-}
-
-/// What a local fit minimises.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum ObjectiveKind {
-    /// The seed paper's eq. 8 at each lifetime weight w (README, "Choices").
-    #[default]
-    Eq8,
-    /// −2 ln L under the error model ([`crate::likelihood`]: AR(1) reading error per curve,
-    /// log-normal rupture-time scatter, both estimated with the constants): the strain and
-    /// lifetime terms weighed by their own measured scatter instead of by w, and a densely
-    /// logged curve counts as much as its correlated errors say, not by its point count.
-    Likelihood,
-}
 
 /// Which start points `fit` uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
@@ -1206,7 +1182,7 @@ impl RunConfig {
             }
         }
         if let Some(t) = self.t_ref {
-            if !(t.is_finite() && t > -crate::model::ZERO_CELSIUS_K) {
+            if !(t.is_finite() && t > -crate::data::ZERO_CELSIUS_K) {
                 return Err(invalid(
                     "T_ref",
                     format!("must be a finite temperature above absolute zero, °C (got {t})"),
@@ -1667,6 +1643,21 @@ fn toml_error(text: &str, path: &Path, e: &toml::de::Error) -> Error {
     match field_at(text, span.start) {
         Some(field) => Error::config_at(path, line, format!("{field}: {msg}")),
         None => Error::config_at(path, line, msg),
+    }
+}
+
+impl FitSettings {
+    /// The settings of the resolved configuration `cfg` (the one place they are derived).
+    pub fn from_config(cfg: &RunConfig) -> Self {
+        FitSettings {
+            lm: cfg.solver.lm_options(),
+            ode: cfg.solver.ode_options(),
+            omega_f: cfg.objective.omega_f,
+            lifetime: cfg.objective.lifetime_term,
+            jacobian: cfg.solver.jacobian,
+            kind: cfg.objective.kind,
+            lifetime_sd_floor: cfg.objective.lifetime_sd_floor,
+        }
     }
 }
 

@@ -15,6 +15,10 @@ use crate::error::{Error, Result};
 mod min_rate;
 mod table;
 
+/// 0 °C in K: files give temperatures in °C, the model's load and the temperature laws work
+/// in K.
+pub const ZERO_CELSIUS_K: f64 = 273.15;
+
 pub use min_rate::estimate_min_rate;
 pub use table::PROGRESS_MIN_BYTES;
 pub(crate) use table::{read_file, Table};
@@ -282,7 +286,7 @@ impl Interrupted {
         let sig: f64 = sig
             .parse()
             .map_err(|_| format!("'{s}': cannot parse the stress '{sig}'"))?;
-        if !(t.is_finite() && t > -crate::model::ZERO_CELSIUS_K) {
+        if !(t.is_finite() && t > -ZERO_CELSIUS_K) {
             return Err(format!(
                 "'{s}': the temperature must be above absolute zero (°C)"
             ));
@@ -927,7 +931,7 @@ impl Field<'_> {
             Range::Any => None,
             Range::NonNegative if v < 0.0 => Some("must not be negative".to_string()),
             Range::Positive if v <= 0.0 => Some("must be positive".to_string()),
-            Range::Temperature if v < -crate::model::ZERO_CELSIUS_K => {
+            Range::Temperature if v < -ZERO_CELSIUS_K => {
                 Some("is below absolute zero (-273.15 °C)".to_string())
             }
             Range::Temperature if !(MIN_DATA_TEMPERATURE_C..=MAX_DATA_TEMPERATURE_C).contains(&v) => {

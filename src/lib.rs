@@ -33,6 +33,7 @@ pub mod output;
 pub mod predict;
 pub mod progress;
 pub mod report;
+pub mod sampling;
 pub mod specimen;
 pub mod sweep;
 pub mod synth;

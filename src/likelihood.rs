@@ -40,10 +40,10 @@ use std::sync::Mutex;
 
 use nalgebra::DMatrix;
 
-use crate::config::LifetimeTerm;
+use crate::objective::LifetimeTerm;
 use crate::data::Curve;
 use crate::errmodel::{ErrorModel, Residuals};
-use crate::fit::FitSettings;
+use crate::objective::FitSettings;
 use crate::lsq::{minimize, EvalFailure, LeastSquaresProblem, Termination};
 use crate::model::{Model, Role};
 use crate::objective::{

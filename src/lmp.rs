@@ -17,7 +17,7 @@ use serde::Serialize;
 
 use crate::data::Curve;
 use crate::error::{Error, Result};
-use crate::model::ZERO_CELSIUS_K;
+use crate::data::ZERO_CELSIUS_K;
 
 /// Default degree of the master curve in log10 σ.
 pub const DEFAULT_DEGREE: usize = 2;

@@ -56,7 +56,7 @@ impl Condition {
             .trim()
             .parse()
             .map_err(|_| format!("'{s}': cannot parse the stress '{}'", sig.trim()))?;
-        if !(t.is_finite() && t > -crate::model::ZERO_CELSIUS_K) {
+        if !(t.is_finite() && t > -crate::data::ZERO_CELSIUS_K) {
             return Err(format!(
                 "'{s}': the temperature must be above absolute zero (°C)"
             ));

@@ -44,7 +44,7 @@ use crate::likelihood::{
 };
 use crate::model::{ext, Model};
 use crate::objective::{mean_abs, ParamSpace};
-use crate::sweep::latin_hypercube;
+use crate::sampling::latin_hypercube;
 pub use decide::Verdict;
 use decide::{ExtensionEvidence, SelectInput};
 pub use hooks::Hooks;

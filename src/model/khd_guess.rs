@@ -14,7 +14,7 @@
 //! The curves are those of one temperature ([`crate::guess`] runs the procedure per
 //! temperature when constants follow temperature laws).
 
-use crate::config::LifetimeTerm;
+use crate::objective::LifetimeTerm;
 use crate::data::Curve;
 use crate::guess::{Guess, GuessProcedure};
 use crate::lsq::{minimize, EvalFailure, LeastSquaresProblem, LmOptions};

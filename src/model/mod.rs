@@ -71,8 +71,7 @@ pub enum Role {
     InverseDuctility,
 }
 
-/// 0 °C in K: files give temperatures in °C, [`Load`] and the temperature laws work in K.
-pub const ZERO_CELSIUS_K: f64 = 273.15;
+pub use crate::data::ZERO_CELSIUS_K;
 
 /// The conditions of one test: nominal stress, temperature and the damage at rupture.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -163,6 +162,51 @@ pub trait CreepModel<const N: usize>: Send + Sync {
     /// The values of [`CreepModel::output_names`] at time `t` (h) and state `y`, appended to
     /// `out`.
     fn outputs(&self, _p: &Self::Prepared<f64>, _t: f64, _y: &[f64; N], _out: &mut Vec<f64>) {}
+}
+
+/// Every constitutive model is what the integrator integrates (the methods forward, inlined:
+/// the integrator is monomorphised over the model as before).
+impl<const N: usize, M: CreepModel<N>> ode::OdeSystem<N> for M {
+    type Prepared<S: Scalar> = <M as CreepModel<N>>::Prepared<S>;
+    #[inline(always)]
+    fn init<S: Scalar>(&self, p: &Self::Prepared<S>) -> [S; N] {
+        CreepModel::init(self, p)
+    }
+    #[inline(always)]
+    fn rhs<S: Scalar>(&self, p: &Self::Prepared<S>, t: S, y: &[S; N], dy: &mut [S; N]) -> bool {
+        CreepModel::rhs(self, p, t, y, dy)
+    }
+    #[inline(always)]
+    fn time_part<S: Scalar>(&self, p: &Self::Prepared<S>, t: S) -> S {
+        CreepModel::time_part(self, p, t)
+    }
+    #[inline(always)]
+    fn rhs_tp<S: Scalar>(
+        &self,
+        p: &Self::Prepared<S>,
+        t: S,
+        tp: S,
+        y: &[S; N],
+        dy: &mut [S; N],
+    ) -> bool {
+        CreepModel::rhs_tp(self, p, t, tp, y, dy)
+    }
+    #[inline(always)]
+    fn event<S: Scalar>(&self, p: &Self::Prepared<S>, y: &[S; N]) -> S {
+        CreepModel::event(self, p, y)
+    }
+    #[inline(always)]
+    fn event_rate<S: Scalar>(&self, p: &Self::Prepared<S>, y: &[S; N], dy: &[S; N]) -> S {
+        CreepModel::event_rate(self, p, y, dy)
+    }
+    #[inline(always)]
+    fn strain<S: Scalar>(&self, p: &Self::Prepared<S>, y: &[S; N]) -> S {
+        CreepModel::strain(self, p, y)
+    }
+    #[inline(always)]
+    fn strain_rate<S: Scalar>(&self, p: &Self::Prepared<S>, y: &[S; N], dy: &[S; N]) -> S {
+        CreepModel::strain_rate(self, p, y, dy)
+    }
 }
 
 /// Object-safe face of a model: what fits, reports and commands need.

@@ -425,7 +425,7 @@ impl Diagrams<'_> {
 mod tests {
     use super::*;
     use crate::config::Overrides;
-    use crate::model::ZERO_CELSIUS_K;
+    use crate::data::ZERO_CELSIUS_K;
 
     /// The joint seed configuration (560 and 590 °C, three curves each) at its start values.
     fn joint() -> (RunConfig, Dataset, Box<dyn Model>, Vec<f64>) {

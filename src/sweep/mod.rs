@@ -29,7 +29,7 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Mutex;
 use std::time::Instant;
 
-use rand::{Rng, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -41,6 +41,7 @@ use crate::fit::{local_fit, param_space, FitSettings};
 use crate::guess::initial_guess;
 use crate::objective::mean_abs;
 use crate::output::{lock_folder, RunFolder};
+use crate::sampling::latin_hypercube;
 
 /// The part of a sweep the command line asks for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -92,23 +93,6 @@ pub fn install_sigint_handler() {
             libc::signal(libc::SIGINT, on_sigint as *const () as libc::sighandler_t);
         }
     }
-}
-
-/// Latin-hypercube sample of `n` points in [0, 1]^k: each coordinate's n values fall one in
-/// each of n equal strata, in a random order; drawn serially from `rng`.
-pub fn latin_hypercube(n: usize, k: usize, rng: &mut ChaCha8Rng) -> Vec<Vec<f64>> {
-    let mut pts = vec![vec![0.0; k]; n];
-    for j in 0..k {
-        let mut perm: Vec<usize> = (0..n).collect();
-        for i in (1..n).rev() {
-            let s = rng.gen_range(0..=i);
-            perm.swap(i, s);
-        }
-        for i in 0..n {
-            pts[i][j] = (perm[i] as f64 + rng.gen::<f64>()) / n as f64;
-        }
-    }
-    pts
 }
 
 /// Everything a sweep computes from the configuration before any fit.
