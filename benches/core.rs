@@ -13,7 +13,7 @@ use creepfit::dual::{Dual, Scalar, SENS};
 use creepfit::fit::{local_fit, param_space, FitSettings};
 use creepfit::lsq::LeastSquaresProblem;
 use creepfit::model::{registry, CreepModel, Khd, KhdReduced, Load};
-use creepfit::objective::{CreepProblem, JacobianMethod, Objective};
+use creepfit::model::objective::{CreepProblem, JacobianMethod, Objective};
 use creepfit::ode::OdeOptions;
 use nalgebra::DMatrix;
 

@@ -17,7 +17,7 @@ use creepfit::data::Curve;
 use creepfit::fit::{param_space, FitSettings};
 use creepfit::likelihood::{ml_fit, MlFit, MlOptions};
 use creepfit::model::{build, ext, Load, Model};
-use creepfit::objective::ParamSpace;
+use creepfit::model::objective::ParamSpace;
 use creepfit::report::plot::{plot_creep_curves, CurvePlot};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -104,7 +104,7 @@ fn main() {
             let names: Vec<String> = exts.iter().map(|s| s.to_string()).collect();
             let model = build("khd", &names).unwrap();
             let space = space_of(model.as_ref(), &base_space);
-            let guess = creepfit::guess::initial_guess(
+            let guess = creepfit::model::guess::initial_guess(
                 model.as_ref(),
                 &curves,
                 &space,

@@ -166,7 +166,7 @@ pub fn oracle_lambda(cfg: &RunConfig, truth: &Truth) -> f64 {
         lifetime_sd: truth.lifetime_sd,
     };
     let space = param_space(cfg);
-    let guess = crate::guess::initial_guess(
+    let guess = crate::model::guess::initial_guess(
         model.as_ref(),
         &curves,
         &space,
@@ -189,7 +189,7 @@ pub fn oracle_lambda(cfg: &RunConfig, truth: &Truth) -> f64 {
                 .position(|c| c.role == r)
                 .expect("the base model has its rate and ductility constants")
         };
-        crate::objective::CurveFactors {
+        crate::model::objective::CurveFactors {
             index: vec![
                 role(crate::model::Role::Rate),
                 role(crate::model::Role::InverseDuctility),

@@ -12,7 +12,7 @@ use crate::error::{Error, Result};
 use crate::fit::FitSettings;
 use crate::journal::Journal;
 use crate::model::Load;
-use crate::objective::Objective;
+use crate::model::objective::Objective;
 use crate::ode::OdeOptions;
 use crate::output::RunFolder;
 use crate::progress::{Bars, Observer, StopWhen};
@@ -1198,7 +1198,7 @@ pub(crate) fn curve_plots(
                 .unwrap_or(0.0)
                 .max(*c.times_h.last().unwrap_or(&0.0));
             let o = OdeOptions {
-                t_end: crate::objective::HORIZON_FACTOR * span,
+                t_end: crate::model::objective::HORIZON_FACTOR * span,
                 ..*ode
             };
             let res = model.simulate(params, &load, &[], &mut [], &o);
@@ -1316,7 +1316,7 @@ fn simulate_into(
             .unwrap_or(0.0)
             .max(*c.times_h.last().unwrap_or(&0.0));
         let o = OdeOptions {
-            t_end: crate::objective::HORIZON_FACTOR * span,
+            t_end: crate::model::objective::HORIZON_FACTOR * span,
             ..ode
         };
         let res = model.simulate(params, &load, &[], &mut [], &o);

@@ -22,8 +22,8 @@ use crate::error::{Error, Result};
 use crate::lsq::LmOptions;
 use crate::model::law::{self as laws, LawKind};
 use crate::model::{self, Model, Scale};
-pub use crate::objective::{LifetimeTerm, ObjectiveKind};
-use crate::objective::{FitSettings, JacobianMethod};
+pub use crate::model::objective::{LifetimeTerm, ObjectiveKind};
+use crate::model::objective::{FitSettings, JacobianMethod};
 use crate::ode::OdeOptions;
 use crate::predict::Condition;
 

@@ -25,14 +25,14 @@ use rayon::prelude::*;
 
 pub use crate::config::StartChoice;
 use crate::config::RunConfig;
-pub use crate::objective::FitSettings;
-use crate::objective::ObjectiveKind;
+pub use crate::model::objective::FitSettings;
+use crate::model::objective::ObjectiveKind;
 use crate::data::{Curve, Dataset};
 use crate::error::{Error, Result};
-use crate::guess::{initial_guess, Guess};
+use crate::model::guess::{initial_guess, Guess};
 use crate::lsq::{minimize, LmOptions, LmReport, Termination};
 use crate::model::Model;
-use crate::objective::{
+use crate::model::objective::{
     bin_curves, mean_abs, CreepProblem, Evaluation, Objective,
     ParamSpace,
 };
@@ -859,7 +859,7 @@ struct LocalFitRecord {
     wall_s: f64,
 }
 
-/// A [`crate::objective::CurvePrediction`] as part of a [`LocalFitRecord`].
+/// A [`crate::model::objective::CurvePrediction`] as part of a [`LocalFitRecord`].
 #[derive(serde::Serialize, serde::Deserialize)]
 struct CurveRecord {
     outcome: crate::ode::Outcome,
@@ -932,7 +932,7 @@ impl From<LocalFitRecord> for LocalFit {
                 curves: r
                     .eval_curves
                     .into_iter()
-                    .map(|c| crate::objective::CurvePrediction {
+                    .map(|c| crate::model::objective::CurvePrediction {
                         outcome: c.outcome,
                         rupture_time_h: c.rupture_time_h,
                         rupture_strain: c.rupture_strain,

@@ -24,7 +24,7 @@ use crate::error::{Error, Result};
 use crate::fit::{run_fit_observed, FitRun};
 use crate::lmp::LarsonMiller;
 use crate::model::Load;
-use crate::objective::{mean_abs, CurvePrediction, Objective};
+use crate::model::objective::{mean_abs, CurvePrediction, Objective};
 use crate::ode::Outcome;
 use crate::report::diagrams::Diagrams;
 use crate::report::plot::{
@@ -929,7 +929,7 @@ mod tests {
     use super::*;
     use crate::config::LifetimeTerm;
     use crate::model::build;
-    use crate::objective::ObjectiveSettings;
+    use crate::model::objective::ObjectiveSettings;
     use crate::ode::OdeOptions;
 
     /// A measured curve of the KHD model at `truth` (100 MPa, 30 points to rupture) and the

@@ -21,7 +21,7 @@ use crate::data::Dataset;
 use crate::error::{Error, Result};
 use crate::lmp::LarsonMiller;
 use crate::model::{Load, Model};
-use crate::objective::HORIZON_FACTOR;
+use crate::model::objective::HORIZON_FACTOR;
 use crate::ode::{OdeOptions, Outcome};
 use crate::report::diagrams::{Asked, Diagrams};
 use crate::report::plot::{

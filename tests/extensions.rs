@@ -429,7 +429,7 @@ fn sensitivity_jacobian_of_new_extensions_matches_central_differences() {
     use creepfit::fit::FitSettings;
     use creepfit::lsq::LeastSquaresProblem;
     use creepfit::model::Scale;
-    use creepfit::objective::{
+    use creepfit::model::objective::{
         CreepProblem, JacobianMethod, Objective, ObjectiveSettings, ParamSpace,
     };
     use nalgebra::DMatrix;

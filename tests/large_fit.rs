@@ -12,7 +12,7 @@ use creepfit::fit::{
 };
 use creepfit::lsq::minimize;
 use creepfit::model::{build, Load};
-use creepfit::objective::{bin_curves, CreepProblem, Objective};
+use creepfit::model::objective::{bin_curves, CreepProblem, Objective};
 use creepfit::ode::OdeOptions;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

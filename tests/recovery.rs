@@ -6,7 +6,7 @@ use creepfit::data::{estimate_min_rate, Curve};
 use creepfit::fit::{local_fit, FitSettings};
 use creepfit::lsq::LmOptions;
 use creepfit::model::{registry, Load, Model, Scale};
-use creepfit::objective::{JacobianMethod, ParamSpace};
+use creepfit::model::objective::{JacobianMethod, ParamSpace};
 use creepfit::ode::OdeOptions;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

@@ -10,7 +10,7 @@ use creepfit::data::{estimate_min_rate, Curve};
 use creepfit::fit::{local_fit, run_fit, FitSettings};
 use creepfit::lsq::{LeastSquaresProblem, LmOptions};
 use creepfit::model::{build, with_laws, LawKind, Load, Model, Scale};
-use creepfit::objective::{CreepProblem, JacobianMethod, Objective, ParamSpace};
+use creepfit::model::objective::{CreepProblem, JacobianMethod, Objective, ParamSpace};
 use creepfit::ode::OdeOptions;
 use nalgebra::DMatrix;
 use rand::{Rng, SeedableRng};

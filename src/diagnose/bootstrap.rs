@@ -20,7 +20,7 @@ use crate::errmodel::ErrorModel;
 use crate::fit::FitSettings;
 use crate::likelihood::{raw_objective, MlFit};
 use crate::model::Model;
-use crate::objective::Evaluation;
+use crate::model::objective::Evaluation;
 
 /// Replicates per batch (fixed, for thread-count invariance).
 pub const BATCH: usize = 10;

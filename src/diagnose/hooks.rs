@@ -16,7 +16,7 @@ use crate::error::{Error, Result};
 use crate::journal::{debug_hash, exact, Exact};
 use crate::likelihood::{EffectKind, MlFit, SpecimenFit};
 use crate::lsq::Termination;
-use crate::objective::{CurvePrediction, Evaluation};
+use crate::model::objective::{CurvePrediction, Evaluation};
 
 pub use crate::progress::Hooks;
 

@@ -38,12 +38,12 @@ use crate::config::RunConfig;
 use crate::data::{Curve, Dataset};
 use crate::error::{Error, Result};
 use crate::fit::{param_space, FitSettings};
-use crate::guess::initial_guess;
+use crate::model::guess::initial_guess;
 use crate::likelihood::{
     ml_fit, ml_fit_from, raw_objective, with_specimens, EffectStart, MlFit, MlOptions,
 };
 use crate::model::{ext, Model};
-use crate::objective::{mean_abs, ParamSpace};
+use crate::model::objective::{mean_abs, ParamSpace};
 use crate::sampling::latin_hypercube;
 pub use decide::Verdict;
 use decide::{ExtensionEvidence, SelectInput};

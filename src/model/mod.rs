@@ -7,10 +7,12 @@
 //! [`CreepModel`] plus one line in [`registry`].
 
 pub mod ext;
+pub mod guess;
 mod khd;
 pub mod khd_guess;
 pub mod kr;
 pub mod law;
+pub mod objective;
 
 pub use ext::KhdExtended;
 pub use khd::{Khd, KhdReduced};
@@ -19,8 +21,8 @@ pub use law::{with_laws, LawKind, WithLaws};
 use crate::data::Curve;
 use crate::dual::{Dual, Scalar, SENS, SENS_WIDE};
 use crate::error::{Error, Result};
-use crate::guess::{Guess, GuessFn};
-use crate::objective::ParamSpace;
+use crate::model::guess::{Guess, GuessFn};
+use crate::model::objective::ParamSpace;
 use crate::ode::{self, OdeOptions, SimResult};
 
 /// How a constant is mapped to the optimiser's unit box.
@@ -291,7 +293,7 @@ pub trait Model: Send + Sync {
     ) -> Guess {
         match self.guess_procedure() {
             Some(g) => g(self.as_dyn(), curves, space, omega_f, ode),
-            None => crate::guess::box_centre(space),
+            None => crate::model::guess::box_centre(space),
         }
     }
     /// The constants of the underlying model at `temperature_c` (°C) from a parameter

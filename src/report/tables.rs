@@ -11,7 +11,7 @@ use crate::data::Curve;
 use crate::error::{Error, Result};
 use crate::fit::{FitRun, LocalFit};
 use crate::model::Model;
-use crate::objective::ParamSpace;
+use crate::model::objective::ParamSpace;
 use crate::output;
 
 /// Create `dir` (and parents).
@@ -614,7 +614,7 @@ pub fn fit_summary(cfg: &RunConfig, run: &FitRun, curves: &[Curve]) -> Value {
     });
     // A joint calibration across temperatures (or the likelihood objective) says so, with
     // the errors and the model's constants at each temperature.
-    if cfg.has_laws() || cfg.objective.kind != crate::objective::ObjectiveKind::Eq8 {
+    if cfg.has_laws() || cfg.objective.kind != crate::model::objective::ObjectiveKind::Eq8 {
         let inner: Vec<&str> = run.model.inner_constants().iter().map(|c| c.name).collect();
         let at = |t: f64| -> Value {
             let v = run.model.constants_at(&best.params, t);
@@ -655,7 +655,7 @@ pub fn fit_summary(cfg: &RunConfig, run: &FitRun, curves: &[Curve]) -> Value {
         );
         summary["activation_energy"] = serde_json::to_value(a).expect("plain values");
     }
-    if run.settings.kind == crate::objective::ObjectiveKind::Likelihood {
+    if run.settings.kind == crate::model::objective::ObjectiveKind::Likelihood {
         summary["specimens"] = specimens_json(&run.specimens);
     }
     summary

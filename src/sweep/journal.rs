@@ -14,7 +14,7 @@ use crate::data::Dataset;
 use crate::error::{Error, Result};
 use crate::identity::{first_difference, hash_value, identity};
 use crate::model::Scale;
-use crate::objective::ParamSpace;
+use crate::model::objective::ParamSpace;
 use crate::output;
 
 /// Key of the drawn start points' hash in a sweep's identity.

@@ -38,8 +38,8 @@ use crate::config::RunConfig;
 use crate::data::Dataset;
 use crate::error::{Error, Result};
 use crate::fit::{local_fit, param_space, FitSettings};
-use crate::guess::initial_guess;
-use crate::objective::mean_abs;
+use crate::model::guess::initial_guess;
+use crate::model::objective::mean_abs;
 use crate::output::{lock_folder, RunFolder};
 use crate::sampling::latin_hypercube;
 
@@ -328,7 +328,7 @@ pub fn run_sweep(cfg: &RunConfig, data: &Dataset) -> Result<(Plan, SweepRun)> {
 fn solve(
     model: &dyn crate::model::Model,
     data: &Dataset,
-    space: &crate::objective::ParamSpace,
+    space: &crate::model::objective::ParamSpace,
     settings: &FitSettings,
     plan: &Plan,
     (s, wi): (usize, usize),

@@ -34,7 +34,7 @@ use crate::fit::FitSettings;
 use crate::likelihood::{raw_objective, LikelihoodProblem, MlFit, MlOptions};
 use crate::lsq::{LeastSquaresProblem, LmOptions};
 use crate::model::Model;
-use crate::objective::{CreepProblem, Evaluation, ParamSpace};
+use crate::model::objective::{CreepProblem, Evaluation, ParamSpace};
 
 /// What every computation of this module needs: the model, the data, the box, the numerical
 /// settings and the error model's options.

@@ -18,7 +18,7 @@ use crate::config::{ProfileConfig, RunConfig};
 use crate::data::Dataset;
 use crate::error::{Error, Result};
 use crate::fit::{param_space, FitSettings};
-use crate::guess::initial_guess;
+use crate::model::guess::initial_guess;
 use crate::likelihood::MlOptions;
 use crate::model::{Load, Scale};
 use crate::progress::Hooks;
