@@ -95,7 +95,7 @@ fn main() {
         let curves: Vec<Curve> = data
             .curves
             .iter()
-            .map(|c| creepfit::diagnose::binned(c, 60))
+            .map(|c| creepfit::data::binned(c, 60))
             .collect();
         let settings = FitSettings::from_config(&cfg);
         let base_space = param_space(&cfg);

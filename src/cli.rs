@@ -16,7 +16,7 @@ use crate::model::objective::Objective;
 use crate::ode::OdeOptions;
 use crate::output::RunFolder;
 use crate::progress::{Bars, Observer, StopWhen};
-use crate::report::diagrams::Diagrams;
+use crate::predict::diagrams::Diagrams;
 use crate::report::plot::{
     plot_creep_curves, plot_curve_residuals, CurveId, CurvePlot, CurveSeries,
 };
@@ -347,7 +347,7 @@ pub fn run(cli: Cli) -> Result<()> {
         } => {
             let at = at
                 .map(|s| {
-                    crate::predict::Condition::parse_list(&s)
+                    crate::data::Condition::parse_list(&s)
                         .map_err(|m| Error::Invalid(format!("--at: {m}")))
                 })
                 .transpose()?;
@@ -708,7 +708,7 @@ fn diagnose_into(
     let curves: Vec<crate::data::Curve> = data
         .curves
         .iter()
-        .map(|c| crate::diagnose::binned(c, cfg.diagnose.max_points))
+        .map(|c| crate::data::binned(c, cfg.diagnose.max_points))
         .collect();
     for c in std::iter::once(&d.base).chain(chosen) {
         let mut exts = cfg.extensions.clone();

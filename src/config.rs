@@ -25,7 +25,7 @@ use crate::model::{self, Model, Scale};
 pub use crate::model::objective::{LifetimeTerm, ObjectiveKind};
 use crate::model::objective::{FitSettings, JacobianMethod};
 use crate::ode::OdeOptions;
-use crate::predict::Condition;
+use crate::data::Condition;
 
 /// Names of the extension catalogue (DESIGN.md §6).
 pub const EXTENSION_NAMES: &[&str] = model::ext::CATALOGUE;
@@ -92,7 +92,7 @@ pub struct ObjectiveConfig {
     /// 0.01 (1 %, the best reproducibility of a rupture time).
     pub lifetime_sd_floor: f64,
     /// Most points per curve the run works on (0, the default: all): a longer curve is
-    /// reduced as `diagnose` reduces it ([`crate::diagnose::binned`]: the first point kept,
+    /// reduced as `diagnose` reduces it ([`crate::data::binned`]: the first point kept,
     /// the rest groups of consecutive points). A densely logged curve then weighs in the objective about as much as
     /// a digitised one, not by its point count (README, "Alloy 617").
     pub max_points: usize,
@@ -1344,7 +1344,7 @@ impl RunConfig {
     fn binned(&self, mut data: Dataset) -> Dataset {
         if self.objective.max_points > 0 {
             for c in &mut data.curves {
-                *c = crate::diagnose::binned(c, self.objective.max_points);
+                *c = crate::data::binned(c, self.objective.max_points);
             }
         }
         data

@@ -26,7 +26,7 @@ use crate::lmp::LarsonMiller;
 use crate::model::Load;
 use crate::model::objective::{mean_abs, CurvePrediction, Objective};
 use crate::ode::Outcome;
-use crate::report::diagrams::Diagrams;
+use crate::predict::diagrams::Diagrams;
 use crate::report::plot::{
     plot_creep_curves, plot_xy, AxisScale, Dash, MarkerShape, Rgb, XyAxes, XyGroup,
 };
@@ -620,7 +620,7 @@ pub const CURVE_COLUMNS: [&str; 3] = ["predicted_life_pct", "curve_outcome", "cu
 
 /// `creepfit holdout`: run, print, write `holdout.csv`, `constants.csv`, `summary.json`,
 /// `curves.png`, `parity.png` and the diagrams of the training fit with every test
-/// ([`crate::report::diagrams`]: the held-out temperature's tests as open circles).
+/// ([`crate::predict::diagrams`]: the held-out temperature's tests as open circles).
 pub fn holdout_cmd(config: &Path, temperature_c: f64, cli: &Overrides) -> Result<()> {
     let (cfg, data) = crate::cli::load(config, cli)?;
     let out = cfg.out_dir(&format!("holdout-{temperature_c}C"));

@@ -17,7 +17,7 @@ use std::time::Duration;
 use creepfit::config::{DiagnoseOverrides, Overrides, RunConfig, RunOptions, StartChoice};
 use creepfit::data::Dataset;
 use creepfit::error::Error;
-use creepfit::predict::Condition;
+use creepfit::data::Condition;
 use creepfit::report::tables;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;

@@ -145,18 +145,18 @@ pub fn constants_rows(
 /// model's order. Every model constant must appear exactly once with a finite value; an
 /// unknown name, a repeated one (a `T_ref` row included) or a missing one is an error naming
 /// the file, the line and the field. A `T_ref` row is skipped here
-/// ([`crate::predict::check_t_ref`] checks it); [`read_constants_for`] also checks the
+/// ([`check_t_ref`] checks it); [`read_constants_for`] also checks the
 /// configuration's bounds.
 pub fn read_constants(path: &Path, model: &dyn Model) -> Result<Vec<f64>> {
     read_constants_lines(path, model).map(|(v, _)| v)
 }
 
 /// [`read_constants`] for a run of `cfg`: also the reference temperature of the constants
-/// (`T_ref` row, [`crate::predict::check_t_ref`]) and every value inside the configuration's
+/// (`T_ref` row, [`check_t_ref`]) and every value inside the configuration's
 /// bounds `[lb, ub]` (a held law parameter: equal to its value), each an error naming the
 /// file, the line and the constant.
 pub fn read_constants_for(path: &Path, cfg: &RunConfig, model: &dyn Model) -> Result<Vec<f64>> {
-    crate::predict::check_t_ref(path, cfg)?;
+    check_t_ref(path, cfg)?;
     let (values, lines) = read_constants_lines(path, model)?;
     within_bounds(path, values, &lines, cfg)
 }
@@ -171,7 +171,7 @@ pub fn read_constants_bytes(
 ) -> Result<Vec<f64>> {
     let text = std::str::from_utf8(csv)
         .map_err(|e| Error::data(path, 0, format!("not UTF-8 text: {e}")))?;
-    crate::predict::check_t_ref_text(path, text, cfg)?;
+    check_t_ref_text(path, text, cfg)?;
     let (values, lines) = constants_lines(path, csv, None, model)?;
     within_bounds(path, values, &lines, cfg)
 }
@@ -754,6 +754,60 @@ pub fn write_specimens(
         ],
         &rows,
     )
+}
+
+/// The constants' reference temperature written with them (`T_ref` row of constants.csv),
+/// if the file has one.
+pub fn constants_t_ref(path: &Path) -> Result<Option<(f64, usize)>> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    constants_t_ref_text(path, &text)
+}
+
+/// [`constants_t_ref`] of a constants table's text in memory, named `path` in errors.
+pub fn constants_t_ref_text(path: &Path, text: &str) -> Result<Option<(f64, usize)>> {
+    for (i, line) in text.lines().enumerate() {
+        let mut f = line.split(',');
+        if f.next().map(str::trim) == Some(T_REF_ROW) {
+            let v = f.next().unwrap_or("").trim();
+            let t: f64 = v.parse().map_err(|_| {
+                Error::data(
+                    path,
+                    i + 1,
+                    format!("column 'value': cannot parse '{v}' as a number"),
+                )
+            })?;
+            return Ok(Some((t, i + 1)));
+        }
+    }
+    Ok(None)
+}
+
+/// Constants fitted about another reference temperature than the configuration's mean
+/// different constants: an error naming both.
+pub fn check_t_ref(path: &Path, cfg: &RunConfig) -> Result<()> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    check_t_ref_text(path, &text, cfg)
+}
+
+/// [`check_t_ref`] of a constants table's text in memory, named `path` in errors.
+pub fn check_t_ref_text(path: &Path, text: &str, cfg: &RunConfig) -> Result<()> {
+    if let Some((t, line)) = constants_t_ref_text(path, text)? {
+        match cfg.t_ref {
+            Some(c) if c == t => {}
+            other => {
+                return Err(Error::data(
+                    path,
+                    line,
+                    format!(
+                        "T_ref: these constants are about T_ref = {t} °C, the configuration resolves T_ref = {}; set T_ref = {t} in {}",
+                        other.map_or("none (no temperature laws)".to_string(), |c| format!("{c} °C")),
+                        cfg.path.display()
+                    ),
+                ))
+            }
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]

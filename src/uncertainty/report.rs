@@ -316,7 +316,7 @@ pub fn run_observed(
     }
     for (t, l) in &loads {
         hooks.check("predictions")?;
-        let condition = crate::predict::Condition {
+        let condition = crate::data::Condition {
             temperature_c: *t,
             stress_mpa: l.stress_mpa,
         };
@@ -840,7 +840,7 @@ pub fn profile_command(cfg: &RunConfig, data: &Dataset, constants: Option<&Path>
     };
     let tested = crate::predict::Tested::of(data, cfg.has_laws());
     for (t, l) in loads(cfg, data, &cfg.profile) {
-        let c = crate::predict::Condition {
+        let c = crate::data::Condition {
             temperature_c: t,
             stress_mpa: l.stress_mpa,
         };

@@ -6,8 +6,10 @@
 //! baselines ([`crate::baseline`]) fitted to the rupture times of the configuration's data,
 //! each marked where the condition lies outside the temperatures or stresses it was fitted
 //! on, so that the model's life is always shown next to the standard ones. The plots a creep
-//! engineer reads: the predicted curves and the diagrams of [`crate::report::diagrams`]
+//! engineer reads: the predicted curves and the diagrams of [`crate::predict::diagrams`]
 //! (stress–rupture, Norton, Larson–Miller) with the asked conditions on them.
+
+pub mod diagrams;
 
 use std::path::Path;
 
@@ -17,72 +19,18 @@ use serde_json::{json, Value};
 pub use crate::baseline::Extrapolation;
 use crate::baseline::{self, Baseline, BaselineKind, BaselineSettings};
 use crate::config::RunConfig;
+use crate::data::Condition;
 use crate::data::Dataset;
 use crate::error::{Error, Result};
 use crate::lmp::LarsonMiller;
 use crate::model::{Load, Model};
 use crate::model::objective::HORIZON_FACTOR;
 use crate::ode::{OdeOptions, Outcome};
-use crate::report::diagrams::{Asked, Diagrams};
+use diagrams::{Asked, Diagrams};
 use crate::report::plot::{
     plot_creep_curves, plot_xy, AxisScale, CurveId, CurvePlot, Dash, Rgb, XyAxes, XyGroup,
 };
 use crate::report::tables::{self, jnum, num, write_csv, write_csv_rows, write_text};
-
-/// One condition to predict: temperature (°C) and stress (MPa).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Condition {
-    /// Test temperature, °C.
-    #[serde(rename = "temperature_C")]
-    pub temperature_c: f64,
-    /// Nominal stress, MPa.
-    #[serde(rename = "stress_MPa")]
-    pub stress_mpa: f64,
-}
-
-impl Condition {
-    /// Parse `T:σ` (°C and MPa), e.g. `575:100`.
-    pub fn parse(s: &str) -> std::result::Result<Condition, String> {
-        let (t, sig) = s
-            .trim()
-            .split_once(':')
-            .ok_or_else(|| format!("'{s}': expected T:stress (°C:MPa), e.g. 575:100"))?;
-        let t: f64 = t
-            .trim()
-            .parse()
-            .map_err(|_| format!("'{s}': cannot parse the temperature '{}'", t.trim()))?;
-        let sig: f64 = sig
-            .trim()
-            .parse()
-            .map_err(|_| format!("'{s}': cannot parse the stress '{}'", sig.trim()))?;
-        if !(t.is_finite() && t > -crate::data::ZERO_CELSIUS_K) {
-            return Err(format!(
-                "'{s}': the temperature must be above absolute zero (°C)"
-            ));
-        }
-        if !(sig.is_finite() && sig > 0.0) {
-            return Err(format!("'{s}': the stress must be positive (MPa)"));
-        }
-        Ok(Condition {
-            temperature_c: t,
-            stress_mpa: sig,
-        })
-    }
-
-    /// Parse a comma-separated list `T:σ[,T:σ…]`.
-    pub fn parse_list(s: &str) -> std::result::Result<Vec<Condition>, String> {
-        s.split(',')
-            .filter(|p| !p.trim().is_empty())
-            .map(Condition::parse)
-            .collect()
-    }
-
-    /// `575 °C, 100 MPa`.
-    pub fn label(&self) -> String {
-        format!("{} °C, {} MPa", self.temperature_c, self.stress_mpa)
-    }
-}
 
 /// The model's prediction at one condition.
 #[derive(Debug, Clone, PartialEq)]
@@ -1156,60 +1104,6 @@ fn plots(
         .write(out),
     );
     failures
-}
-
-/// The constants' reference temperature written with them (`T_ref` row of constants.csv),
-/// if the file has one.
-pub fn constants_t_ref(path: &Path) -> Result<Option<(f64, usize)>> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    constants_t_ref_text(path, &text)
-}
-
-/// [`constants_t_ref`] of a constants table's text in memory, named `path` in errors.
-pub fn constants_t_ref_text(path: &Path, text: &str) -> Result<Option<(f64, usize)>> {
-    for (i, line) in text.lines().enumerate() {
-        let mut f = line.split(',');
-        if f.next().map(str::trim) == Some(tables::T_REF_ROW) {
-            let v = f.next().unwrap_or("").trim();
-            let t: f64 = v.parse().map_err(|_| {
-                Error::data(
-                    path,
-                    i + 1,
-                    format!("column 'value': cannot parse '{v}' as a number"),
-                )
-            })?;
-            return Ok(Some((t, i + 1)));
-        }
-    }
-    Ok(None)
-}
-
-/// Constants fitted about another reference temperature than the configuration's mean
-/// different constants: an error naming both.
-pub fn check_t_ref(path: &Path, cfg: &RunConfig) -> Result<()> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    check_t_ref_text(path, &text, cfg)
-}
-
-/// [`check_t_ref`] of a constants table's text in memory, named `path` in errors.
-pub fn check_t_ref_text(path: &Path, text: &str, cfg: &RunConfig) -> Result<()> {
-    if let Some((t, line)) = constants_t_ref_text(path, text)? {
-        match cfg.t_ref {
-            Some(c) if c == t => {}
-            other => {
-                return Err(Error::data(
-                    path,
-                    line,
-                    format!(
-                        "T_ref: these constants are about T_ref = {t} °C, the configuration resolves T_ref = {}; set T_ref = {t} in {}",
-                        other.map_or("none (no temperature laws)".to_string(), |c| format!("{c} °C")),
-                        cfg.path.display()
-                    ),
-                ))
-            }
-        }
-    }
-    Ok(())
 }
 
 #[cfg(test)]

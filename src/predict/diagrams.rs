@@ -19,7 +19,8 @@ use crate::config::RunConfig;
 use crate::data::Dataset;
 use crate::lmp::{self, LarsonMiller};
 use crate::model::Model;
-use crate::predict::{horizon, simulate_at, Condition};
+use crate::data::Condition;
+use super::{horizon, simulate_at};
 use crate::report::plot::{
     plot_xy, temperature_colors, AxisScale, Dash, MarkerShape, Rgb, XyAxes, XyGroup,
 };
