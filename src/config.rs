@@ -634,7 +634,7 @@ pub struct RunConfig {
     pub curves: PathBuf,
     /// Ruptures CSV, resolved against the configuration's directory.
     pub ruptures: PathBuf,
-    /// Content hash of the loaded data ([`crate::identity::data_hash`]); empty until
+    /// Content hash of the loaded data ([`crate::data::data_hash`]); empty until
     /// [`RunConfig::with_data`] binds the configuration to its data.
     pub data_hash: String,
     /// Keep only curves at this temperature (°C).
@@ -843,7 +843,7 @@ impl RunConfig {
     /// temperature, and the fit is then the fit without laws (bit for bit at the default
     /// `T_ref`).
     pub fn with_data(mut self, data: &Dataset) -> RunConfig {
-        self.data_hash = crate::identity::data_hash(data);
+        self.data_hash = crate::data::data_hash(data);
         if self.has_laws() && !data.curves.is_empty() {
             let temps: Vec<f64> = data.curves.iter().map(|c| c.temperature_c).collect();
             let lo = temps.iter().cloned().fold(f64::INFINITY, f64::min);
@@ -1659,6 +1659,22 @@ impl FitSettings {
             lifetime_sd_floor: cfg.objective.lifetime_sd_floor,
         }
     }
+}
+
+/// The canonical identity of a configuration: its serialisation without the excluded
+/// fields, plus the crate version.
+pub fn identity(cfg: &RunConfig) -> serde_json::Value {
+    let mut v = serde_json::to_value(cfg).expect("a configuration serialises");
+    if let serde_json::Value::Object(m) = &mut v {
+        for k in IDENTITY_EXCLUDED {
+            m.remove(*k);
+        }
+        m.insert(
+            "version".into(),
+            serde_json::Value::String(env!("CARGO_PKG_VERSION").into()),
+        );
+    }
+    v
 }
 
 #[cfg(test)]

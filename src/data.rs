@@ -1501,6 +1501,36 @@ fn local_quadratic_at_mean(t: &[f64], e: &[f64], tm: f64) -> f64 {
     }
 }
 
+/// Content hash of loaded data (16 hex digits): every curve's temperature, stress, specimen,
+/// times and strains, rupture record and the minimum rates the run uses, bit for bit, in
+/// order. O(n) in the points, no copy of the data.
+pub fn data_hash(data: &Dataset) -> String {
+    let mut h = crate::identity::fnv1a(b"creepfit-data-v1");
+    let f = |x: f64, h: &mut u64| *h = crate::identity::fnv1a_from(*h, &x.to_bits().to_le_bytes());
+    let opt = |x: Option<f64>| x.unwrap_or(f64::NAN);
+    for c in &data.curves {
+        h = crate::identity::fnv1a_from(h, &(c.times_h.len() as u64).to_le_bytes());
+        f(c.temperature_c, &mut h);
+        f(c.stress_mpa, &mut h);
+        match &c.specimen {
+            Some(s) => {
+                h = crate::identity::fnv1a_from(h, &(s.len() as u64 + 1).to_le_bytes());
+                h = crate::identity::fnv1a_from(h, s.as_bytes());
+            }
+            None => h = crate::identity::fnv1a_from(h, &0u64.to_le_bytes()),
+        }
+        for (t, e) in c.times_h.iter().zip(&c.strains) {
+            f(*t, &mut h);
+            f(*e, &mut h);
+        }
+        f(opt(c.rupture_time_h), &mut h);
+        f(c.rupture_strain, &mut h);
+        f(opt(c.min_rate_measured), &mut h);
+        f(c.min_rate_estimated, &mut h);
+    }
+    format!("{h:016x}")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -652,10 +652,10 @@ pub fn holdout_cmd(config: &Path, temperature_c: f64, cli: &Overrides) -> Result
 }
 
 /// The run identity of `holdout` of `cfg` (bound to its data) at `temperature_c` kept in its
-/// journal: the configuration's ([`crate::identity::identity`]: every setting of the training
+/// journal: the configuration's ([`crate::config::identity`]: every setting of the training
 /// fits, the data's hash, the crate version), the command and the held-out temperature.
 pub fn identity(cfg: &RunConfig, temperature_c: f64) -> serde_json::Value {
-    let mut id = crate::identity::identity(cfg);
+    let mut id = crate::config::identity(cfg);
     id["command"] = "holdout".into();
     id["held_out_temperature_C"] = temperature_c.into();
     id

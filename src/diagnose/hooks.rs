@@ -21,10 +21,10 @@ use crate::model::objective::{CurvePrediction, Evaluation};
 pub use crate::progress::Hooks;
 
 /// The run identity of a diagnosis of `cfg` (bound to its data) kept in its journal: the
-/// configuration's ([`crate::identity::identity`]: every setting that changes a fit, the
+/// configuration's ([`crate::config::identity`]: every setting that changes a fit, the
 /// data's hash, the crate version), the command and the `[diagnose]` settings used.
 pub fn identity(cfg: &crate::config::RunConfig) -> serde_json::Value {
-    let mut id = crate::identity::identity(cfg);
+    let mut id = crate::config::identity(cfg);
     id["command"] = "diagnose".into();
     id["diagnose"] = serde_json::to_value(&cfg.diagnose).expect("settings serialise");
     id

@@ -584,7 +584,7 @@ pub fn fit_summary(cfg: &RunConfig, run: &FitRun, curves: &[Curve]) -> Value {
         "model": run.model.name(),
         "extensions": cfg.extensions,
         "error_model": error_model_json(cfg, run, curves),
-        "run_id": crate::identity::hash_value(&crate::identity::identity(cfg)),
+        "run_id": crate::identity::hash_value(&crate::config::identity(cfg)),
         "data_hash": cfg.data_hash,
         "objective": jnum(best.eval.objective),
         "norm_residual": jnum(best.eval.norm_residual),

@@ -426,7 +426,7 @@ pub fn run_in_memory(
 
 /// The configuration must have been resolved on these very data (its `data_hash`).
 fn check_bound(cfg: &RunConfig, data: &Dataset) -> Result<()> {
-    if cfg.data_hash != crate::identity::data_hash(data) {
+    if cfg.data_hash != crate::data::data_hash(data) {
         return Err(Error::Invalid(
             "the configuration is not bound to these data (build it with RunConfig::resolve or with_data)".into(),
         ));

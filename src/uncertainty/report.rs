@@ -811,10 +811,10 @@ pub fn timings_line(run: &ProfileRun) -> String {
 }
 
 /// The run identity of `creepfit profile` on `cfg` (bound to its data) kept in its journal:
-/// the configuration's ([`crate::identity::identity`]), the command, the `[profile]`
+/// the configuration's ([`crate::config::identity`]), the command, the `[profile]`
 /// settings and the given constants (`--constants`, exact), if any.
 pub fn identity(cfg: &RunConfig, given: Option<&[f64]>) -> serde_json::Value {
-    let mut id = crate::identity::identity(cfg);
+    let mut id = crate::config::identity(cfg);
     id["command"] = "profile".into();
     id["profile"] = serde_json::to_value(&cfg.profile).expect("settings serialise");
     id["given_constants"] = match given {
