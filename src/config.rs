@@ -1677,6 +1677,16 @@ pub fn identity(cfg: &RunConfig) -> serde_json::Value {
     v
 }
 
+/// Resolve the run configuration (file + command line) and load its data: the one place
+/// the commands build them.
+pub fn load(config: &Path, cli: &Overrides) -> Result<(RunConfig, Dataset)> {
+    let (cfg, data) = RunConfig::resolve(config, cli)?;
+    for w in cfg.warnings.iter().chain(&data.warnings) {
+        eprintln!("warning: {w}");
+    }
+    Ok((cfg, data))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1531,6 +1531,16 @@ pub fn data_hash(data: &Dataset) -> String {
     format!("{h:016x}")
 }
 
+/// Record in the run's manifest the data points the loader dropped (`outliers = "drop"`).
+pub fn note_data(folder: &mut crate::output::RunFolder, data: &Dataset) {
+    if !data.dropped.is_empty() {
+        folder.note(
+            "dropped_points",
+            serde_json::to_value(&data.dropped).expect("JSON of plain values"),
+        );
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

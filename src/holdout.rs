@@ -622,13 +622,13 @@ pub const CURVE_COLUMNS: [&str; 3] = ["predicted_life_pct", "curve_outcome", "cu
 /// `curves.png`, `parity.png` and the diagrams of the training fit with every test
 /// ([`crate::predict::diagrams`]: the held-out temperature's tests as open circles).
 pub fn holdout_cmd(config: &Path, temperature_c: f64, cli: &Overrides) -> Result<()> {
-    let (cfg, data) = crate::cli::load(config, cli)?;
+    let (cfg, data) = crate::config::load(config, cli)?;
     let out = cfg.out_dir(&format!("holdout-{temperature_c}C"));
     let (mut folder, journal) =
-        crate::cli::take_with_journal(&out, "holdout", &identity(&cfg, temperature_c))?;
-    crate::cli::note_data(&mut folder, &data);
+        crate::journal::take_with_journal(&out, "holdout", &identity(&cfg, temperature_c))?;
+    crate::data::note_data(&mut folder, &data);
     let bars = crate::progress::Bars::new(!cfg.run.progress);
-    let stop = crate::cli::stop_after(&bars, &journal, cfg.run.stop_after);
+    let stop = crate::progress::stop_after(&bars, &journal, cfg.run.stop_after);
     let hooks = crate::progress::Hooks {
         observer: &stop,
         journal: Some(&journal),
@@ -637,7 +637,7 @@ pub fn holdout_cmd(config: &Path, temperature_c: f64, cli: &Overrides) -> Result
     let h = holdout_observed(&cfg, &data, temperature_c, cfg.predict.intervals, &hooks);
     bars.clear();
     let outcome = h.and_then(|h| {
-        crate::cli::write_timings(
+        crate::report::tables::write_timings(
             &out,
             "holdout",
             Some(&journal),
@@ -809,7 +809,7 @@ fn holdout_into(cfg: &RunConfig, data: &Dataset, h: &Holdout, out: &Path) -> Res
         warnings: Vec::new(),
         dropped: Vec::new(),
     };
-    let plots = crate::cli::curve_plots(
+    let plots = crate::predict::curve_plots(
         cfg,
         &held,
         &best.params,

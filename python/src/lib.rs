@@ -570,7 +570,7 @@ fn predict(
         let params =
             tables::read_constants_bytes(&name, constants.as_bytes(), &cfg, model.as_ref())?;
         creepfit::predict::check_conditions(&cfg, &data, cli.predict_at.is_some())?;
-        let tested = creepfit::predict::Tested::of(&data, cfg.has_laws());
+        let tested = creepfit::baseline::Tested::of(&data, cfg.has_laws());
         warnings.extend(creepfit::predict::extrapolation_notes(
             &tested,
             &cfg.predict.at,

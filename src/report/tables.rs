@@ -810,6 +810,32 @@ pub fn check_t_ref_text(path: &Path, text: &str, cfg: &RunConfig) -> Result<()> 
     Ok(())
 }
 
+/// Write `timings.json` into `out`: how long this run took, what it resumed. Timings are kept
+/// out of the result files, which are then the same for an interrupted and resumed run as for
+/// an uninterrupted one.
+pub fn write_timings(
+    out: &Path,
+    command: &str,
+    journal: Option<&crate::journal::Journal>,
+    timings: serde_json::Value,
+) -> Result<()> {
+    let mut t = serde_json::json!({ "command": command });
+    if let Some(j) = journal {
+        t["journal_records_resumed"] = j.found().into();
+        t["journal_records_written"] = j.written().into();
+    }
+    if let (Some(m), serde_json::Value::Object(more)) = (t.as_object_mut(), timings) {
+        m.extend(more);
+    }
+    write_text(
+        &out.join(TIMINGS_FILE),
+        &serde_json::to_string_pretty(&t).expect("JSON of plain values"),
+    )
+}
+
+/// The file of a run's wall times (not a result: it differs between runs of one computation).
+pub const TIMINGS_FILE: &str = "timings.json";
+
 #[cfg(test)]
 mod tests {
     use super::*;

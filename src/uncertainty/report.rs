@@ -35,7 +35,7 @@ pub struct LoadPrediction {
     pub temperature_c: f64,
     pub stress_mpa: f64,
     /// Where the load lies against the tested conditions.
-    pub extrapolation: crate::predict::Extrapolation,
+    pub extrapolation: crate::baseline::Extrapolation,
     /// How the simulation at the optimum ended (`ruptured`, else why the quantities and the
     /// band are missing).
     pub outcome: &'static str,
@@ -309,7 +309,7 @@ pub fn run_observed(
     let t4 = Instant::now();
     let fractions = super::predict::band_fractions(pc.band_points);
     let mut predictions = Vec::with_capacity(loads.len());
-    let tested = crate::predict::Tested::of(data, cfg.has_laws());
+    let tested = crate::baseline::Tested::of(data, cfg.has_laws());
     let ode = crate::uncertainty::constrained::prediction_ode(&ctx);
     if !loads.is_empty() {
         hooks.phase("predictions", loads.len());
@@ -336,7 +336,7 @@ pub fn run_observed(
             stress_mpa: l.stress_mpa,
             extrapolation: tested
                 .classify(condition)
-                .unwrap_or(crate::predict::Extrapolation::Both),
+                .unwrap_or(crate::baseline::Extrapolation::Both),
             outcome,
             quantities,
             band,
@@ -838,7 +838,7 @@ pub fn profile_command(cfg: &RunConfig, data: &Dataset, constants: Option<&Path>
         )?),
         None => None,
     };
-    let tested = crate::predict::Tested::of(data, cfg.has_laws());
+    let tested = crate::baseline::Tested::of(data, cfg.has_laws());
     for (t, l) in loads(cfg, data, &cfg.profile) {
         let c = crate::data::Condition {
             temperature_c: t,
@@ -850,10 +850,10 @@ pub fn profile_command(cfg: &RunConfig, data: &Dataset, constants: Option<&Path>
     }
     let out = cfg.out_dir("profile");
     let (mut folder, journal) =
-        crate::cli::take_with_journal(&out, "profile", &identity(cfg, given.as_deref()))?;
-    crate::cli::note_data(&mut folder, data);
+        crate::journal::take_with_journal(&out, "profile", &identity(cfg, given.as_deref()))?;
+    crate::data::note_data(&mut folder, data);
     let bars = crate::progress::Bars::new(!cfg.run.progress);
-    let stop = crate::cli::stop_after(&bars, &journal, cfg.run.stop_after);
+    let stop = crate::progress::stop_after(&bars, &journal, cfg.run.stop_after);
     let hooks = Hooks {
         observer: &stop,
         journal: Some(&journal),
@@ -863,7 +863,7 @@ pub fn profile_command(cfg: &RunConfig, data: &Dataset, constants: Option<&Path>
         bars.clear();
         let run = run?;
         let failures = write_outputs(cfg, &run, &out)?;
-        crate::cli::write_timings(
+        crate::report::tables::write_timings(
             &out,
             "profile",
             Some(&journal),
