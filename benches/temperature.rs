@@ -26,8 +26,8 @@ use creepfit::config::{RunConfig, StartChoice};
 use creepfit::data::{estimate_min_rate, Curve, Dataset};
 use creepfit::fit::{local_fit, param_space, run_fit, FitSettings};
 use creepfit::model::guess::initial_guess;
-use creepfit::model::{build, with_laws, LawKind, Load, Model, Scale};
 use creepfit::model::objective::{Objective, ParamSpace};
+use creepfit::model::{build, with_laws, LawKind, Load, Model, Scale};
 use creepfit::ode::OdeOptions;
 
 fn resolved(name: &str, guess_only: bool) -> (RunConfig, Dataset) {

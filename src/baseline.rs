@@ -27,10 +27,10 @@ use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 
 use crate::data::Curve;
+use crate::data::ZERO_CELSIUS_K;
 use crate::error::{Error, Result};
 use crate::lmp::LarsonMiller;
 use crate::model::law::arrhenius::R_KJ_PER_MOL_K;
-use crate::data::ZERO_CELSIUS_K;
 
 /// Which classical parameter.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -893,7 +893,10 @@ impl Tested {
     /// ([`TEMPERATURE_MARGIN_C`], [`STRESS_MARGIN_FACTOR`]), `Err` with why the
     /// configuration cannot predict it (another temperature without a temperature law, or
     /// beyond a margin).
-    pub fn classify(&self, c: crate::data::Condition) -> std::result::Result<Extrapolation, String> {
+    pub fn classify(
+        &self,
+        c: crate::data::Condition,
+    ) -> std::result::Result<Extrapolation, String> {
         let (t0, t1) = self.temperature_range();
         let (t, s) = (c.temperature_c, c.stress_mpa);
         if !(t0.is_finite() && t1.is_finite()) {

@@ -7,24 +7,22 @@ use clap::{Parser, Subcommand};
 
 use crate::config::load;
 use crate::config::DiagnoseOverrides;
-use crate::data::note_data;
-use crate::journal::take_with_journal;
-use crate::predict::{curve_plots, PLOT_POINTS};
-use crate::progress::stop_after;
-use crate::report::tables::write_timings;
 use crate::config::{Overrides, RunConfig, RunOptions, StartChoice};
+use crate::data::note_data;
 use crate::data::Dataset;
 use crate::error::{Error, Result};
 use crate::fit::FitSettings;
-use crate::model::Load;
+use crate::journal::take_with_journal;
 use crate::model::objective::Objective;
+use crate::model::Load;
 use crate::ode::OdeOptions;
 use crate::output::RunFolder;
-use crate::progress::Bars;
 use crate::predict::diagrams::Diagrams;
-use crate::report::plot::{
-    plot_creep_curves, plot_curve_residuals, CurveId, CurveSeries,
-};
+use crate::predict::{curve_plots, PLOT_POINTS};
+use crate::progress::stop_after;
+use crate::progress::Bars;
+use crate::report::plot::{plot_creep_curves, plot_curve_residuals, CurveId, CurveSeries};
+use crate::report::tables::write_timings;
 use crate::report::tables::{self, num, write_csv, write_text};
 use crate::sweep;
 

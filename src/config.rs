@@ -17,15 +17,15 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
+use crate::data::Condition;
 use crate::data::{self, Dataset, LoadOptions};
 use crate::error::{Error, Result};
 use crate::lsq::LmOptions;
 use crate::model::law::{self as laws, LawKind};
-use crate::model::{self, Model, Scale};
-pub use crate::model::objective::{LifetimeTerm, ObjectiveKind};
 use crate::model::objective::{FitSettings, JacobianMethod};
+pub use crate::model::objective::{LifetimeTerm, ObjectiveKind};
+use crate::model::{self, Model, Scale};
 use crate::ode::OdeOptions;
-use crate::data::Condition;
 
 /// Names of the extension catalogue (DESIGN.md §6).
 pub const EXTENSION_NAMES: &[&str] = model::ext::CATALOGUE;

@@ -23,19 +23,18 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-pub use crate::config::StartChoice;
 use crate::config::RunConfig;
-pub use crate::model::objective::FitSettings;
-use crate::model::objective::ObjectiveKind;
+pub use crate::config::StartChoice;
 use crate::data::{Curve, Dataset};
 use crate::error::{Error, Result};
-use crate::model::guess::{initial_guess, Guess};
 use crate::lsq::{minimize, LmOptions, LmReport, Termination};
-use crate::model::Model;
+use crate::model::guess::{initial_guess, Guess};
+pub use crate::model::objective::FitSettings;
+use crate::model::objective::ObjectiveKind;
 use crate::model::objective::{
-    bin_curves, mean_abs, CreepProblem, Evaluation, Objective,
-    ParamSpace,
+    bin_curves, mean_abs, CreepProblem, Evaluation, Objective, ParamSpace,
 };
+use crate::model::Model;
 
 /// One local fit from one start at one weight vector.
 #[derive(Debug, Clone)]

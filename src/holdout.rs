@@ -23,8 +23,8 @@ use crate::data::{Curve, Dataset};
 use crate::error::{Error, Result};
 use crate::fit::{run_fit_observed, FitRun};
 use crate::lmp::LarsonMiller;
-use crate::model::Load;
 use crate::model::objective::{mean_abs, CurvePrediction, Objective};
+use crate::model::Load;
 use crate::ode::Outcome;
 use crate::predict::diagrams::Diagrams;
 use crate::report::plot::{

@@ -11,7 +11,6 @@
 
 use serde_json::Value;
 
-
 /// 64-bit FNV-1a of `bytes`.
 pub fn fnv1a(bytes: &[u8]) -> u64 {
     fnv1a_from(0xcbf29ce484222325, bytes)
@@ -30,7 +29,6 @@ pub fn fnv1a_from(mut h: u64, bytes: &[u8]) -> u64 {
 pub fn hash_value(v: &Value) -> String {
     format!("{:016x}", fnv1a(v.to_string().as_bytes()))
 }
-
 
 /// Whether a JSON value is a leaf of the identity: a scalar, or an array of scalars (a list
 /// such as `extensions` or `w_grid` is compared whole).

@@ -40,15 +40,15 @@ use std::sync::Mutex;
 
 use nalgebra::DMatrix;
 
-use crate::model::objective::LifetimeTerm;
 use crate::data::Curve;
 use crate::errmodel::{ErrorModel, Residuals};
-use crate::model::objective::FitSettings;
 use crate::lsq::{minimize, EvalFailure, LeastSquaresProblem, Termination};
-use crate::model::{Model, Role};
+use crate::model::objective::FitSettings;
+use crate::model::objective::LifetimeTerm;
 use crate::model::objective::{
     CreepProblem, CurveFactors, Evaluation, Objective, ObjectiveSettings, ParamSpace,
 };
+use crate::model::{Model, Role};
 use crate::specimen::Lmm;
 
 /// Options of [`ml_fit`].

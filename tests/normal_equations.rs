@@ -107,8 +107,8 @@ fn streamed_normal_equations_equal_those_of_the_stored_jacobian() {
 /// resampled to 7,000 points each (21,003 residuals).
 #[test]
 fn more_free_constants_than_the_narrow_pass_keep_the_stored_sensitivity_jacobian() {
-    use creepfit::model::{build, with_laws, LawKind::*};
     use creepfit::model::objective::ParamSpace;
+    use creepfit::model::{build, with_laws, LawKind::*};
     let cfg = config("560C.toml");
     let data = cfg.load_data().unwrap();
     let settings = FitSettings::from_config(&cfg);

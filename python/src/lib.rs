@@ -15,9 +15,9 @@ use std::sync::mpsc;
 use std::time::Duration;
 
 use creepfit::config::{DiagnoseOverrides, Overrides, RunConfig, RunOptions, StartChoice};
+use creepfit::data::Condition;
 use creepfit::data::Dataset;
 use creepfit::error::Error;
-use creepfit::data::Condition;
 use creepfit::report::tables;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;

@@ -35,17 +35,17 @@ use rayon::prelude::*;
 
 pub use crate::config::DiagnoseConfig;
 use crate::config::RunConfig;
+use crate::data::binned;
 use crate::data::{Curve, Dataset};
 use crate::error::{Error, Result};
 use crate::fit::{param_space, FitSettings};
-use crate::model::guess::initial_guess;
 use crate::likelihood::{
     ml_fit, ml_fit_from, raw_objective, with_specimens, EffectStart, MlFit, MlOptions,
 };
-use crate::model::{ext, Model};
+use crate::model::guess::initial_guess;
 use crate::model::objective::{mean_abs, ParamSpace};
+use crate::model::{ext, Model};
 use crate::sampling::latin_hypercube;
-use crate::data::binned;
 pub use decide::Verdict;
 use decide::{ExtensionEvidence, SelectInput};
 pub use hooks::Hooks;
@@ -991,7 +991,6 @@ fn gof_bootstrap(
         })
         .collect())
 }
-
 
 /// Diagnose the configuration's data with the configuration's `[diagnose]` settings.
 pub fn diagnose(cfg: &RunConfig, data: &Dataset) -> Result<Diagnosis> {

@@ -14,14 +14,14 @@
 //! The curves are those of one temperature ([`crate::model::guess`] runs the procedure per
 //! temperature when constants follow temperature laws).
 
-use crate::model::objective::LifetimeTerm;
 use crate::data::Curve;
-use crate::model::guess::{Guess, GuessProcedure};
 use crate::lsq::{minimize, EvalFailure, LeastSquaresProblem, LmOptions};
-use crate::model::Model;
+use crate::model::guess::{Guess, GuessProcedure};
+use crate::model::objective::LifetimeTerm;
 use crate::model::objective::{
     CreepProblem, JacobianMethod, Objective, ObjectiveSettings, ParamSpace, MAX_PARAMS,
 };
+use crate::model::Model;
 use crate::ode::OdeOptions;
 
 /// Fraction of the rupture life taken as the primary stage for fitting H* and h.

@@ -20,8 +20,8 @@ use super::{ConstantSpec, CreepModel, Load, Role, Scale};
 use crate::data::Curve;
 use crate::dual::Scalar;
 use crate::model::guess::{Guess, GuessProcedure};
-use crate::model::Model;
 use crate::model::objective::ParamSpace;
+use crate::model::Model;
 use crate::ode::OdeOptions;
 
 /// Reference stress σ₀, MPa.

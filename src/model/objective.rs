@@ -18,8 +18,8 @@ use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
 use crate::data::Curve;
-use crate::lsq::LmOptions;
 use crate::dual::{Dual, Scalar, SENS, SENS_WIDE};
+use crate::lsq::LmOptions;
 use crate::lsq::{EvalFailure, LeastSquaresProblem, NormalEquations};
 use crate::model::{Load, Model, Scale};
 use crate::ode::{OdeOptions, Outcome, SimResult};

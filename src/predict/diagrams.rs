@@ -15,12 +15,12 @@
 
 use std::path::Path;
 
+use super::{horizon, simulate_at};
 use crate::config::RunConfig;
+use crate::data::Condition;
 use crate::data::Dataset;
 use crate::lmp::{self, LarsonMiller};
 use crate::model::Model;
-use crate::data::Condition;
-use super::{horizon, simulate_at};
 use crate::report::plot::{
     plot_xy, temperature_colors, AxisScale, Dash, MarkerShape, Rgb, XyAxes, XyGroup,
 };

@@ -17,21 +17,21 @@ use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 
 pub use crate::baseline::Extrapolation;
-use crate::baseline::{Tested, STRESS_MARGIN_FACTOR, TEMPERATURE_MARGIN_C};
 use crate::baseline::{self, Baseline, BaselineKind, BaselineSettings};
+use crate::baseline::{Tested, STRESS_MARGIN_FACTOR, TEMPERATURE_MARGIN_C};
 use crate::config::RunConfig;
 use crate::data::Condition;
 use crate::data::Dataset;
 use crate::error::{Error, Result};
 use crate::lmp::LarsonMiller;
-use crate::model::{Load, Model};
 use crate::model::objective::HORIZON_FACTOR;
+use crate::model::{Load, Model};
 use crate::ode::{OdeOptions, Outcome};
-use diagrams::{Asked, Diagrams};
 use crate::report::plot::{
     plot_creep_curves, plot_xy, AxisScale, CurveId, CurvePlot, Dash, Rgb, XyAxes, XyGroup,
 };
 use crate::report::tables::{self, jnum, num, write_csv, write_csv_rows, write_text};
+use diagrams::{Asked, Diagrams};
 
 /// The model's prediction at one condition.
 #[derive(Debug, Clone, PartialEq)]
@@ -77,7 +77,6 @@ impl ConstantsSource {
         }
     }
 }
-
 
 /// Everything `predict` computed.
 pub struct PredictRun {

@@ -10,8 +10,8 @@ use crate::config::RunConfig;
 use crate::data::Curve;
 use crate::error::{Error, Result};
 use crate::fit::{FitRun, LocalFit};
-use crate::model::Model;
 use crate::model::objective::ParamSpace;
+use crate::model::Model;
 use crate::output;
 
 /// Create `dir` (and parents).

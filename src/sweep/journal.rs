@@ -9,13 +9,13 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
+use crate::config::identity;
 use crate::config::RunConfig;
 use crate::data::Dataset;
 use crate::error::{Error, Result};
-use crate::config::identity;
 use crate::identity::{first_difference, hash_value};
-use crate::model::Scale;
 use crate::model::objective::ParamSpace;
+use crate::model::Scale;
 use crate::output;
 
 /// Key of the drawn start points' hash in a sweep's identity.

@@ -33,8 +33,8 @@ use crate::error::{Error, Result};
 use crate::fit::FitSettings;
 use crate::likelihood::{raw_objective, LikelihoodProblem, MlFit, MlOptions};
 use crate::lsq::{LeastSquaresProblem, LmOptions};
-use crate::model::Model;
 use crate::model::objective::{CreepProblem, Evaluation, ParamSpace};
+use crate::model::Model;
 
 /// What every computation of this module needs: the model, the data, the box, the numerical
 /// settings and the error model's options.

@@ -384,7 +384,14 @@ impl Model for WithLaws {
         omega_f: f64,
         ode: &OdeOptions,
     ) -> Guess {
-        crate::model::guess::per_temperature(self.inner.as_ref(), &self.laws, curves, space, omega_f, ode)
+        crate::model::guess::per_temperature(
+            self.inner.as_ref(),
+            &self.laws,
+            curves,
+            space,
+            omega_f,
+            ode,
+        )
     }
     fn constants_at(&self, params: &[f64], temperature_c: f64) -> Vec<f64> {
         let n = self.laws.n_inner();
