@@ -1,6 +1,10 @@
 //! Command-line interface (DESIGN.md §5): argument parsing and the commands, which call the
 //! library and write the output files.
 
+// The doc comments of the command-line types are clap's help texts, written for the terminal
+// (`[diagnose] starts` is a TOML table, `<name>` a placeholder), not rustdoc links or HTML.
+#![allow(rustdoc::broken_intra_doc_links, rustdoc::invalid_html_tags)]
+
 use std::path::{Path, PathBuf};
 
 use clap::{Parser, Subcommand};

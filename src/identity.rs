@@ -49,7 +49,7 @@ fn element_name(e: &Value, i: usize) -> String {
     }
 }
 
-/// JSON pointers of every leaf of `v` (see [`is_leaf`]), in key order; with the dotted name
+/// JSON pointers of every leaf of `v` (see `is_leaf`), in key order; with the dotted name
 /// of each (`solver.ftol`, `constants.A.lb`, `objective.w_sets[0]`).
 pub fn leaves(v: &Value) -> Vec<(String, String)> {
     fn walk(v: &Value, ptr: &str, name: &str, out: &mut Vec<(String, String)>) {

@@ -1,5 +1,5 @@
-//! What `diagnose` reports while it runs and what it resumes from: an [`Observer`] told of
-//! every phase and step, and an optional [`Journal`] of the bootstrap replicates'
+//! What `diagnose` reports while it runs and what it resumes from: an [`Observer`](crate::progress::Observer) told of
+//! every phase and step, and an optional [`Journal`](crate::journal::Journal) of the bootstrap replicates'
 //! statistics. Replicate b of a bootstrap is a pure function of the seed, the stream and b
 //! ([`super::bootstrap::replicate_rng`]) and of the fitted models it is drawn under and
 //! refitted from: the journal keys it by (stream, hash of those fits, b), so a rerun into the

@@ -25,7 +25,7 @@ use crate::report::plot::{
     plot_xy, temperature_colors, AxisScale, Dash, MarkerShape, Rgb, XyAxes, XyGroup,
 };
 
-/// The files [`write_diagrams`] writes (`larson_miller.png` only with a baseline).
+/// The files [`Diagrams::write`] writes (`larson_miller.png` only with a baseline).
 pub const FILES: [&str; 3] = ["stress_rupture.png", "norton.png", "larson_miller.png"];
 
 /// A condition asked of `predict` with the model's prediction there (drawn as a triangle).

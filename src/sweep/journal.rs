@@ -59,7 +59,7 @@ pub struct Header {
     /// (I, N) of the part this journal holds.
     pub shard: (usize, usize),
     /// Latin-hypercube starts that could not be evaluated where they were drawn and were
-    /// pulled toward the extra start ([`super::repair_starts`]), by start_id.
+    /// pulled toward the extra start ([`crate::fit::repair_starts`]), by start_id.
     #[serde(default)]
     pub repaired_starts: Vec<usize>,
 }

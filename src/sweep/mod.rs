@@ -6,7 +6,7 @@
 //! parallel work, every fit is deterministic, and each finished fit is appended (flushed) to
 //! `journal.jsonl` in the output folder. A rerun on the same folder computes only what is
 //! missing; `--shard I/N` computes the starts with `start_id % N == I − 1` (`--shard auto`
-//! takes I and N from a scheduler's job array, [`array`]); [`merge`] unites the shard
+//! takes I and N from a scheduler's job array, [`array`](mod@array)); [`merge`] unites the shard
 //! journals, also of an incomplete set. The final files are a function of the set of solutions alone, so they are
 //! identical for any thread count, shard split or interruption history.
 //!

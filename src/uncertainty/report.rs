@@ -270,7 +270,7 @@ pub fn core(
     }
 }
 
-/// The whole computation: [`core`], the well-determined combinations and the predictions at
+/// The whole computation: [`core`](fn@core), the well-determined combinations and the predictions at
 /// the configured untested stresses.
 pub fn run(
     cfg: &RunConfig,
@@ -282,7 +282,7 @@ pub fn run(
 }
 
 /// [`run`] telling `hooks.observer` of its phases and steps, its calibration replicates and
-/// profile sides journaled in `hooks.journal` and resumed from it ([`core`]).
+/// profile sides journaled in `hooks.journal` and resumed from it ([`core`](fn@core)).
 pub fn run_observed(
     cfg: &RunConfig,
     data: &Dataset,
