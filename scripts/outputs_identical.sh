@@ -10,11 +10,10 @@
 # the whole run are compared too.
 # Both runs use the same paths (the binary copied to one place, the outputs under one
 # folder, moved aside after each run), so that argv in manifest.json and any path written
-# into a file are the same. Then every output file is compared byte for byte. Left out:
-# timings.json (wall times only). JSON files that hold wall times beside results
-# (manifest.json's started/written_unix_s, summary.json's wall_s, …) are compared byte for
-# byte first and, when they differ, again without those keys: a file identical but for wall
-# times is reported as such and is not a difference. Prints each differing file; exit 1 if any.
+# into a file are the same. Then scripts/outputs_compare.py compares every output file byte
+# for byte (see there what it leaves out and what it accepts as run facts: wall times, PIDs,
+# the binary's own build stamp, the order of a journal's parallel records). Prints each
+# differing file; exit 1 if any.
 set -euo pipefail
 [ $# -eq 2 ] || { echo "usage: $0 OLD_BIN NEW_BIN" >&2; exit 2; }
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -57,50 +56,4 @@ run_all "$new"
 mv "$work/run" "$work/new"
 echo "new binary: $((SECONDS - t0)) s"
 
-python3 - "$work/old" "$work/new" <<'EOF'
-import json, sys
-from pathlib import Path
-
-old, new = Path(sys.argv[1]), Path(sys.argv[2])
-SKIP = {"timings.json"}
-TIME_KEYS = {"wall_s", "fit_wall_s", "phase_s", "timings_s", "training_fit_s",
-             "started_unix_s", "written_unix_s"}
-
-def files(d):
-    return {p.relative_to(d) for p in d.rglob("*") if p.is_file() and p.name not in SKIP}
-
-def untimed(v):
-    if isinstance(v, dict):
-        return {k: untimed(x) for k, x in v.items() if k not in TIME_KEYS}
-    if isinstance(v, list):
-        return [untimed(x) for x in v]
-    return v
-
-a, b = files(old), files(new)
-bad = []
-for f in sorted(a ^ b):
-    bad.append(f"{f}: only in {'old' if f in a else 'new'}")
-same = timed = 0
-for f in sorted(a & b):
-    x, y = (old / f).read_bytes(), (new / f).read_bytes()
-    if x == y:
-        same += 1
-        continue
-    if f.suffix in (".json", ".jsonl"):
-        try:
-            lx = [untimed(json.loads(l)) for l in x.decode().splitlines() if l.strip()] \
-                if f.suffix == ".jsonl" else untimed(json.loads(x))
-            ly = [untimed(json.loads(l)) for l in y.decode().splitlines() if l.strip()] \
-                if f.suffix == ".jsonl" else untimed(json.loads(y))
-            if lx == ly:
-                timed += 1
-                continue
-        except ValueError:
-            pass
-    bad.append(f"{f}: differs")
-for line in bad:
-    print("DIFFERS", line)
-print(f"{len(a | b)} files: {same} byte-identical, {timed} identical but for wall times "
-      f"({', '.join(sorted(TIME_KEYS))}), {len(bad)} differing; timings.json not compared")
-sys.exit(1 if bad else 0)
-EOF
+"$root/scripts/outputs_compare.py" "$work/old" "$work/new"
