@@ -12,8 +12,8 @@ use creepfit::config::RunConfig;
 use creepfit::dual::{Dual, Scalar, SENS};
 use creepfit::fit::{local_fit, param_space, FitSettings};
 use creepfit::lsq::LeastSquaresProblem;
+use creepfit::model::objective::{CreepProblem, JacobianMethod, Objective};
 use creepfit::model::{registry, CreepModel, Khd, KhdReduced, Load};
-use creepfit::objective::{CreepProblem, JacobianMethod, Objective};
 use creepfit::ode::OdeOptions;
 use nalgebra::DMatrix;
 

@@ -25,9 +25,9 @@ use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use creepfit::config::{RunConfig, StartChoice};
 use creepfit::data::{estimate_min_rate, Curve, Dataset};
 use creepfit::fit::{local_fit, param_space, run_fit, FitSettings};
-use creepfit::guess::initial_guess;
+use creepfit::model::guess::initial_guess;
+use creepfit::model::objective::{Objective, ParamSpace};
 use creepfit::model::{build, with_laws, LawKind, Load, Model, Scale};
-use creepfit::objective::{Objective, ParamSpace};
 use creepfit::ode::OdeOptions;
 
 fn resolved(name: &str, guess_only: bool) -> (RunConfig, Dataset) {

@@ -11,8 +11,8 @@
 use creepfit::config::RunConfig;
 use creepfit::data::{estimate_min_rate, Curve};
 use creepfit::fit::{local_fit, FitSettings};
+use creepfit::model::objective::ParamSpace;
 use creepfit::model::{build, with_laws, LawKind, Load, Scale};
-use creepfit::objective::ParamSpace;
 use creepfit::ode::OdeOptions;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

@@ -28,7 +28,7 @@ fn main() {
             let curves: Vec<_> = data
                 .curves
                 .iter()
-                .map(|c| creepfit::diagnose::binned(c, cfg.diagnose.max_points))
+                .map(|c| creepfit::data::binned(c, cfg.diagnose.max_points))
                 .collect();
             let model = cfg.build_model().expect("model");
             let space = param_space(&cfg);

@@ -16,8 +16,8 @@ use creepfit::config::RunConfig;
 use creepfit::data::Curve;
 use creepfit::fit::{param_space, FitSettings};
 use creepfit::likelihood::{ml_fit, MlFit, MlOptions};
+use creepfit::model::objective::ParamSpace;
 use creepfit::model::{build, ext, Load, Model};
-use creepfit::objective::ParamSpace;
 use creepfit::report::plot::{plot_creep_curves, CurvePlot};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -95,7 +95,7 @@ fn main() {
         let curves: Vec<Curve> = data
             .curves
             .iter()
-            .map(|c| creepfit::diagnose::binned(c, 60))
+            .map(|c| creepfit::data::binned(c, 60))
             .collect();
         let settings = FitSettings::from_config(&cfg);
         let base_space = param_space(&cfg);
@@ -104,7 +104,7 @@ fn main() {
             let names: Vec<String> = exts.iter().map(|s| s.to_string()).collect();
             let model = build("khd", &names).unwrap();
             let space = space_of(model.as_ref(), &base_space);
-            let guess = creepfit::guess::initial_guess(
+            let guess = creepfit::model::guess::initial_guess(
                 model.as_ref(),
                 &curves,
                 &space,
@@ -113,7 +113,7 @@ fn main() {
             );
             let mut fresh = vec![guess.params];
             let mut rng = ChaCha8Rng::seed_from_u64(1);
-            for u in creepfit::sweep::latin_hypercube(32, space.len(), &mut rng) {
+            for u in creepfit::sampling::latin_hypercube(32, space.len(), &mut rng) {
                 let mut x = vec![0.0; space.len()];
                 space.from_unit(&u, &mut x);
                 fresh.push(x);

@@ -27,10 +27,10 @@ use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 
 use crate::data::Curve;
+use crate::data::ZERO_CELSIUS_K;
 use crate::error::{Error, Result};
 use crate::lmp::LarsonMiller;
 use crate::model::law::arrhenius::R_KJ_PER_MOL_K;
-use crate::model::ZERO_CELSIUS_K;
 
 /// Which classical parameter.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -813,6 +813,129 @@ impl RuptureParameter for Wilshire {
     }
     fn to_json(&self) -> Value {
         json!(self)
+    }
+}
+
+/// Farthest a prediction may lie outside the tested temperatures, °C (beyond: an error). A
+/// creep mechanism (and the activation energy a temperature law carries) can change within
+/// some tens of kelvin; 25 °C keeps a prediction close to the data.
+pub const TEMPERATURE_MARGIN_C: f64 = 25.0;
+/// Farthest a prediction may lie outside the stresses tested at its temperature, as a factor
+/// (beyond: an error): 1.5 below the lowest or above the highest. With the stress exponents
+/// of these alloys (5–10) a factor 1.5 in stress is already a factor 8–60 in life.
+pub const STRESS_MARGIN_FACTOR: f64 = 1.5;
+
+/// The tested conditions of a data set: each tested temperature with the range of stresses
+/// tested there, and whether the configuration has temperature laws.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Tested {
+    /// (temperature °C, lowest stress MPa, highest stress MPa), ascending temperature.
+    pub temperatures: Vec<(f64, f64, f64)>,
+    /// Whether some constant follows a temperature law: without one the constants describe
+    /// the tested temperature only.
+    pub laws: bool,
+}
+
+/// Relative closeness of two temperatures or stresses typed by people.
+fn same(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-9 * a.abs().max(b.abs()).max(1.0)
+}
+
+impl Tested {
+    /// The tested conditions of `data`.
+    pub fn of(data: &crate::data::Dataset, laws: bool) -> Tested {
+        let mut temperatures: Vec<(f64, f64, f64)> = Vec::new();
+        for c in &data.curves {
+            match temperatures.iter_mut().find(|t| same(t.0, c.temperature_c)) {
+                Some(t) => {
+                    t.1 = t.1.min(c.stress_mpa);
+                    t.2 = t.2.max(c.stress_mpa);
+                }
+                None => temperatures.push((c.temperature_c, c.stress_mpa, c.stress_mpa)),
+            }
+        }
+        temperatures.sort_by(|a, b| a.0.total_cmp(&b.0));
+        Tested { temperatures, laws }
+    }
+
+    /// The tested temperatures' range, °C.
+    pub fn temperature_range(&self) -> (f64, f64) {
+        (
+            self.temperatures.first().map_or(f64::NAN, |t| t.0),
+            self.temperatures.last().map_or(f64::NAN, |t| t.0),
+        )
+    }
+
+    /// The stresses (MPa) that count as tested at `t` °C: at a tested temperature its own
+    /// range; between two tested temperatures the union of theirs; outside the tested
+    /// temperatures the nearest one's.
+    pub fn stress_range(&self, t: f64) -> (f64, f64) {
+        let ts = &self.temperatures;
+        if ts.is_empty() {
+            return (f64::NAN, f64::NAN);
+        }
+        if let Some(x) = ts.iter().find(|x| same(x.0, t)) {
+            return (x.1, x.2);
+        }
+        if t < ts[0].0 {
+            return (ts[0].1, ts[0].2);
+        }
+        let last = ts[ts.len() - 1];
+        if t > last.0 {
+            return (last.1, last.2);
+        }
+        let k = ts.iter().position(|x| x.0 > t).unwrap_or(ts.len() - 1);
+        let (a, b) = (ts[k - 1], ts[k]);
+        (a.1.min(b.1), a.2.max(b.2))
+    }
+
+    /// Where `c` lies: `Ok` with its extrapolation inside the margins
+    /// ([`TEMPERATURE_MARGIN_C`], [`STRESS_MARGIN_FACTOR`]), `Err` with why the
+    /// configuration cannot predict it (another temperature without a temperature law, or
+    /// beyond a margin).
+    pub fn classify(
+        &self,
+        c: crate::data::Condition,
+    ) -> std::result::Result<Extrapolation, String> {
+        let (t0, t1) = self.temperature_range();
+        let (t, s) = (c.temperature_c, c.stress_mpa);
+        if !(t0.is_finite() && t1.is_finite()) {
+            return Err("the data hold no tested condition".into());
+        }
+        if !self.laws && !self.temperatures.iter().any(|x| same(x.0, t)) {
+            return Err(format!(
+                "{t} °C is not a tested temperature and the configuration has no temperature law: its constants describe {} °C only; predict at {}, or give constants a temperature law (e.g. law = \"arrhenius\" on A, docs/FORMATS.md) and fit curves at several temperatures",
+                self.temperatures
+                    .iter()
+                    .map(|x| x.0.to_string())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                self.temperatures
+                    .iter()
+                    .map(|x| format!("{} °C", x.0))
+                    .collect::<Vec<_>>()
+                    .join(" or ")
+            ));
+        }
+        if t < t0 - TEMPERATURE_MARGIN_C || t > t1 + TEMPERATURE_MARGIN_C {
+            return Err(format!(
+                "{t} °C is more than {TEMPERATURE_MARGIN_C} °C outside the tested temperatures ({t0}–{t1} °C): beyond what the configuration can predict (docs/FORMATS.md, \"Limits of a prediction\")"
+            ));
+        }
+        let (s0, s1) = self.stress_range(t);
+        if s < s0 / STRESS_MARGIN_FACTOR || s > s1 * STRESS_MARGIN_FACTOR {
+            return Err(format!(
+                "{s} MPa is more than a factor {STRESS_MARGIN_FACTOR} outside the stresses tested at {t} °C ({s0}–{s1} MPa): beyond what the configuration can predict (docs/FORMATS.md, \"Limits of a prediction\")"
+            ));
+        }
+        let in_t = t >= t0 && t <= t1;
+        let in_s = s >= s0 && s <= s1;
+        Ok(match (in_t, in_s) {
+            (true, true) => Extrapolation::None,
+            (true, false) => Extrapolation::Stress,
+            (false, true) => Extrapolation::Temperature,
+            (false, false) => Extrapolation::Both,
+        })
     }
 }
 

@@ -166,7 +166,7 @@ pub fn oracle_lambda(cfg: &RunConfig, truth: &Truth) -> f64 {
         lifetime_sd: truth.lifetime_sd,
     };
     let space = param_space(cfg);
-    let guess = crate::guess::initial_guess(
+    let guess = crate::model::guess::initial_guess(
         model.as_ref(),
         &curves,
         &space,
@@ -175,7 +175,7 @@ pub fn oracle_lambda(cfg: &RunConfig, truth: &Truth) -> f64 {
     );
     let mut starts = vec![truth.constants.clone(), guess.params];
     let mut rng = <rand_chacha::ChaCha8Rng as rand::SeedableRng>::seed_from_u64(truth.seed);
-    for u in crate::sweep::latin_hypercube(8, space.len(), &mut rng) {
+    for u in crate::sampling::latin_hypercube(8, space.len(), &mut rng) {
         let mut x = vec![0.0; space.len()];
         space.from_unit(&u, &mut x);
         starts.push(x);
@@ -189,7 +189,7 @@ pub fn oracle_lambda(cfg: &RunConfig, truth: &Truth) -> f64 {
                 .position(|c| c.role == r)
                 .expect("the base model has its rate and ductility constants")
         };
-        crate::objective::CurveFactors {
+        crate::model::objective::CurveFactors {
             index: vec![
                 role(crate::model::Role::Rate),
                 role(crate::model::Role::InverseDuctility),

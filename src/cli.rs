@@ -1,25 +1,32 @@
 //! Command-line interface (DESIGN.md §5): argument parsing and the commands, which call the
 //! library and write the output files.
 
+// The doc comments of the command-line types are clap's help texts, written for the terminal
+// (`[diagnose] starts` is a TOML table, `<name>` a placeholder), not rustdoc links or HTML.
+#![allow(rustdoc::broken_intra_doc_links, rustdoc::invalid_html_tags)]
+
 use std::path::{Path, PathBuf};
 
 use clap::{Parser, Subcommand};
 
+use crate::config::load;
 use crate::config::DiagnoseOverrides;
 use crate::config::{Overrides, RunConfig, RunOptions, StartChoice};
+use crate::data::note_data;
 use crate::data::Dataset;
 use crate::error::{Error, Result};
 use crate::fit::FitSettings;
-use crate::journal::Journal;
+use crate::journal::take_with_journal;
+use crate::model::objective::Objective;
 use crate::model::Load;
-use crate::objective::Objective;
 use crate::ode::OdeOptions;
 use crate::output::RunFolder;
-use crate::progress::{Bars, Observer, StopWhen};
-use crate::report::diagrams::Diagrams;
-use crate::report::plot::{
-    plot_creep_curves, plot_curve_residuals, CurveId, CurvePlot, CurveSeries,
-};
+use crate::predict::diagrams::Diagrams;
+use crate::predict::{curve_plots, PLOT_POINTS};
+use crate::progress::stop_after;
+use crate::progress::Bars;
+use crate::report::plot::{plot_creep_curves, plot_curve_residuals, CurveId, CurveSeries};
+use crate::report::tables::write_timings;
 use crate::report::tables::{self, num, write_csv, write_text};
 use crate::sweep;
 
@@ -257,16 +264,6 @@ pub enum Command {
     },
 }
 
-/// Resolve the run configuration (file + command line) and load its data: the one place
-/// the binary builds them.
-pub fn load(config: &Path, cli: &Overrides) -> Result<(RunConfig, Dataset)> {
-    let (cfg, data) = RunConfig::resolve(config, cli)?;
-    for w in cfg.warnings.iter().chain(&data.warnings) {
-        eprintln!("warning: {w}");
-    }
-    Ok((cfg, data))
-}
-
 /// Command-line settings that only say where the outputs go.
 fn out_only(out: Option<PathBuf>) -> Overrides {
     Overrides {
@@ -304,16 +301,6 @@ fn plots_done(out: &Path, failures: Vec<String>) -> Result<()> {
     }
 }
 
-/// Record in the run's manifest the data points the loader dropped (`outliers = "drop"`).
-pub(crate) fn note_data(folder: &mut RunFolder, data: &Dataset) {
-    if !data.dropped.is_empty() {
-        folder.note(
-            "dropped_points",
-            serde_json::to_value(&data.dropped).expect("JSON of plain values"),
-        );
-    }
-}
-
 /// Run a parsed command line.
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
@@ -347,7 +334,7 @@ pub fn run(cli: Cli) -> Result<()> {
         } => {
             let at = at
                 .map(|s| {
-                    crate::predict::Condition::parse_list(&s)
+                    crate::data::Condition::parse_list(&s)
                         .map_err(|m| Error::Invalid(format!("--at: {m}")))
                 })
                 .transpose()?;
@@ -601,72 +588,6 @@ pub fn diagnose_check(cfg: &RunConfig, data: &Dataset) -> Result<()> {
     Ok(())
 }
 
-/// Take the output folder `out` over for a resumable run of `command` with run identity `id`:
-/// the lock, then the journal (a folder of another run is refused before anything in it
-/// changes), then the folder is this run's, its journal kept to resume from.
-pub(crate) fn take_with_journal(
-    out: &Path,
-    command: &str,
-    id: &serde_json::Value,
-) -> Result<(RunFolder, Journal)> {
-    let lock = crate::output::lock_folder(out)?;
-    let journal = Journal::open(out, id)?;
-    let folder = RunFolder::take_over(lock, command, &|f| f == crate::journal::FILE)?;
-    crate::output::record(journal.path());
-    if journal.discarded() > 0 {
-        eprintln!(
-            "warning: {}: {} records of another creepfit build discarded (computed again)",
-            journal.path().display(),
-            journal.discarded()
-        );
-    }
-    if journal.found() > 0 {
-        eprintln!(
-            "{}: resuming from {} journaled records",
-            journal.path().display(),
-            journal.found()
-        );
-    }
-    Ok((folder, journal))
-}
-
-/// `observer`, asked to stop once `journal` holds `limit` new records (`--stop-after`).
-pub(crate) fn stop_after<'a>(
-    observer: &'a dyn Observer,
-    journal: &'a Journal,
-    limit: Option<usize>,
-) -> StopWhen<'a> {
-    StopWhen::new(observer, move || {
-        limit.is_some_and(|k| journal.written() >= k as u64)
-    })
-}
-
-/// Write `timings.json` into `out`: how long this run took, what it resumed. Timings are kept
-/// out of the result files, which are then the same for an interrupted and resumed run as for
-/// an uninterrupted one.
-pub(crate) fn write_timings(
-    out: &Path,
-    command: &str,
-    journal: Option<&Journal>,
-    timings: serde_json::Value,
-) -> Result<()> {
-    let mut t = serde_json::json!({ "command": command });
-    if let Some(j) = journal {
-        t["journal_records_resumed"] = j.found().into();
-        t["journal_records_written"] = j.written().into();
-    }
-    if let (Some(m), serde_json::Value::Object(more)) = (t.as_object_mut(), timings) {
-        m.extend(more);
-    }
-    write_text(
-        &out.join(TIMINGS_FILE),
-        &serde_json::to_string_pretty(&t).expect("JSON of plain values"),
-    )
-}
-
-/// The file of a run's wall times (not a result: it differs between runs of one computation).
-pub const TIMINGS_FILE: &str = "timings.json";
-
 /// `diagnose`'s computation and outputs into `out`.
 fn diagnose_into(
     cfg: &RunConfig,
@@ -708,7 +629,7 @@ fn diagnose_into(
     let curves: Vec<crate::data::Curve> = data
         .curves
         .iter()
-        .map(|c| crate::diagnose::binned(c, cfg.diagnose.max_points))
+        .map(|c| crate::data::binned(c, cfg.diagnose.max_points))
         .collect();
     for c in std::iter::once(&d.base).chain(chosen) {
         let mut exts = cfg.extensions.clone();
@@ -1178,48 +1099,6 @@ fn fit_into(cfg: &RunConfig, data: &Dataset, out: &Path) -> Result<()> {
     plots_done(&out, failures)
 }
 
-/// Most measured points a plot draws per curve ([`tables::thin`]).
-const PLOT_POINTS: usize = 2000;
-
-/// Measured points and dense predicted curves for a plot.
-pub(crate) fn curve_plots(
-    cfg: &RunConfig,
-    data: &Dataset,
-    params: &[f64],
-    ode: &OdeOptions,
-    model: &dyn crate::model::Model,
-) -> Vec<CurvePlot> {
-    data.curves
-        .iter()
-        .map(|c| {
-            let load = Load::of_curve(c, cfg.objective.omega_f);
-            let span = c
-                .rupture_time_h
-                .unwrap_or(0.0)
-                .max(*c.times_h.last().unwrap_or(&0.0));
-            let o = OdeOptions {
-                t_end: crate::objective::HORIZON_FACTOR * span,
-                ..*ode
-            };
-            let res = model.simulate(params, &load, &[], &mut [], &o);
-            let grid = crate::predict::dense_grid(res.t_end, 400);
-            let (_, traj) = model.trajectory(params, &load, &grid, &o);
-            CurvePlot {
-                id: CurveId::of(c),
-                measured: tables::thin(
-                    c.times_h
-                        .iter()
-                        .zip(&c.strains)
-                        .map(|(t, e)| (*t, 100.0 * e))
-                        .collect(),
-                    PLOT_POINTS,
-                ),
-                predicted: traj.iter().map(|(t, e, _)| (*t, 100.0 * e)).collect(),
-            }
-        })
-        .collect()
-}
-
 fn predict_cmd(config: &Path, constants: &Path, cli: &Overrides) -> Result<()> {
     let (cfg, data) = load(config, cli)?;
     crate::predict::check_asked(&cfg)?;
@@ -1243,7 +1122,7 @@ fn predict_into(
     params: &[f64],
     out: &Path,
 ) -> Result<()> {
-    let tested = crate::predict::Tested::of(data, cfg.has_laws());
+    let tested = crate::baseline::Tested::of(data, cfg.has_laws());
     for n in crate::predict::extrapolation_notes(&tested, &cfg.predict.at) {
         eprintln!("warning: {n}");
     }
@@ -1316,7 +1195,7 @@ fn simulate_into(
             .unwrap_or(0.0)
             .max(*c.times_h.last().unwrap_or(&0.0));
         let o = OdeOptions {
-            t_end: crate::objective::HORIZON_FACTOR * span,
+            t_end: crate::model::objective::HORIZON_FACTOR * span,
             ..ode
         };
         let res = model.simulate(params, &load, &[], &mut [], &o);

@@ -17,14 +17,15 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
+use crate::data::Condition;
 use crate::data::{self, Dataset, LoadOptions};
 use crate::error::{Error, Result};
 use crate::lsq::LmOptions;
 use crate::model::law::{self as laws, LawKind};
+use crate::model::objective::{FitSettings, JacobianMethod};
+pub use crate::model::objective::{LifetimeTerm, ObjectiveKind};
 use crate::model::{self, Model, Scale};
-use crate::objective::JacobianMethod;
 use crate::ode::OdeOptions;
-use crate::predict::Condition;
 
 /// Names of the extension catalogue (DESIGN.md §6).
 pub const EXTENSION_NAMES: &[&str] = model::ext::CATALOGUE;
@@ -39,31 +40,6 @@ pub const EXTENSION_NAMES: &[&str] = model::ext::CATALOGUE;
 pub const IDENTITY_EXCLUDED: &[&str] = &[
     "path", "name", "curves", "ruptures", "run", "diagnose", "predict", "profile", "outliers",
 ];
-
-/// Which side of the lifetime error enters the objective (eq. 8).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum LifetimeTerm {
-    /// Only when the prediction ruptures later than measured (the paper).
-    #[default]
-    Late,
-    /// Always.
-    Both,
-}
-
-/// What a local fit minimises.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum ObjectiveKind {
-    /// The seed paper's eq. 8 at each lifetime weight w (README, "Choices").
-    #[default]
-    Eq8,
-    /// −2 ln L under the error model ([`crate::likelihood`]: AR(1) reading error per curve,
-    /// log-normal rupture-time scatter, both estimated with the constants): the strain and
-    /// lifetime terms weighed by their own measured scatter instead of by w, and a densely
-    /// logged curve counts as much as its correlated errors say, not by its point count.
-    Likelihood,
-}
 
 /// Which start points `fit` uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
@@ -116,7 +92,7 @@ pub struct ObjectiveConfig {
     /// 0.01 (1 %, the best reproducibility of a rupture time).
     pub lifetime_sd_floor: f64,
     /// Most points per curve the run works on (0, the default: all): a longer curve is
-    /// reduced as `diagnose` reduces it ([`crate::diagnose::binned`]: the first point kept,
+    /// reduced as `diagnose` reduces it ([`crate::data::binned`]: the first point kept,
     /// the rest groups of consecutive points). A densely logged curve then weighs in the objective about as much as
     /// a digitised one, not by its point count (README, "Alloy 617").
     pub max_points: usize,
@@ -658,7 +634,7 @@ pub struct RunConfig {
     pub curves: PathBuf,
     /// Ruptures CSV, resolved against the configuration's directory.
     pub ruptures: PathBuf,
-    /// Content hash of the loaded data ([`crate::identity::data_hash`]); empty until
+    /// Content hash of the loaded data ([`crate::data::data_hash`]); empty until
     /// [`RunConfig::with_data`] binds the configuration to its data.
     pub data_hash: String,
     /// Keep only curves at this temperature (°C).
@@ -867,7 +843,7 @@ impl RunConfig {
     /// temperature, and the fit is then the fit without laws (bit for bit at the default
     /// `T_ref`).
     pub fn with_data(mut self, data: &Dataset) -> RunConfig {
-        self.data_hash = crate::identity::data_hash(data);
+        self.data_hash = crate::data::data_hash(data);
         if self.has_laws() && !data.curves.is_empty() {
             let temps: Vec<f64> = data.curves.iter().map(|c| c.temperature_c).collect();
             let lo = temps.iter().cloned().fold(f64::INFINITY, f64::min);
@@ -1206,7 +1182,7 @@ impl RunConfig {
             }
         }
         if let Some(t) = self.t_ref {
-            if !(t.is_finite() && t > -crate::model::ZERO_CELSIUS_K) {
+            if !(t.is_finite() && t > -crate::data::ZERO_CELSIUS_K) {
                 return Err(invalid(
                     "T_ref",
                     format!("must be a finite temperature above absolute zero, °C (got {t})"),
@@ -1368,7 +1344,7 @@ impl RunConfig {
     fn binned(&self, mut data: Dataset) -> Dataset {
         if self.objective.max_points > 0 {
             for c in &mut data.curves {
-                *c = crate::diagnose::binned(c, self.objective.max_points);
+                *c = crate::data::binned(c, self.objective.max_points);
             }
         }
         data
@@ -1668,6 +1644,47 @@ fn toml_error(text: &str, path: &Path, e: &toml::de::Error) -> Error {
         Some(field) => Error::config_at(path, line, format!("{field}: {msg}")),
         None => Error::config_at(path, line, msg),
     }
+}
+
+impl FitSettings {
+    /// The settings of the resolved configuration `cfg` (the one place they are derived).
+    pub fn from_config(cfg: &RunConfig) -> Self {
+        FitSettings {
+            lm: cfg.solver.lm_options(),
+            ode: cfg.solver.ode_options(),
+            omega_f: cfg.objective.omega_f,
+            lifetime: cfg.objective.lifetime_term,
+            jacobian: cfg.solver.jacobian,
+            kind: cfg.objective.kind,
+            lifetime_sd_floor: cfg.objective.lifetime_sd_floor,
+        }
+    }
+}
+
+/// The canonical identity of a configuration: its serialisation without the excluded
+/// fields, plus the crate version.
+pub fn identity(cfg: &RunConfig) -> serde_json::Value {
+    let mut v = serde_json::to_value(cfg).expect("a configuration serialises");
+    if let serde_json::Value::Object(m) = &mut v {
+        for k in IDENTITY_EXCLUDED {
+            m.remove(*k);
+        }
+        m.insert(
+            "version".into(),
+            serde_json::Value::String(env!("CARGO_PKG_VERSION").into()),
+        );
+    }
+    v
+}
+
+/// Resolve the run configuration (file + command line) and load its data: the one place
+/// the commands build them.
+pub fn load(config: &Path, cli: &Overrides) -> Result<(RunConfig, Dataset)> {
+    let (cfg, data) = RunConfig::resolve(config, cli)?;
+    for w in cfg.warnings.iter().chain(&data.warnings) {
+        eprintln!("warning: {w}");
+    }
+    Ok((cfg, data))
 }
 
 #[cfg(test)]

@@ -15,6 +15,10 @@ use crate::error::{Error, Result};
 mod min_rate;
 mod table;
 
+/// 0 °C in K: files give temperatures in °C, the model's load and the temperature laws work
+/// in K.
+pub const ZERO_CELSIUS_K: f64 = 273.15;
+
 pub use min_rate::estimate_min_rate;
 pub use table::PROGRESS_MIN_BYTES;
 pub(crate) use table::{read_file, Table};
@@ -282,7 +286,7 @@ impl Interrupted {
         let sig: f64 = sig
             .parse()
             .map_err(|_| format!("'{s}': cannot parse the stress '{sig}'"))?;
-        if !(t.is_finite() && t > -crate::model::ZERO_CELSIUS_K) {
+        if !(t.is_finite() && t > -ZERO_CELSIUS_K) {
             return Err(format!(
                 "'{s}': the temperature must be above absolute zero (°C)"
             ));
@@ -927,7 +931,7 @@ impl Field<'_> {
             Range::Any => None,
             Range::NonNegative if v < 0.0 => Some("must not be negative".to_string()),
             Range::Positive if v <= 0.0 => Some("must be positive".to_string()),
-            Range::Temperature if v < -crate::model::ZERO_CELSIUS_K => {
+            Range::Temperature if v < -ZERO_CELSIUS_K => {
                 Some("is below absolute zero (-273.15 °C)".to_string())
             }
             Range::Temperature if !(MIN_DATA_TEMPERATURE_C..=MAX_DATA_TEMPERATURE_C).contains(&v) => {
@@ -1370,6 +1374,171 @@ fn read_ruptures_from(
         });
     }
     Ok(out)
+}
+
+/// One condition to predict: temperature (°C) and stress (MPa).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Condition {
+    /// Test temperature, °C.
+    #[serde(rename = "temperature_C")]
+    pub temperature_c: f64,
+    /// Nominal stress, MPa.
+    #[serde(rename = "stress_MPa")]
+    pub stress_mpa: f64,
+}
+
+impl Condition {
+    /// Parse `T:σ` (°C and MPa), e.g. `575:100`.
+    pub fn parse(s: &str) -> std::result::Result<Condition, String> {
+        let (t, sig) = s
+            .trim()
+            .split_once(':')
+            .ok_or_else(|| format!("'{s}': expected T:stress (°C:MPa), e.g. 575:100"))?;
+        let t: f64 = t
+            .trim()
+            .parse()
+            .map_err(|_| format!("'{s}': cannot parse the temperature '{}'", t.trim()))?;
+        let sig: f64 = sig
+            .trim()
+            .parse()
+            .map_err(|_| format!("'{s}': cannot parse the stress '{}'", sig.trim()))?;
+        if !(t.is_finite() && t > -ZERO_CELSIUS_K) {
+            return Err(format!(
+                "'{s}': the temperature must be above absolute zero (°C)"
+            ));
+        }
+        if !(sig.is_finite() && sig > 0.0) {
+            return Err(format!("'{s}': the stress must be positive (MPa)"));
+        }
+        Ok(Condition {
+            temperature_c: t,
+            stress_mpa: sig,
+        })
+    }
+
+    /// Parse a comma-separated list `T:σ[,T:σ…]`.
+    pub fn parse_list(s: &str) -> std::result::Result<Vec<Condition>, String> {
+        s.split(',')
+            .filter(|p| !p.trim().is_empty())
+            .map(Condition::parse)
+            .collect()
+    }
+
+    /// `575 °C, 100 MPa`.
+    pub fn label(&self) -> String {
+        format!("{} °C, {} MPa", self.temperature_c, self.stress_mpa)
+    }
+}
+
+/// `c` with at most `max_points` points: the first point as it is, the others in
+/// `max_points − 1` groups (fewer where that would leave a group under 4 points) of consecutive
+/// points whose sizes differ by at most one, each group
+/// replaced by one point at its mean time t̄ whose strain is the value at t̄ of a
+/// least-squares quadratic through the group's points (the group's mean for fewer than 4
+/// points or no time spread). The quadratic matters where the curve bends: the plain mean of a
+/// group's strains exceeds the curve at t̄ by ε''·var(t)/2, which near rupture is larger than
+/// the reading error of a logged curve and would read as misfit; the local quadratic's value
+/// at t̄ is unbiased for a quadratic (and, for a symmetric group, a cubic) curve and still
+/// averages the reading error over the group.
+pub fn binned(c: &Curve, max_points: usize) -> Curve {
+    let n = c.times_h.len();
+    if n <= max_points || max_points < 2 {
+        return c.clone();
+    }
+    // At least 4 points a group: the local quadratic needs them, and the plain mean a
+    // smaller group falls back to is biased where the curve bends (a 3-point mean in the
+    // first hours of a logged primary stage is off by more than its reading error).
+    let groups = (max_points - 1).min((n - 1) / 4).max(1);
+    let mut times = vec![c.times_h[0]];
+    let mut strains = vec![c.strains[0]];
+    for g in 0..groups {
+        let lo = 1 + g * (n - 1) / groups;
+        let hi = 1 + (g + 1) * (n - 1) / groups;
+        let (t, e) = (&c.times_h[lo..hi], &c.strains[lo..hi]);
+        let tm = t.iter().sum::<f64>() / t.len() as f64;
+        times.push(tm);
+        strains.push(local_quadratic_at_mean(t, e, tm));
+    }
+    Curve {
+        times_h: times,
+        strains,
+        ..c.clone()
+    }
+}
+
+/// Value at `tm` (the mean of `t`) of the least-squares quadratic through (t, e); the mean of
+/// `e` when there are fewer than 4 points or the quadratic is degenerate.
+fn local_quadratic_at_mean(t: &[f64], e: &[f64], tm: f64) -> f64 {
+    let m = t.len();
+    let mean = e.iter().sum::<f64>() / m as f64;
+    if m < 4 {
+        return mean;
+    }
+    // Centred, scaled abscissa x = (t − t̄)/s; fit e = a + b x + c x².
+    let s = t.iter().map(|v| (v - tm).abs()).fold(0.0, f64::max);
+    if !(s > 0.0) {
+        return mean;
+    }
+    let (mut s0, mut s1, mut s2, mut s3, mut s4) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    let (mut r0, mut r1, mut r2) = (0.0, 0.0, 0.0);
+    for (ti, ei) in t.iter().zip(e) {
+        let x = (ti - tm) / s;
+        let x2 = x * x;
+        s0 += 1.0;
+        s1 += x;
+        s2 += x2;
+        s3 += x2 * x;
+        s4 += x2 * x2;
+        r0 += ei;
+        r1 += x * ei;
+        r2 += x2 * ei;
+    }
+    let a = nalgebra::Matrix3::new(s0, s1, s2, s1, s2, s3, s2, s3, s4);
+    match a.lu().solve(&nalgebra::Vector3::new(r0, r1, r2)) {
+        Some(c) if c[0].is_finite() => c[0],
+        _ => mean,
+    }
+}
+
+/// Content hash of loaded data (16 hex digits): every curve's temperature, stress, specimen,
+/// times and strains, rupture record and the minimum rates the run uses, bit for bit, in
+/// order. O(n) in the points, no copy of the data.
+pub fn data_hash(data: &Dataset) -> String {
+    let mut h = crate::identity::fnv1a(b"creepfit-data-v1");
+    let f = |x: f64, h: &mut u64| *h = crate::identity::fnv1a_from(*h, &x.to_bits().to_le_bytes());
+    let opt = |x: Option<f64>| x.unwrap_or(f64::NAN);
+    for c in &data.curves {
+        h = crate::identity::fnv1a_from(h, &(c.times_h.len() as u64).to_le_bytes());
+        f(c.temperature_c, &mut h);
+        f(c.stress_mpa, &mut h);
+        match &c.specimen {
+            Some(s) => {
+                h = crate::identity::fnv1a_from(h, &(s.len() as u64 + 1).to_le_bytes());
+                h = crate::identity::fnv1a_from(h, s.as_bytes());
+            }
+            None => h = crate::identity::fnv1a_from(h, &0u64.to_le_bytes()),
+        }
+        for (t, e) in c.times_h.iter().zip(&c.strains) {
+            f(*t, &mut h);
+            f(*e, &mut h);
+        }
+        f(opt(c.rupture_time_h), &mut h);
+        f(c.rupture_strain, &mut h);
+        f(opt(c.min_rate_measured), &mut h);
+        f(c.min_rate_estimated, &mut h);
+    }
+    format!("{h:016x}")
+}
+
+/// Record in the run's manifest the data points the loader dropped (`outliers = "drop"`).
+pub fn note_data(folder: &mut crate::output::RunFolder, data: &Dataset) {
+    if !data.dropped.is_empty() {
+        folder.note(
+            "dropped_points",
+            serde_json::to_value(&data.dropped).expect("JSON of plain values"),
+        );
+    }
 }
 
 #[cfg(test)]

@@ -137,7 +137,7 @@ pub const SENS: usize = 8;
 
 /// The wide width of the sensitivity Jacobian: used when more than [`SENS`] constants are
 /// free (extensions, temperature laws); above it the constants are seeded in chunks of this
-/// many, one simulation per chunk ([`crate::objective::CreepProblem`]). Never finite
+/// many, one simulation per chunk ([`crate::model::objective::CreepProblem`]). Never finite
 /// differences unless the configuration asks for them.
 pub const SENS_WIDE: usize = 16;
 

@@ -23,62 +23,18 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
+use crate::config::RunConfig;
 pub use crate::config::StartChoice;
-use crate::config::{LifetimeTerm, ObjectiveKind, RunConfig};
 use crate::data::{Curve, Dataset};
 use crate::error::{Error, Result};
-use crate::guess::{initial_guess, Guess};
 use crate::lsq::{minimize, LmOptions, LmReport, Termination};
-use crate::model::Model;
-use crate::objective::{
-    bin_curves, mean_abs, CreepProblem, Evaluation, JacobianMethod, Objective, ObjectiveSettings,
-    ParamSpace,
+use crate::model::guess::{initial_guess, Guess};
+pub use crate::model::objective::FitSettings;
+use crate::model::objective::ObjectiveKind;
+use crate::model::objective::{
+    bin_curves, mean_abs, CreepProblem, Evaluation, Objective, ParamSpace,
 };
-use crate::ode::OdeOptions;
-
-/// Numerical settings of a fit: a view of the resolved [`RunConfig`], derived from it only
-/// by [`FitSettings::from_config`].
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct FitSettings {
-    /// Levenberg–Marquardt options (unit-box coordinates).
-    pub lm: LmOptions,
-    /// Integration options.
-    pub ode: OdeOptions,
-    /// Damage at rupture ω_f.
-    pub omega_f: f64,
-    /// Lifetime term of eq. 8.
-    pub lifetime: LifetimeTerm,
-    /// How the local fits' Jacobian is computed.
-    pub jacobian: JacobianMethod,
-    /// What the local fits minimise.
-    pub kind: ObjectiveKind,
-    /// Floor of the rupture-time scatter (ln scale) under [`ObjectiveKind::Likelihood`].
-    pub lifetime_sd_floor: f64,
-}
-
-impl FitSettings {
-    /// The settings of the resolved configuration `cfg` (the one place they are derived).
-    pub fn from_config(cfg: &RunConfig) -> Self {
-        FitSettings {
-            lm: cfg.solver.lm_options(),
-            ode: cfg.solver.ode_options(),
-            omega_f: cfg.objective.omega_f,
-            lifetime: cfg.objective.lifetime_term,
-            jacobian: cfg.solver.jacobian,
-            kind: cfg.objective.kind,
-            lifetime_sd_floor: cfg.objective.lifetime_sd_floor,
-        }
-    }
-
-    /// What eq. 8 takes of these settings.
-    pub fn objective(&self) -> ObjectiveSettings {
-        ObjectiveSettings {
-            lifetime: self.lifetime,
-            omega_f: self.omega_f,
-            ode: self.ode,
-        }
-    }
-}
+use crate::model::Model;
 
 /// One local fit from one start at one weight vector.
 #[derive(Debug, Clone)]
@@ -597,7 +553,7 @@ pub fn evaluable_anchor(
 ) -> Option<Vec<f64>> {
     let mut rng = <rand_chacha::ChaCha8Rng as rand::SeedableRng>::seed_from_u64(seed);
     let un = space.to_unit(near);
-    let pts = crate::sweep::latin_hypercube(ANCHOR_POINTS, space.n_free(), &mut rng);
+    let pts = crate::sampling::latin_hypercube(ANCHOR_POINTS, space.n_free(), &mut rng);
     pts.into_par_iter()
         .filter_map(|u| {
             let mut x = near.to_vec();
@@ -674,7 +630,7 @@ pub fn run_fit_observed(
     }
     if lhs > 0 {
         let mut rng = <rand_chacha::ChaCha8Rng as rand::SeedableRng>::seed_from_u64(cfg.sweep.seed);
-        for (k, u) in crate::sweep::latin_hypercube(lhs, space.n_free(), &mut rng)
+        for (k, u) in crate::sampling::latin_hypercube(lhs, space.n_free(), &mut rng)
             .into_iter()
             .enumerate()
         {
@@ -902,7 +858,7 @@ struct LocalFitRecord {
     wall_s: f64,
 }
 
-/// A [`crate::objective::CurvePrediction`] as part of a [`LocalFitRecord`].
+/// A [`crate::model::objective::CurvePrediction`] as part of a [`LocalFitRecord`].
 #[derive(serde::Serialize, serde::Deserialize)]
 struct CurveRecord {
     outcome: crate::ode::Outcome,
@@ -975,7 +931,7 @@ impl From<LocalFitRecord> for LocalFit {
                 curves: r
                     .eval_curves
                     .into_iter()
-                    .map(|c| crate::objective::CurvePrediction {
+                    .map(|c| crate::model::objective::CurvePrediction {
                         outcome: c.outcome,
                         rupture_time_h: c.rupture_time_h,
                         rupture_strain: c.rupture_strain,

@@ -23,10 +23,10 @@ use crate::data::{Curve, Dataset};
 use crate::error::{Error, Result};
 use crate::fit::{run_fit_observed, FitRun};
 use crate::lmp::LarsonMiller;
+use crate::model::objective::{mean_abs, CurvePrediction, Objective};
 use crate::model::Load;
-use crate::objective::{mean_abs, CurvePrediction, Objective};
 use crate::ode::Outcome;
-use crate::report::diagrams::Diagrams;
+use crate::predict::diagrams::Diagrams;
 use crate::report::plot::{
     plot_creep_curves, plot_xy, AxisScale, Dash, MarkerShape, Rgb, XyAxes, XyGroup,
 };
@@ -620,15 +620,15 @@ pub const CURVE_COLUMNS: [&str; 3] = ["predicted_life_pct", "curve_outcome", "cu
 
 /// `creepfit holdout`: run, print, write `holdout.csv`, `constants.csv`, `summary.json`,
 /// `curves.png`, `parity.png` and the diagrams of the training fit with every test
-/// ([`crate::report::diagrams`]: the held-out temperature's tests as open circles).
+/// ([`crate::predict::diagrams`]: the held-out temperature's tests as open circles).
 pub fn holdout_cmd(config: &Path, temperature_c: f64, cli: &Overrides) -> Result<()> {
-    let (cfg, data) = crate::cli::load(config, cli)?;
+    let (cfg, data) = crate::config::load(config, cli)?;
     let out = cfg.out_dir(&format!("holdout-{temperature_c}C"));
     let (mut folder, journal) =
-        crate::cli::take_with_journal(&out, "holdout", &identity(&cfg, temperature_c))?;
-    crate::cli::note_data(&mut folder, &data);
+        crate::journal::take_with_journal(&out, "holdout", &identity(&cfg, temperature_c))?;
+    crate::data::note_data(&mut folder, &data);
     let bars = crate::progress::Bars::new(!cfg.run.progress);
-    let stop = crate::cli::stop_after(&bars, &journal, cfg.run.stop_after);
+    let stop = crate::progress::stop_after(&bars, &journal, cfg.run.stop_after);
     let hooks = crate::progress::Hooks {
         observer: &stop,
         journal: Some(&journal),
@@ -637,7 +637,7 @@ pub fn holdout_cmd(config: &Path, temperature_c: f64, cli: &Overrides) -> Result
     let h = holdout_observed(&cfg, &data, temperature_c, cfg.predict.intervals, &hooks);
     bars.clear();
     let outcome = h.and_then(|h| {
-        crate::cli::write_timings(
+        crate::report::tables::write_timings(
             &out,
             "holdout",
             Some(&journal),
@@ -652,10 +652,10 @@ pub fn holdout_cmd(config: &Path, temperature_c: f64, cli: &Overrides) -> Result
 }
 
 /// The run identity of `holdout` of `cfg` (bound to its data) at `temperature_c` kept in its
-/// journal: the configuration's ([`crate::identity::identity`]: every setting of the training
+/// journal: the configuration's ([`crate::config::identity`]: every setting of the training
 /// fits, the data's hash, the crate version), the command and the held-out temperature.
 pub fn identity(cfg: &RunConfig, temperature_c: f64) -> serde_json::Value {
-    let mut id = crate::identity::identity(cfg);
+    let mut id = crate::config::identity(cfg);
     id["command"] = "holdout".into();
     id["held_out_temperature_C"] = temperature_c.into();
     id
@@ -809,7 +809,7 @@ fn holdout_into(cfg: &RunConfig, data: &Dataset, h: &Holdout, out: &Path) -> Res
         warnings: Vec::new(),
         dropped: Vec::new(),
     };
-    let plots = crate::cli::curve_plots(
+    let plots = crate::predict::curve_plots(
         cfg,
         &held,
         &best.params,
@@ -929,7 +929,7 @@ mod tests {
     use super::*;
     use crate::config::LifetimeTerm;
     use crate::model::build;
-    use crate::objective::ObjectiveSettings;
+    use crate::model::objective::ObjectiveSettings;
     use crate::ode::OdeOptions;
 
     /// A measured curve of the KHD model at `truth` (100 MPa, 30 points to rupture) and the

@@ -1,8 +1,8 @@
 //! Run identity: what makes two runs the same computation, so that a sweep is resumed or
 //! merged only with its own results.
 //!
-//! The identity of a run is the canonical JSON of its [`RunConfig`] (sorted keys, numbers in
-//! shortest round-trip form) without the fields of [`IDENTITY_EXCLUDED`], together with the
+//! The identity of a run is the canonical JSON of its `RunConfig` (`crate::config::identity`) (sorted keys, numbers in
+//! shortest round-trip form) without the fields of `IDENTITY_EXCLUDED`, together with the
 //! crate version (code changes can change results); the sweep adds its drawn start points.
 //! Its label is the 64-bit FNV-1a hash of that text. FNV-1a is enough here: the hash is not a
 //! security boundary (nobody forges a journal to fool their own sweep), the sweep journal
@@ -11,31 +11,13 @@
 
 use serde_json::Value;
 
-use crate::config::{RunConfig, IDENTITY_EXCLUDED};
-use crate::data::Dataset;
-
-/// The canonical identity of a configuration: its serialisation without the excluded
-/// fields, plus the crate version.
-pub fn identity(cfg: &RunConfig) -> Value {
-    let mut v = serde_json::to_value(cfg).expect("a configuration serialises");
-    if let Value::Object(m) = &mut v {
-        for k in IDENTITY_EXCLUDED {
-            m.remove(*k);
-        }
-        m.insert(
-            "version".into(),
-            Value::String(env!("CARGO_PKG_VERSION").into()),
-        );
-    }
-    v
-}
-
 /// 64-bit FNV-1a of `bytes`.
 pub fn fnv1a(bytes: &[u8]) -> u64 {
     fnv1a_from(0xcbf29ce484222325, bytes)
 }
 
-fn fnv1a_from(mut h: u64, bytes: &[u8]) -> u64 {
+/// 64-bit FNV-1a of `bytes` continued from the hash `h`.
+pub fn fnv1a_from(mut h: u64, bytes: &[u8]) -> u64 {
     for b in bytes {
         h ^= *b as u64;
         h = h.wrapping_mul(0x100000001b3);
@@ -46,36 +28,6 @@ fn fnv1a_from(mut h: u64, bytes: &[u8]) -> u64 {
 /// The hash of a JSON value's canonical text, as 16 hex digits.
 pub fn hash_value(v: &Value) -> String {
     format!("{:016x}", fnv1a(v.to_string().as_bytes()))
-}
-
-/// Content hash of loaded data (16 hex digits): every curve's temperature, stress, specimen,
-/// times and strains, rupture record and the minimum rates the run uses, bit for bit, in
-/// order. O(n) in the points, no copy of the data.
-pub fn data_hash(data: &Dataset) -> String {
-    let mut h = fnv1a(b"creepfit-data-v1");
-    let f = |x: f64, h: &mut u64| *h = fnv1a_from(*h, &x.to_bits().to_le_bytes());
-    let opt = |x: Option<f64>| x.unwrap_or(f64::NAN);
-    for c in &data.curves {
-        h = fnv1a_from(h, &(c.times_h.len() as u64).to_le_bytes());
-        f(c.temperature_c, &mut h);
-        f(c.stress_mpa, &mut h);
-        match &c.specimen {
-            Some(s) => {
-                h = fnv1a_from(h, &(s.len() as u64 + 1).to_le_bytes());
-                h = fnv1a_from(h, s.as_bytes());
-            }
-            None => h = fnv1a_from(h, &0u64.to_le_bytes()),
-        }
-        for (t, e) in c.times_h.iter().zip(&c.strains) {
-            f(*t, &mut h);
-            f(*e, &mut h);
-        }
-        f(opt(c.rupture_time_h), &mut h);
-        f(c.rupture_strain, &mut h);
-        f(opt(c.min_rate_measured), &mut h);
-        f(c.min_rate_estimated, &mut h);
-    }
-    format!("{h:016x}")
 }
 
 /// Whether a JSON value is a leaf of the identity: a scalar, or an array of scalars (a list
@@ -97,7 +49,7 @@ fn element_name(e: &Value, i: usize) -> String {
     }
 }
 
-/// JSON pointers of every leaf of `v` (see [`is_leaf`]), in key order; with the dotted name
+/// JSON pointers of every leaf of `v` (see `is_leaf`), in key order; with the dotted name
 /// of each (`solver.ftol`, `constants.A.lb`, `objective.w_sets[0]`).
 pub fn leaves(v: &Value) -> Vec<(String, String)> {
     fn walk(v: &Value, ptr: &str, name: &str, out: &mut Vec<(String, String)>) {

@@ -354,6 +354,35 @@ pub mod exact {
 #[serde(transparent)]
 pub struct Exact(#[serde(with = "exact::vec")] pub Vec<f64>);
 
+/// Take the output folder `out` over for a resumable run of `command` with run identity `id`:
+/// the lock, then the journal (a folder of another run is refused before anything in it
+/// changes), then the folder is this run's, its journal kept to resume from.
+pub fn take_with_journal(
+    out: &Path,
+    command: &str,
+    id: &serde_json::Value,
+) -> Result<(crate::output::RunFolder, Journal)> {
+    let lock = crate::output::lock_folder(out)?;
+    let journal = Journal::open(out, id)?;
+    let folder = crate::output::RunFolder::take_over(lock, command, &|f| f == FILE)?;
+    crate::output::record(journal.path());
+    if journal.discarded() > 0 {
+        eprintln!(
+            "warning: {}: {} records of another creepfit build discarded (computed again)",
+            journal.path().display(),
+            journal.discarded()
+        );
+    }
+    if journal.found() > 0 {
+        eprintln!(
+            "{}: resuming from {} journaled records",
+            journal.path().display(),
+            journal.found()
+        );
+    }
+    Ok((folder, journal))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,7 +1,7 @@
 //! Constants fitted by maximum likelihood under the error model of [`crate::errmodel`].
 //!
 //! The residuals come from eq. 8's residual vector at w = 1 on every curve with the lifetime
-//! term on both sides ([`crate::objective::Objective`]): strain (ε_pred − ε)/ε_f, multiplied
+//! term on both sides ([`crate::model::objective::Objective`]): strain (ε_pred − ε)/ε_f, multiplied
 //! back by ε_f, and (t_r − t_f)/t_f, taken as ln(1 + ·) = ln(t_r/t_f). Whitened by the error
 //! model (AR(1) innovations per curve, log lifetime residuals over their scatter), their sum
 //! of squares is −2 ln L up to terms of the error model alone; the error model itself is
@@ -40,15 +40,15 @@ use std::sync::Mutex;
 
 use nalgebra::DMatrix;
 
-use crate::config::LifetimeTerm;
 use crate::data::Curve;
 use crate::errmodel::{ErrorModel, Residuals};
-use crate::fit::FitSettings;
 use crate::lsq::{minimize, EvalFailure, LeastSquaresProblem, Termination};
-use crate::model::{Model, Role};
-use crate::objective::{
+use crate::model::objective::FitSettings;
+use crate::model::objective::LifetimeTerm;
+use crate::model::objective::{
     CreepProblem, CurveFactors, Evaluation, Objective, ObjectiveSettings, ParamSpace,
 };
+use crate::model::{Model, Role};
 use crate::specimen::Lmm;
 
 /// Options of [`ml_fit`].

@@ -16,8 +16,8 @@ use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 
 use crate::data::Curve;
+use crate::data::ZERO_CELSIUS_K;
 use crate::error::{Error, Result};
-use crate::model::ZERO_CELSIUS_K;
 
 /// Default degree of the master curve in log10 σ.
 pub const DEFAULT_DEGREE: usize = 2;

@@ -221,6 +221,17 @@ impl Observer for Bars {
     }
 }
 
+/// `observer`, asked to stop once `journal` holds `limit` new records (`--stop-after`).
+pub fn stop_after<'a>(
+    observer: &'a dyn Observer,
+    journal: &'a crate::journal::Journal,
+    limit: Option<usize>,
+) -> StopWhen<'a> {
+    StopWhen::new(observer, move || {
+        limit.is_some_and(|k| journal.written() >= k as u64)
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -428,10 +428,10 @@ fn curves_of(model: &dyn Model, x: &[f64], stresses: &[f64]) -> Vec<creepfit::da
 fn sensitivity_jacobian_of_new_extensions_matches_central_differences() {
     use creepfit::fit::FitSettings;
     use creepfit::lsq::LeastSquaresProblem;
-    use creepfit::model::Scale;
-    use creepfit::objective::{
+    use creepfit::model::objective::{
         CreepProblem, JacobianMethod, Objective, ObjectiveSettings, ParamSpace,
     };
+    use creepfit::model::Scale;
     use nalgebra::DMatrix;
     let cfg = creepfit::config::RunConfig::load(
         &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/560C.toml"),

@@ -7,8 +7,8 @@ use std::path::Path;
 use creepfit::config::RunConfig;
 use creepfit::fit::{param_space, FitSettings};
 use creepfit::lsq::LeastSquaresProblem;
+use creepfit::model::objective::{CreepProblem, JacobianMethod, Objective, ObjectiveSettings};
 use creepfit::model::registry;
-use creepfit::objective::{CreepProblem, JacobianMethod, Objective, ObjectiveSettings};
 use creepfit::ode::OdeOptions;
 use nalgebra::DMatrix;
 

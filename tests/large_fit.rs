@@ -11,8 +11,8 @@ use creepfit::fit::{
     is_large, local_fit, param_space, with_predictions, FitSettings, MULTIRES_BINNED_POINTS,
 };
 use creepfit::lsq::minimize;
+use creepfit::model::objective::{bin_curves, CreepProblem, Objective};
 use creepfit::model::{build, Load};
-use creepfit::objective::{bin_curves, CreepProblem, Objective};
 use creepfit::ode::OdeOptions;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

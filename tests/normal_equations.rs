@@ -8,7 +8,7 @@ use std::path::Path;
 use creepfit::config::RunConfig;
 use creepfit::fit::{param_space, FitSettings};
 use creepfit::lsq::{LeastSquaresProblem, NormalEquations};
-use creepfit::objective::{CreepProblem, JacobianMethod, Objective};
+use creepfit::model::objective::{CreepProblem, JacobianMethod, Objective};
 use nalgebra::{DMatrix, DVector};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -107,8 +107,8 @@ fn streamed_normal_equations_equal_those_of_the_stored_jacobian() {
 /// resampled to 7,000 points each (21,003 residuals).
 #[test]
 fn more_free_constants_than_the_narrow_pass_keep_the_stored_sensitivity_jacobian() {
+    use creepfit::model::objective::ParamSpace;
     use creepfit::model::{build, with_laws, LawKind::*};
-    use creepfit::objective::ParamSpace;
     let cfg = config("560C.toml");
     let data = cfg.load_data().unwrap();
     let settings = FitSettings::from_config(&cfg);
@@ -156,7 +156,7 @@ fn more_free_constants_than_the_narrow_pass_keep_the_stored_sensitivity_jacobian
     };
     let (m, n) = (problem.n_residuals(), problem.n_params());
     assert_eq!(n, 9);
-    assert!(m >= creepfit::objective::NORMAL_EQUATIONS_MIN_RESIDUALS);
+    assert!(m >= creepfit::model::objective::NORMAL_EQUATIONS_MIN_RESIDUALS);
     assert!(!problem.prefers_normal_equations());
     let mut x = cfg.starts_all_given().unwrap();
     x.extend([300.0, 0.0, 200.0]);

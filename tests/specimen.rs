@@ -11,8 +11,8 @@ use creepfit::likelihood::{
     EffectLayout, MlOptions, SpecimenOptions,
 };
 use creepfit::lsq::LmOptions;
+use creepfit::model::objective::{CurveFactors, JacobianMethod, ParamSpace};
 use creepfit::model::{registry, Load, Model, Scale};
-use creepfit::objective::{CurveFactors, JacobianMethod, ParamSpace};
 use creepfit::ode::OdeOptions;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;

@@ -15,9 +15,9 @@ use std::sync::mpsc;
 use std::time::Duration;
 
 use creepfit::config::{DiagnoseOverrides, Overrides, RunConfig, RunOptions, StartChoice};
+use creepfit::data::Condition;
 use creepfit::data::Dataset;
 use creepfit::error::Error;
-use creepfit::predict::Condition;
 use creepfit::report::tables;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
@@ -570,7 +570,7 @@ fn predict(
         let params =
             tables::read_constants_bytes(&name, constants.as_bytes(), &cfg, model.as_ref())?;
         creepfit::predict::check_conditions(&cfg, &data, cli.predict_at.is_some())?;
-        let tested = creepfit::predict::Tested::of(&data, cfg.has_laws());
+        let tested = creepfit::baseline::Tested::of(&data, cfg.has_laws());
         warnings.extend(creepfit::predict::extrapolation_notes(
             &tested,
             &cfg.predict.at,

@@ -19,8 +19,8 @@ use crate::data::Curve;
 use crate::errmodel::ErrorModel;
 use crate::fit::FitSettings;
 use crate::likelihood::{raw_objective, MlFit};
+use crate::model::objective::Evaluation;
 use crate::model::Model;
-use crate::objective::Evaluation;
 
 /// Replicates per batch (fixed, for thread-count invariance).
 pub const BATCH: usize = 10;

@@ -1,5 +1,5 @@
-//! What `diagnose` reports while it runs and what it resumes from: an [`Observer`] told of
-//! every phase and step, and an optional [`Journal`] of the bootstrap replicates'
+//! What `diagnose` reports while it runs and what it resumes from: an [`Observer`](crate::progress::Observer) told of
+//! every phase and step, and an optional [`Journal`](crate::journal::Journal) of the bootstrap replicates'
 //! statistics. Replicate b of a bootstrap is a pure function of the seed, the stream and b
 //! ([`super::bootstrap::replicate_rng`]) and of the fitted models it is drawn under and
 //! refitted from: the journal keys it by (stream, hash of those fits, b), so a rerun into the
@@ -16,15 +16,15 @@ use crate::error::{Error, Result};
 use crate::journal::{debug_hash, exact, Exact};
 use crate::likelihood::{EffectKind, MlFit, SpecimenFit};
 use crate::lsq::Termination;
-use crate::objective::{CurvePrediction, Evaluation};
+use crate::model::objective::{CurvePrediction, Evaluation};
 
 pub use crate::progress::Hooks;
 
 /// The run identity of a diagnosis of `cfg` (bound to its data) kept in its journal: the
-/// configuration's ([`crate::identity::identity`]: every setting that changes a fit, the
+/// configuration's ([`crate::config::identity`]: every setting that changes a fit, the
 /// data's hash, the crate version), the command and the `[diagnose]` settings used.
 pub fn identity(cfg: &crate::config::RunConfig) -> serde_json::Value {
-    let mut id = crate::identity::identity(cfg);
+    let mut id = crate::config::identity(cfg);
     id["command"] = "diagnose".into();
     id["diagnose"] = serde_json::to_value(&cfg.diagnose).expect("settings serialise");
     id

@@ -35,16 +35,17 @@ use rayon::prelude::*;
 
 pub use crate::config::DiagnoseConfig;
 use crate::config::RunConfig;
+use crate::data::binned;
 use crate::data::{Curve, Dataset};
 use crate::error::{Error, Result};
 use crate::fit::{param_space, FitSettings};
-use crate::guess::initial_guess;
 use crate::likelihood::{
     ml_fit, ml_fit_from, raw_objective, with_specimens, EffectStart, MlFit, MlOptions,
 };
+use crate::model::guess::initial_guess;
+use crate::model::objective::{mean_abs, ParamSpace};
 use crate::model::{ext, Model};
-use crate::objective::{mean_abs, ParamSpace};
-use crate::sweep::latin_hypercube;
+use crate::sampling::latin_hypercube;
 pub use decide::Verdict;
 use decide::{ExtensionEvidence, SelectInput};
 pub use hooks::Hooks;
@@ -989,76 +990,6 @@ fn gof_bootstrap(
             replicates: reps.len(),
         })
         .collect())
-}
-
-/// `c` with at most `max_points` points: the first point as it is, the others in
-/// `max_points − 1` groups (fewer where that would leave a group under 4 points) of consecutive
-/// points whose sizes differ by at most one, each group
-/// replaced by one point at its mean time t̄ whose strain is the value at t̄ of a
-/// least-squares quadratic through the group's points (the group's mean for fewer than 4
-/// points or no time spread). The quadratic matters where the curve bends: the plain mean of a
-/// group's strains exceeds the curve at t̄ by ε''·var(t)/2, which near rupture is larger than
-/// the reading error of a logged curve and would read as misfit; the local quadratic's value
-/// at t̄ is unbiased for a quadratic (and, for a symmetric group, a cubic) curve and still
-/// averages the reading error over the group.
-pub fn binned(c: &Curve, max_points: usize) -> Curve {
-    let n = c.times_h.len();
-    if n <= max_points || max_points < 2 {
-        return c.clone();
-    }
-    // At least 4 points a group: the local quadratic needs them, and the plain mean a
-    // smaller group falls back to is biased where the curve bends (a 3-point mean in the
-    // first hours of a logged primary stage is off by more than its reading error).
-    let groups = (max_points - 1).min((n - 1) / 4).max(1);
-    let mut times = vec![c.times_h[0]];
-    let mut strains = vec![c.strains[0]];
-    for g in 0..groups {
-        let lo = 1 + g * (n - 1) / groups;
-        let hi = 1 + (g + 1) * (n - 1) / groups;
-        let (t, e) = (&c.times_h[lo..hi], &c.strains[lo..hi]);
-        let tm = t.iter().sum::<f64>() / t.len() as f64;
-        times.push(tm);
-        strains.push(local_quadratic_at_mean(t, e, tm));
-    }
-    Curve {
-        times_h: times,
-        strains,
-        ..c.clone()
-    }
-}
-
-/// Value at `tm` (the mean of `t`) of the least-squares quadratic through (t, e); the mean of
-/// `e` when there are fewer than 4 points or the quadratic is degenerate.
-fn local_quadratic_at_mean(t: &[f64], e: &[f64], tm: f64) -> f64 {
-    let m = t.len();
-    let mean = e.iter().sum::<f64>() / m as f64;
-    if m < 4 {
-        return mean;
-    }
-    // Centred, scaled abscissa x = (t − t̄)/s; fit e = a + b x + c x².
-    let s = t.iter().map(|v| (v - tm).abs()).fold(0.0, f64::max);
-    if !(s > 0.0) {
-        return mean;
-    }
-    let (mut s0, mut s1, mut s2, mut s3, mut s4) = (0.0, 0.0, 0.0, 0.0, 0.0);
-    let (mut r0, mut r1, mut r2) = (0.0, 0.0, 0.0);
-    for (ti, ei) in t.iter().zip(e) {
-        let x = (ti - tm) / s;
-        let x2 = x * x;
-        s0 += 1.0;
-        s1 += x;
-        s2 += x2;
-        s3 += x2 * x;
-        s4 += x2 * x2;
-        r0 += ei;
-        r1 += x * ei;
-        r2 += x2 * ei;
-    }
-    let a = nalgebra::Matrix3::new(s0, s1, s2, s1, s2, s3, s2, s3, s4);
-    match a.lu().solve(&nalgebra::Vector3::new(r0, r1, r2)) {
-        Some(c) if c[0].is_finite() => c[0],
-        _ => mean,
-    }
 }
 
 /// Diagnose the configuration's data with the configuration's `[diagnose]` settings.

@@ -225,7 +225,7 @@ impl CreepModel<4> for Khd {
     }
 }
 
-/// The exact one-state reduction of [`Khd`] (DESIGN.md §1), state y = [ε]:
+/// The exact one-state reduction of [`Khd`] (DESIGN.md §1), state y = \[ε\]:
 /// Φ(t) = 1 − (1 + Kc t)^(−1/3), ω = Cε, H = H*(1 − exp(−hε/(σH*))).
 #[derive(Debug, Clone, Copy, Default)]
 pub struct KhdReduced;

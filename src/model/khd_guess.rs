@@ -11,17 +11,17 @@
 //!
 //! Measured minimum creep rates come from the ruptures file where given, else from the curve
 //! (see [`crate::data::estimate_min_rate`]). Every value is finally put inside its bounds.
-//! The curves are those of one temperature ([`crate::guess`] runs the procedure per
+//! The curves are those of one temperature ([`crate::model::guess`] runs the procedure per
 //! temperature when constants follow temperature laws).
 
-use crate::config::LifetimeTerm;
 use crate::data::Curve;
-use crate::guess::{Guess, GuessProcedure};
 use crate::lsq::{minimize, EvalFailure, LeastSquaresProblem, LmOptions};
-use crate::model::Model;
-use crate::objective::{
+use crate::model::guess::{Guess, GuessProcedure};
+use crate::model::objective::LifetimeTerm;
+use crate::model::objective::{
     CreepProblem, JacobianMethod, Objective, ObjectiveSettings, ParamSpace, MAX_PARAMS,
 };
+use crate::model::Model;
 use crate::ode::OdeOptions;
 
 /// Fraction of the rupture life taken as the primary stage for fitting H* and h.
@@ -141,7 +141,7 @@ impl LeastSquaresProblem for PrimaryProblem<'_> {
 /// Run the procedure for the KHD constants [A, B, H*, h, Kc, C] within `space`. A held
 /// constant of `space` keeps its value and every step is made with it: e.g. with B and H*
 /// held, A is the minimum-rate regression's intercept at S = B(1 − H*) (how
-/// [`crate::guess::per_temperature`] makes the per-temperature values of constants that
+/// [`crate::model::guess::per_temperature`] makes the per-temperature values of constants that
 /// follow a law consistent with the constants common to all temperatures).
 pub fn initial_guess(
     model: &dyn Model,

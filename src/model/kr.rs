@@ -19,9 +19,9 @@
 use super::{ConstantSpec, CreepModel, Load, Role, Scale};
 use crate::data::Curve;
 use crate::dual::Scalar;
-use crate::guess::{Guess, GuessProcedure};
+use crate::model::guess::{Guess, GuessProcedure};
+use crate::model::objective::ParamSpace;
 use crate::model::Model;
-use crate::objective::ParamSpace;
 use crate::ode::OdeOptions;
 
 /// Reference stress σ₀, MPa.

@@ -7,10 +7,12 @@
 //! [`CreepModel`] plus one line in [`registry`].
 
 pub mod ext;
+pub mod guess;
 mod khd;
 pub mod khd_guess;
 pub mod kr;
 pub mod law;
+pub mod objective;
 
 pub use ext::KhdExtended;
 pub use khd::{Khd, KhdReduced};
@@ -19,8 +21,8 @@ pub use law::{with_laws, LawKind, WithLaws};
 use crate::data::Curve;
 use crate::dual::{Dual, Scalar, SENS, SENS_WIDE};
 use crate::error::{Error, Result};
-use crate::guess::{Guess, GuessFn};
-use crate::objective::ParamSpace;
+use crate::model::guess::{Guess, GuessFn};
+use crate::model::objective::ParamSpace;
 use crate::ode::{self, OdeOptions, SimResult};
 
 /// How a constant is mapped to the optimiser's unit box.
@@ -71,8 +73,7 @@ pub enum Role {
     InverseDuctility,
 }
 
-/// 0 °C in K: files give temperatures in °C, [`Load`] and the temperature laws work in K.
-pub const ZERO_CELSIUS_K: f64 = 273.15;
+pub use crate::data::ZERO_CELSIUS_K;
 
 /// The conditions of one test: nominal stress, temperature and the damage at rupture.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -165,6 +166,51 @@ pub trait CreepModel<const N: usize>: Send + Sync {
     fn outputs(&self, _p: &Self::Prepared<f64>, _t: f64, _y: &[f64; N], _out: &mut Vec<f64>) {}
 }
 
+/// Every constitutive model is what the integrator integrates (the methods forward, inlined:
+/// the integrator is monomorphised over the model as before).
+impl<const N: usize, M: CreepModel<N>> ode::OdeSystem<N> for M {
+    type Prepared<S: Scalar> = <M as CreepModel<N>>::Prepared<S>;
+    #[inline(always)]
+    fn init<S: Scalar>(&self, p: &Self::Prepared<S>) -> [S; N] {
+        CreepModel::init(self, p)
+    }
+    #[inline(always)]
+    fn rhs<S: Scalar>(&self, p: &Self::Prepared<S>, t: S, y: &[S; N], dy: &mut [S; N]) -> bool {
+        CreepModel::rhs(self, p, t, y, dy)
+    }
+    #[inline(always)]
+    fn time_part<S: Scalar>(&self, p: &Self::Prepared<S>, t: S) -> S {
+        CreepModel::time_part(self, p, t)
+    }
+    #[inline(always)]
+    fn rhs_tp<S: Scalar>(
+        &self,
+        p: &Self::Prepared<S>,
+        t: S,
+        tp: S,
+        y: &[S; N],
+        dy: &mut [S; N],
+    ) -> bool {
+        CreepModel::rhs_tp(self, p, t, tp, y, dy)
+    }
+    #[inline(always)]
+    fn event<S: Scalar>(&self, p: &Self::Prepared<S>, y: &[S; N]) -> S {
+        CreepModel::event(self, p, y)
+    }
+    #[inline(always)]
+    fn event_rate<S: Scalar>(&self, p: &Self::Prepared<S>, y: &[S; N], dy: &[S; N]) -> S {
+        CreepModel::event_rate(self, p, y, dy)
+    }
+    #[inline(always)]
+    fn strain<S: Scalar>(&self, p: &Self::Prepared<S>, y: &[S; N]) -> S {
+        CreepModel::strain(self, p, y)
+    }
+    #[inline(always)]
+    fn strain_rate<S: Scalar>(&self, p: &Self::Prepared<S>, y: &[S; N], dy: &[S; N]) -> S {
+        CreepModel::strain_rate(self, p, y, dy)
+    }
+}
+
 /// Object-safe face of a model: what fits, reports and commands need.
 pub trait Model: Send + Sync {
     /// Registry name, e.g. `khd`.
@@ -247,7 +293,7 @@ pub trait Model: Send + Sync {
     ) -> Guess {
         match self.guess_procedure() {
             Some(g) => g(self.as_dyn(), curves, space, omega_f, ode),
-            None => crate::guess::box_centre(space),
+            None => crate::model::guess::box_centre(space),
         }
     }
     /// The constants of the underlying model at `temperature_c` (°C) from a parameter

@@ -3,7 +3,40 @@
 //! step statistics. Fixed-size state (`[f64; N]`): no heap allocation per step.
 
 use crate::dual::Scalar;
-use crate::model::CreepModel;
+
+/// What the integrator integrates: a system with an `N`-component state, its right-hand side,
+/// the rupture event and the strain read-out (`crate::model` implements it for every
+/// constitutive model). Generic over the number type [`Scalar`]; all methods are called in
+/// the hot loop and must not allocate.
+pub trait OdeSystem<const N: usize> {
+    /// Constants derived once per simulation (the system's parameters).
+    type Prepared<S: Scalar>: Copy;
+    /// State at t = 0.
+    fn init<S: Scalar>(&self, p: &Self::Prepared<S>) -> [S; N];
+    /// Right-hand side dy/dt at (t, y), t in h; `false` outside the domain (the step is
+    /// rejected and shrunk).
+    fn rhs<S: Scalar>(&self, p: &Self::Prepared<S>, t: S, y: &[S; N], dy: &mut [S; N]) -> bool;
+    /// The part of the right-hand side that depends on time alone, evaluated for all stages
+    /// of a step before the stages.
+    fn time_part<S: Scalar>(&self, p: &Self::Prepared<S>, t: S) -> S;
+    /// [`OdeSystem::rhs`] given `tp` = [`OdeSystem::time_part`] at `t`.
+    fn rhs_tp<S: Scalar>(
+        &self,
+        p: &Self::Prepared<S>,
+        t: S,
+        tp: S,
+        y: &[S; N],
+        dy: &mut [S; N],
+    ) -> bool;
+    /// Rupture event function: negative before rupture, zero at rupture.
+    fn event<S: Scalar>(&self, p: &Self::Prepared<S>, y: &[S; N]) -> S;
+    /// Time derivative of [`OdeSystem::event`] along the solution, given dy/dt.
+    fn event_rate<S: Scalar>(&self, p: &Self::Prepared<S>, y: &[S; N], dy: &[S; N]) -> S;
+    /// Total strain (fraction) read from the state.
+    fn strain<S: Scalar>(&self, p: &Self::Prepared<S>, y: &[S; N]) -> S;
+    /// Strain rate (1/h) from the state and its derivative.
+    fn strain_rate<S: Scalar>(&self, p: &Self::Prepared<S>, y: &[S; N], dy: &[S; N]) -> S;
+}
 
 /// Integration options; times in h.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -300,7 +333,7 @@ pub fn integrate<S, const N: usize, M, F>(
 ) -> SimResult<S>
 where
     S: Scalar,
-    M: CreepModel<N>,
+    M: OdeSystem<N>,
     F: FnMut(usize, f64, &[S; N]),
 {
     let zero = S::cst(0.0);
@@ -539,7 +572,7 @@ where
 /// dt = −g/ġ on the event function. Its value is a rounding-level correction; in dual numbers
 /// it carries the rupture time's sensitivity, dt_r/db = −(∂g/∂b)/ġ, and the state moves along
 /// the solution with it. `None` if the right-hand side is undefined there.
-fn rupture<S: Scalar, const N: usize, M: CreepModel<N>>(
+fn rupture<S: Scalar, const N: usize, M: OdeSystem<N>>(
     model: &M,
     p: &M::Prepared<S>,
     tr: f64,
@@ -613,7 +646,7 @@ fn locate_event(g: impl Fn(f64) -> f64, g0: f64, g1: f64) -> f64 {
 }
 
 /// Hairer's starting step-size heuristic (on value parts).
-fn initial_step<S: Scalar, const N: usize, M: CreepModel<N>>(
+fn initial_step<S: Scalar, const N: usize, M: OdeSystem<N>>(
     model: &M,
     p: &M::Prepared<S>,
     y0: &[S; N],

@@ -10,8 +10,8 @@ use crate::config::RunConfig;
 use crate::data::Curve;
 use crate::error::{Error, Result};
 use crate::fit::{FitRun, LocalFit};
+use crate::model::objective::ParamSpace;
 use crate::model::Model;
-use crate::objective::ParamSpace;
 use crate::output;
 
 /// Create `dir` (and parents).
@@ -145,18 +145,18 @@ pub fn constants_rows(
 /// model's order. Every model constant must appear exactly once with a finite value; an
 /// unknown name, a repeated one (a `T_ref` row included) or a missing one is an error naming
 /// the file, the line and the field. A `T_ref` row is skipped here
-/// ([`crate::predict::check_t_ref`] checks it); [`read_constants_for`] also checks the
+/// ([`check_t_ref`] checks it); [`read_constants_for`] also checks the
 /// configuration's bounds.
 pub fn read_constants(path: &Path, model: &dyn Model) -> Result<Vec<f64>> {
     read_constants_lines(path, model).map(|(v, _)| v)
 }
 
 /// [`read_constants`] for a run of `cfg`: also the reference temperature of the constants
-/// (`T_ref` row, [`crate::predict::check_t_ref`]) and every value inside the configuration's
+/// (`T_ref` row, [`check_t_ref`]) and every value inside the configuration's
 /// bounds `[lb, ub]` (a held law parameter: equal to its value), each an error naming the
 /// file, the line and the constant.
 pub fn read_constants_for(path: &Path, cfg: &RunConfig, model: &dyn Model) -> Result<Vec<f64>> {
-    crate::predict::check_t_ref(path, cfg)?;
+    check_t_ref(path, cfg)?;
     let (values, lines) = read_constants_lines(path, model)?;
     within_bounds(path, values, &lines, cfg)
 }
@@ -171,7 +171,7 @@ pub fn read_constants_bytes(
 ) -> Result<Vec<f64>> {
     let text = std::str::from_utf8(csv)
         .map_err(|e| Error::data(path, 0, format!("not UTF-8 text: {e}")))?;
-    crate::predict::check_t_ref_text(path, text, cfg)?;
+    check_t_ref_text(path, text, cfg)?;
     let (values, lines) = constants_lines(path, csv, None, model)?;
     within_bounds(path, values, &lines, cfg)
 }
@@ -584,7 +584,7 @@ pub fn fit_summary(cfg: &RunConfig, run: &FitRun, curves: &[Curve]) -> Value {
         "model": run.model.name(),
         "extensions": cfg.extensions,
         "error_model": error_model_json(cfg, run, curves),
-        "run_id": crate::identity::hash_value(&crate::identity::identity(cfg)),
+        "run_id": crate::identity::hash_value(&crate::config::identity(cfg)),
         "data_hash": cfg.data_hash,
         "objective": jnum(best.eval.objective),
         "norm_residual": jnum(best.eval.norm_residual),
@@ -614,7 +614,7 @@ pub fn fit_summary(cfg: &RunConfig, run: &FitRun, curves: &[Curve]) -> Value {
     });
     // A joint calibration across temperatures (or the likelihood objective) says so, with
     // the errors and the model's constants at each temperature.
-    if cfg.has_laws() || cfg.objective.kind != crate::config::ObjectiveKind::Eq8 {
+    if cfg.has_laws() || cfg.objective.kind != crate::model::objective::ObjectiveKind::Eq8 {
         let inner: Vec<&str> = run.model.inner_constants().iter().map(|c| c.name).collect();
         let at = |t: f64| -> Value {
             let v = run.model.constants_at(&best.params, t);
@@ -655,7 +655,7 @@ pub fn fit_summary(cfg: &RunConfig, run: &FitRun, curves: &[Curve]) -> Value {
         );
         summary["activation_energy"] = serde_json::to_value(a).expect("plain values");
     }
-    if run.settings.kind == crate::config::ObjectiveKind::Likelihood {
+    if run.settings.kind == crate::model::objective::ObjectiveKind::Likelihood {
         summary["specimens"] = specimens_json(&run.specimens);
     }
     summary
@@ -755,6 +755,86 @@ pub fn write_specimens(
         &rows,
     )
 }
+
+/// The constants' reference temperature written with them (`T_ref` row of constants.csv),
+/// if the file has one.
+pub fn constants_t_ref(path: &Path) -> Result<Option<(f64, usize)>> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    constants_t_ref_text(path, &text)
+}
+
+/// [`constants_t_ref`] of a constants table's text in memory, named `path` in errors.
+pub fn constants_t_ref_text(path: &Path, text: &str) -> Result<Option<(f64, usize)>> {
+    for (i, line) in text.lines().enumerate() {
+        let mut f = line.split(',');
+        if f.next().map(str::trim) == Some(T_REF_ROW) {
+            let v = f.next().unwrap_or("").trim();
+            let t: f64 = v.parse().map_err(|_| {
+                Error::data(
+                    path,
+                    i + 1,
+                    format!("column 'value': cannot parse '{v}' as a number"),
+                )
+            })?;
+            return Ok(Some((t, i + 1)));
+        }
+    }
+    Ok(None)
+}
+
+/// Constants fitted about another reference temperature than the configuration's mean
+/// different constants: an error naming both.
+pub fn check_t_ref(path: &Path, cfg: &RunConfig) -> Result<()> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    check_t_ref_text(path, &text, cfg)
+}
+
+/// [`check_t_ref`] of a constants table's text in memory, named `path` in errors.
+pub fn check_t_ref_text(path: &Path, text: &str, cfg: &RunConfig) -> Result<()> {
+    if let Some((t, line)) = constants_t_ref_text(path, text)? {
+        match cfg.t_ref {
+            Some(c) if c == t => {}
+            other => {
+                return Err(Error::data(
+                    path,
+                    line,
+                    format!(
+                        "T_ref: these constants are about T_ref = {t} °C, the configuration resolves T_ref = {}; set T_ref = {t} in {}",
+                        other.map_or("none (no temperature laws)".to_string(), |c| format!("{c} °C")),
+                        cfg.path.display()
+                    ),
+                ))
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Write `timings.json` into `out`: how long this run took, what it resumed. Timings are kept
+/// out of the result files, which are then the same for an interrupted and resumed run as for
+/// an uninterrupted one.
+pub fn write_timings(
+    out: &Path,
+    command: &str,
+    journal: Option<&crate::journal::Journal>,
+    timings: serde_json::Value,
+) -> Result<()> {
+    let mut t = serde_json::json!({ "command": command });
+    if let Some(j) = journal {
+        t["journal_records_resumed"] = j.found().into();
+        t["journal_records_written"] = j.written().into();
+    }
+    if let (Some(m), serde_json::Value::Object(more)) = (t.as_object_mut(), timings) {
+        m.extend(more);
+    }
+    write_text(
+        &out.join(TIMINGS_FILE),
+        &serde_json::to_string_pretty(&t).expect("JSON of plain values"),
+    )
+}
+
+/// The file of a run's wall times (not a result: it differs between runs of one computation).
+pub const TIMINGS_FILE: &str = "timings.json";
 
 #[cfg(test)]
 mod tests {

@@ -63,9 +63,9 @@ pub struct Analysis {
     pub pareto: Vec<bool>,
     /// The distinct minima, best first.
     pub clusters: Vec<Cluster>,
-    /// Spreads of the constants among solutions within [`NEAR_BEST`] of the best.
+    /// Spreads of the constants among solutions within `NEAR_BEST` of the best.
     pub spreads: Vec<Spread>,
-    /// How many solutions are within [`NEAR_BEST`].
+    /// How many solutions are within `NEAR_BEST`.
     pub near_best: usize,
     /// Constants of the best solution on a bound: (name, "lower"/"upper", value).
     pub pinned: Vec<(String, String, f64)>,

@@ -9,12 +9,13 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
+use crate::config::identity;
 use crate::config::RunConfig;
 use crate::data::Dataset;
 use crate::error::{Error, Result};
-use crate::identity::{first_difference, hash_value, identity};
+use crate::identity::{first_difference, hash_value};
+use crate::model::objective::ParamSpace;
 use crate::model::Scale;
-use crate::objective::ParamSpace;
 use crate::output;
 
 /// Key of the drawn start points' hash in a sweep's identity.
@@ -58,7 +59,7 @@ pub struct Header {
     /// (I, N) of the part this journal holds.
     pub shard: (usize, usize),
     /// Latin-hypercube starts that could not be evaluated where they were drawn and were
-    /// pulled toward the extra start ([`super::repair_starts`]), by start_id.
+    /// pulled toward the extra start ([`crate::fit::repair_starts`]), by start_id.
     #[serde(default)]
     pub repaired_starts: Vec<usize>,
 }

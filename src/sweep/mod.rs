@@ -6,7 +6,7 @@
 //! parallel work, every fit is deterministic, and each finished fit is appended (flushed) to
 //! `journal.jsonl` in the output folder. A rerun on the same folder computes only what is
 //! missing; `--shard I/N` computes the starts with `start_id % N == I − 1` (`--shard auto`
-//! takes I and N from a scheduler's job array, [`array`]); [`merge`] unites the shard
+//! takes I and N from a scheduler's job array, [`array`](mod@array)); [`merge`] unites the shard
 //! journals, also of an incomplete set. The final files are a function of the set of solutions alone, so they are
 //! identical for any thread count, shard split or interruption history.
 //!
@@ -29,7 +29,7 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Mutex;
 use std::time::Instant;
 
-use rand::{Rng, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -38,9 +38,10 @@ use crate::config::RunConfig;
 use crate::data::Dataset;
 use crate::error::{Error, Result};
 use crate::fit::{local_fit, param_space, FitSettings};
-use crate::guess::initial_guess;
-use crate::objective::mean_abs;
+use crate::model::guess::initial_guess;
+use crate::model::objective::mean_abs;
 use crate::output::{lock_folder, RunFolder};
+use crate::sampling::latin_hypercube;
 
 /// The part of a sweep the command line asks for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -92,23 +93,6 @@ pub fn install_sigint_handler() {
             libc::signal(libc::SIGINT, on_sigint as *const () as libc::sighandler_t);
         }
     }
-}
-
-/// Latin-hypercube sample of `n` points in [0, 1]^k: each coordinate's n values fall one in
-/// each of n equal strata, in a random order; drawn serially from `rng`.
-pub fn latin_hypercube(n: usize, k: usize, rng: &mut ChaCha8Rng) -> Vec<Vec<f64>> {
-    let mut pts = vec![vec![0.0; k]; n];
-    for j in 0..k {
-        let mut perm: Vec<usize> = (0..n).collect();
-        for i in (1..n).rev() {
-            let s = rng.gen_range(0..=i);
-            perm.swap(i, s);
-        }
-        for i in 0..n {
-            pts[i][j] = (perm[i] as f64 + rng.gen::<f64>()) / n as f64;
-        }
-    }
-    pts
 }
 
 /// Everything a sweep computes from the configuration before any fit.
@@ -344,7 +328,7 @@ pub fn run_sweep(cfg: &RunConfig, data: &Dataset) -> Result<(Plan, SweepRun)> {
 fn solve(
     model: &dyn crate::model::Model,
     data: &Dataset,
-    space: &crate::objective::ParamSpace,
+    space: &crate::model::objective::ParamSpace,
     settings: &FitSettings,
     plan: &Plan,
     (s, wi): (usize, usize),
@@ -442,7 +426,7 @@ pub fn run_in_memory(
 
 /// The configuration must have been resolved on these very data (its `data_hash`).
 fn check_bound(cfg: &RunConfig, data: &Dataset) -> Result<()> {
-    if cfg.data_hash != crate::identity::data_hash(data) {
+    if cfg.data_hash != crate::data::data_hash(data) {
         return Err(Error::Invalid(
             "the configuration is not bound to these data (build it with RunConfig::resolve or with_data)".into(),
         ));

@@ -16,8 +16,8 @@ use crate::dual::{Dual, Scalar, SENS};
 use crate::errmodel::ErrorModel;
 use crate::likelihood::{raw_objective, residuals_at, LikelihoodProblem, MlFit};
 use crate::lsq::{minimize, EvalFailure, LeastSquaresProblem, Termination};
+use crate::model::objective::{CreepProblem, ParamSpace};
 use crate::model::Load;
-use crate::objective::{CreepProblem, ParamSpace};
 use crate::ode::{OdeOptions, Outcome};
 
 use super::Context;

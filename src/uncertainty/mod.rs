@@ -33,8 +33,8 @@ use crate::error::{Error, Result};
 use crate::fit::FitSettings;
 use crate::likelihood::{raw_objective, LikelihoodProblem, MlFit, MlOptions};
 use crate::lsq::{LeastSquaresProblem, LmOptions};
+use crate::model::objective::{CreepProblem, Evaluation, ParamSpace};
 use crate::model::Model;
-use crate::objective::{CreepProblem, Evaluation, ParamSpace};
 
 /// What every computation of this module needs: the model, the data, the box, the numerical
 /// settings and the error model's options.
@@ -146,7 +146,7 @@ impl Reference {
 pub fn starts(ctx: &Context, given: &[Vec<f64>], lhs: usize, seed: u64) -> Vec<Vec<f64>> {
     let mut out: Vec<Vec<f64>> = given.to_vec();
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    for u in crate::sweep::latin_hypercube(lhs, ctx.space.len(), &mut rng) {
+    for u in crate::sampling::latin_hypercube(lhs, ctx.space.len(), &mut rng) {
         let mut x = vec![0.0; ctx.space.len()];
         ctx.space.from_unit(&u, &mut x);
         out.push(x);

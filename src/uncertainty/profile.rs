@@ -28,7 +28,7 @@
 //!
 //! **A better optimum**: if a profile point lies more than [`BETTER_TOL`] below the
 //! reference, the reference was not the global optimum: the caller refits from that point and
-//! profiles again ([`crate::uncertainty::report::run_profiles`]).
+//! profiles again ([`crate::uncertainty::report::core`](fn@crate::uncertainty::report::core)).
 
 use std::sync::Mutex;
 

@@ -18,8 +18,8 @@ use crate::config::{ProfileConfig, RunConfig};
 use crate::data::Dataset;
 use crate::error::{Error, Result};
 use crate::fit::{param_space, FitSettings};
-use crate::guess::initial_guess;
 use crate::likelihood::MlOptions;
+use crate::model::guess::initial_guess;
 use crate::model::{Load, Scale};
 use crate::progress::Hooks;
 use crate::report::plot::{plot_profile, ProfilePlot};
@@ -35,7 +35,7 @@ pub struct LoadPrediction {
     pub temperature_c: f64,
     pub stress_mpa: f64,
     /// Where the load lies against the tested conditions.
-    pub extrapolation: crate::predict::Extrapolation,
+    pub extrapolation: crate::baseline::Extrapolation,
     /// How the simulation at the optimum ended (`ruptured`, else why the quantities and the
     /// band are missing).
     pub outcome: &'static str,
@@ -270,7 +270,7 @@ pub fn core(
     }
 }
 
-/// The whole computation: [`core`], the well-determined combinations and the predictions at
+/// The whole computation: [`core`](fn@core), the well-determined combinations and the predictions at
 /// the configured untested stresses.
 pub fn run(
     cfg: &RunConfig,
@@ -282,7 +282,7 @@ pub fn run(
 }
 
 /// [`run`] telling `hooks.observer` of its phases and steps, its calibration replicates and
-/// profile sides journaled in `hooks.journal` and resumed from it ([`core`]).
+/// profile sides journaled in `hooks.journal` and resumed from it ([`core`](fn@core)).
 pub fn run_observed(
     cfg: &RunConfig,
     data: &Dataset,
@@ -309,14 +309,14 @@ pub fn run_observed(
     let t4 = Instant::now();
     let fractions = super::predict::band_fractions(pc.band_points);
     let mut predictions = Vec::with_capacity(loads.len());
-    let tested = crate::predict::Tested::of(data, cfg.has_laws());
+    let tested = crate::baseline::Tested::of(data, cfg.has_laws());
     let ode = crate::uncertainty::constrained::prediction_ode(&ctx);
     if !loads.is_empty() {
         hooks.phase("predictions", loads.len());
     }
     for (t, l) in &loads {
         hooks.check("predictions")?;
-        let condition = crate::predict::Condition {
+        let condition = crate::data::Condition {
             temperature_c: *t,
             stress_mpa: l.stress_mpa,
         };
@@ -336,7 +336,7 @@ pub fn run_observed(
             stress_mpa: l.stress_mpa,
             extrapolation: tested
                 .classify(condition)
-                .unwrap_or(crate::predict::Extrapolation::Both),
+                .unwrap_or(crate::baseline::Extrapolation::Both),
             outcome,
             quantities,
             band,
@@ -811,10 +811,10 @@ pub fn timings_line(run: &ProfileRun) -> String {
 }
 
 /// The run identity of `creepfit profile` on `cfg` (bound to its data) kept in its journal:
-/// the configuration's ([`crate::identity::identity`]), the command, the `[profile]`
+/// the configuration's ([`crate::config::identity`]), the command, the `[profile]`
 /// settings and the given constants (`--constants`, exact), if any.
 pub fn identity(cfg: &RunConfig, given: Option<&[f64]>) -> serde_json::Value {
-    let mut id = crate::identity::identity(cfg);
+    let mut id = crate::config::identity(cfg);
     id["command"] = "profile".into();
     id["profile"] = serde_json::to_value(&cfg.profile).expect("settings serialise");
     id["given_constants"] = match given {
@@ -838,9 +838,9 @@ pub fn profile_command(cfg: &RunConfig, data: &Dataset, constants: Option<&Path>
         )?),
         None => None,
     };
-    let tested = crate::predict::Tested::of(data, cfg.has_laws());
+    let tested = crate::baseline::Tested::of(data, cfg.has_laws());
     for (t, l) in loads(cfg, data, &cfg.profile) {
-        let c = crate::predict::Condition {
+        let c = crate::data::Condition {
             temperature_c: t,
             stress_mpa: l.stress_mpa,
         };
@@ -850,10 +850,10 @@ pub fn profile_command(cfg: &RunConfig, data: &Dataset, constants: Option<&Path>
     }
     let out = cfg.out_dir("profile");
     let (mut folder, journal) =
-        crate::cli::take_with_journal(&out, "profile", &identity(cfg, given.as_deref()))?;
-    crate::cli::note_data(&mut folder, data);
+        crate::journal::take_with_journal(&out, "profile", &identity(cfg, given.as_deref()))?;
+    crate::data::note_data(&mut folder, data);
     let bars = crate::progress::Bars::new(!cfg.run.progress);
-    let stop = crate::cli::stop_after(&bars, &journal, cfg.run.stop_after);
+    let stop = crate::progress::stop_after(&bars, &journal, cfg.run.stop_after);
     let hooks = Hooks {
         observer: &stop,
         journal: Some(&journal),
@@ -863,7 +863,7 @@ pub fn profile_command(cfg: &RunConfig, data: &Dataset, constants: Option<&Path>
         bars.clear();
         let run = run?;
         let failures = write_outputs(cfg, &run, &out)?;
-        crate::cli::write_timings(
+        crate::report::tables::write_timings(
             &out,
             "profile",
             Some(&journal),

@@ -31,8 +31,8 @@ use serde::{Deserialize, Serialize};
 use super::{ConstantSpec, Load, Model, Scale, ZERO_CELSIUS_K};
 use crate::data::Curve;
 use crate::dual::{Dual, Scalar, SENS, SENS_WIDE};
-use crate::guess::Guess;
-use crate::objective::{ParamSpace, SimScalar, MAX_PARAMS};
+use crate::model::guess::Guess;
+use crate::model::objective::{ParamSpace, SimScalar, MAX_PARAMS};
 use crate::ode::{OdeOptions, SimResult};
 
 /// The temperature law of one constant.
@@ -374,7 +374,7 @@ impl Model for WithLaws {
     fn output_names(&self) -> Vec<&'static str> {
         self.inner.output_names()
     }
-    fn guess_procedure(&self) -> Option<crate::guess::GuessFn> {
+    fn guess_procedure(&self) -> Option<crate::model::guess::GuessFn> {
         None
     }
     fn initial_guess(
@@ -384,7 +384,14 @@ impl Model for WithLaws {
         omega_f: f64,
         ode: &OdeOptions,
     ) -> Guess {
-        crate::guess::per_temperature(self.inner.as_ref(), &self.laws, curves, space, omega_f, ode)
+        crate::model::guess::per_temperature(
+            self.inner.as_ref(),
+            &self.laws,
+            curves,
+            space,
+            omega_f,
+            ode,
+        )
     }
     fn constants_at(&self, params: &[f64], temperature_c: f64) -> Vec<f64> {
         let n = self.laws.n_inner();

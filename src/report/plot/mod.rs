@@ -1,5 +1,5 @@
 //! PNG plots of calibration results: measured against predicted creep curves, residuals,
-//! engineering diagrams (stress–rupture, Norton, Larson–Miller; [`crate::report::diagrams`]),
+//! engineering diagrams (stress–rupture, Norton, Larson–Miller; [`crate::predict::diagrams`]),
 //! the multistart "waterfall", the spread of the best constants and profile likelihoods.
 //!
 //! Every exporter builds `canvas::PanelSpec`s (pure: axes, series, legend entries) and draws

@@ -12,7 +12,7 @@ pub const PLAIN_MIN: f64 = 1e-3;
 /// Tick positions and labels for an axis over `[lo, hi]`: between 2 and `max` ticks (max ≥ 5)
 /// inside the range for any finite range with lo < hi (lo > 0 on a log axis), every label
 /// distinct and with the digits its spacing needs, all labels of the axis in one format
-/// ([`tick_labels`]). Linear: multiples of 1, 2 or 5 × 10^k. Log: powers of ten when at least
+/// (`tick_labels`). Linear: multiples of 1, 2 or 5 × 10^k. Log: powers of ten when at least
 /// three fall inside (every 2nd, 5th … when too many); else 1, 2, 5 × 10^k when at least
 /// three fall inside, or 1…9 × 10^k when at least four do; else linear ticks (a range within
 /// one decade, such as 0.24–0.40, gets 0.24, 0.26, …, 0.40; 77–130 MPa gets 80, 90, …, 130).

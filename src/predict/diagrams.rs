@@ -15,16 +15,17 @@
 
 use std::path::Path;
 
+use super::{horizon, simulate_at};
 use crate::config::RunConfig;
+use crate::data::Condition;
 use crate::data::Dataset;
 use crate::lmp::{self, LarsonMiller};
 use crate::model::Model;
-use crate::predict::{horizon, simulate_at, Condition};
 use crate::report::plot::{
     plot_xy, temperature_colors, AxisScale, Dash, MarkerShape, Rgb, XyAxes, XyGroup,
 };
 
-/// The files [`write_diagrams`] writes (`larson_miller.png` only with a baseline).
+/// The files [`Diagrams::write`] writes (`larson_miller.png` only with a baseline).
 pub const FILES: [&str; 3] = ["stress_rupture.png", "norton.png", "larson_miller.png"];
 
 /// A condition asked of `predict` with the model's prediction there (drawn as a triangle).
@@ -425,7 +426,7 @@ impl Diagrams<'_> {
 mod tests {
     use super::*;
     use crate::config::Overrides;
-    use crate::model::ZERO_CELSIUS_K;
+    use crate::data::ZERO_CELSIUS_K;
 
     /// The joint seed configuration (560 and 590 °C, three curves each) at its start values.
     fn joint() -> (RunConfig, Dataset, Box<dyn Model>, Vec<f64>) {

@@ -6,8 +6,10 @@
 //! baselines ([`crate::baseline`]) fitted to the rupture times of the configuration's data,
 //! each marked where the condition lies outside the temperatures or stresses it was fitted
 //! on, so that the model's life is always shown next to the standard ones. The plots a creep
-//! engineer reads: the predicted curves and the diagrams of [`crate::report::diagrams`]
+//! engineer reads: the predicted curves and the diagrams of [`crate::predict::diagrams`]
 //! (stress–rupture, Norton, Larson–Miller) with the asked conditions on them.
+
+pub mod diagrams;
 
 use std::path::Path;
 
@@ -16,73 +18,20 @@ use serde_json::{json, Value};
 
 pub use crate::baseline::Extrapolation;
 use crate::baseline::{self, Baseline, BaselineKind, BaselineSettings};
+use crate::baseline::{Tested, STRESS_MARGIN_FACTOR, TEMPERATURE_MARGIN_C};
 use crate::config::RunConfig;
+use crate::data::Condition;
 use crate::data::Dataset;
 use crate::error::{Error, Result};
 use crate::lmp::LarsonMiller;
+use crate::model::objective::HORIZON_FACTOR;
 use crate::model::{Load, Model};
-use crate::objective::HORIZON_FACTOR;
 use crate::ode::{OdeOptions, Outcome};
-use crate::report::diagrams::{Asked, Diagrams};
 use crate::report::plot::{
     plot_creep_curves, plot_xy, AxisScale, CurveId, CurvePlot, Dash, Rgb, XyAxes, XyGroup,
 };
 use crate::report::tables::{self, jnum, num, write_csv, write_csv_rows, write_text};
-
-/// One condition to predict: temperature (°C) and stress (MPa).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Condition {
-    /// Test temperature, °C.
-    #[serde(rename = "temperature_C")]
-    pub temperature_c: f64,
-    /// Nominal stress, MPa.
-    #[serde(rename = "stress_MPa")]
-    pub stress_mpa: f64,
-}
-
-impl Condition {
-    /// Parse `T:σ` (°C and MPa), e.g. `575:100`.
-    pub fn parse(s: &str) -> std::result::Result<Condition, String> {
-        let (t, sig) = s
-            .trim()
-            .split_once(':')
-            .ok_or_else(|| format!("'{s}': expected T:stress (°C:MPa), e.g. 575:100"))?;
-        let t: f64 = t
-            .trim()
-            .parse()
-            .map_err(|_| format!("'{s}': cannot parse the temperature '{}'", t.trim()))?;
-        let sig: f64 = sig
-            .trim()
-            .parse()
-            .map_err(|_| format!("'{s}': cannot parse the stress '{}'", sig.trim()))?;
-        if !(t.is_finite() && t > -crate::model::ZERO_CELSIUS_K) {
-            return Err(format!(
-                "'{s}': the temperature must be above absolute zero (°C)"
-            ));
-        }
-        if !(sig.is_finite() && sig > 0.0) {
-            return Err(format!("'{s}': the stress must be positive (MPa)"));
-        }
-        Ok(Condition {
-            temperature_c: t,
-            stress_mpa: sig,
-        })
-    }
-
-    /// Parse a comma-separated list `T:σ[,T:σ…]`.
-    pub fn parse_list(s: &str) -> std::result::Result<Vec<Condition>, String> {
-        s.split(',')
-            .filter(|p| !p.trim().is_empty())
-            .map(Condition::parse)
-            .collect()
-    }
-
-    /// `575 °C, 100 MPa`.
-    pub fn label(&self) -> String {
-        format!("{} °C, {} MPa", self.temperature_c, self.stress_mpa)
-    }
-}
+use diagrams::{Asked, Diagrams};
 
 /// The model's prediction at one condition.
 #[derive(Debug, Clone, PartialEq)]
@@ -126,126 +75,6 @@ impl ConstantsSource {
             ConstantsSource::Given => "given",
             ConstantsSource::MlRefit => "ml_refit",
         }
-    }
-}
-
-/// Farthest a prediction may lie outside the tested temperatures, °C (beyond: an error). A
-/// creep mechanism (and the activation energy a temperature law carries) can change within
-/// some tens of kelvin; 25 °C keeps a prediction close to the data.
-pub const TEMPERATURE_MARGIN_C: f64 = 25.0;
-/// Farthest a prediction may lie outside the stresses tested at its temperature, as a factor
-/// (beyond: an error): 1.5 below the lowest or above the highest. With the stress exponents
-/// of these alloys (5–10) a factor 1.5 in stress is already a factor 8–60 in life.
-pub const STRESS_MARGIN_FACTOR: f64 = 1.5;
-
-/// The tested conditions of a data set: each tested temperature with the range of stresses
-/// tested there, and whether the configuration has temperature laws.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Tested {
-    /// (temperature °C, lowest stress MPa, highest stress MPa), ascending temperature.
-    pub temperatures: Vec<(f64, f64, f64)>,
-    /// Whether some constant follows a temperature law: without one the constants describe
-    /// the tested temperature only.
-    pub laws: bool,
-}
-
-/// Relative closeness of two temperatures or stresses typed by people.
-fn same(a: f64, b: f64) -> bool {
-    (a - b).abs() <= 1e-9 * a.abs().max(b.abs()).max(1.0)
-}
-
-impl Tested {
-    /// The tested conditions of `data`.
-    pub fn of(data: &Dataset, laws: bool) -> Tested {
-        let mut temperatures: Vec<(f64, f64, f64)> = Vec::new();
-        for c in &data.curves {
-            match temperatures.iter_mut().find(|t| same(t.0, c.temperature_c)) {
-                Some(t) => {
-                    t.1 = t.1.min(c.stress_mpa);
-                    t.2 = t.2.max(c.stress_mpa);
-                }
-                None => temperatures.push((c.temperature_c, c.stress_mpa, c.stress_mpa)),
-            }
-        }
-        temperatures.sort_by(|a, b| a.0.total_cmp(&b.0));
-        Tested { temperatures, laws }
-    }
-
-    /// The tested temperatures' range, °C.
-    pub fn temperature_range(&self) -> (f64, f64) {
-        (
-            self.temperatures.first().map_or(f64::NAN, |t| t.0),
-            self.temperatures.last().map_or(f64::NAN, |t| t.0),
-        )
-    }
-
-    /// The stresses (MPa) that count as tested at `t` °C: at a tested temperature its own
-    /// range; between two tested temperatures the union of theirs; outside the tested
-    /// temperatures the nearest one's.
-    pub fn stress_range(&self, t: f64) -> (f64, f64) {
-        let ts = &self.temperatures;
-        if ts.is_empty() {
-            return (f64::NAN, f64::NAN);
-        }
-        if let Some(x) = ts.iter().find(|x| same(x.0, t)) {
-            return (x.1, x.2);
-        }
-        if t < ts[0].0 {
-            return (ts[0].1, ts[0].2);
-        }
-        let last = ts[ts.len() - 1];
-        if t > last.0 {
-            return (last.1, last.2);
-        }
-        let k = ts.iter().position(|x| x.0 > t).unwrap_or(ts.len() - 1);
-        let (a, b) = (ts[k - 1], ts[k]);
-        (a.1.min(b.1), a.2.max(b.2))
-    }
-
-    /// Where `c` lies: `Ok` with its extrapolation inside the margins
-    /// ([`TEMPERATURE_MARGIN_C`], [`STRESS_MARGIN_FACTOR`]), `Err` with why the
-    /// configuration cannot predict it (another temperature without a temperature law, or
-    /// beyond a margin).
-    pub fn classify(&self, c: Condition) -> std::result::Result<Extrapolation, String> {
-        let (t0, t1) = self.temperature_range();
-        let (t, s) = (c.temperature_c, c.stress_mpa);
-        if !(t0.is_finite() && t1.is_finite()) {
-            return Err("the data hold no tested condition".into());
-        }
-        if !self.laws && !self.temperatures.iter().any(|x| same(x.0, t)) {
-            return Err(format!(
-                "{t} °C is not a tested temperature and the configuration has no temperature law: its constants describe {} °C only; predict at {}, or give constants a temperature law (e.g. law = \"arrhenius\" on A, docs/FORMATS.md) and fit curves at several temperatures",
-                self.temperatures
-                    .iter()
-                    .map(|x| x.0.to_string())
-                    .collect::<Vec<_>>()
-                    .join(", "),
-                self.temperatures
-                    .iter()
-                    .map(|x| format!("{} °C", x.0))
-                    .collect::<Vec<_>>()
-                    .join(" or ")
-            ));
-        }
-        if t < t0 - TEMPERATURE_MARGIN_C || t > t1 + TEMPERATURE_MARGIN_C {
-            return Err(format!(
-                "{t} °C is more than {TEMPERATURE_MARGIN_C} °C outside the tested temperatures ({t0}–{t1} °C): beyond what the configuration can predict (docs/FORMATS.md, \"Limits of a prediction\")"
-            ));
-        }
-        let (s0, s1) = self.stress_range(t);
-        if s < s0 / STRESS_MARGIN_FACTOR || s > s1 * STRESS_MARGIN_FACTOR {
-            return Err(format!(
-                "{s} MPa is more than a factor {STRESS_MARGIN_FACTOR} outside the stresses tested at {t} °C ({s0}–{s1} MPa): beyond what the configuration can predict (docs/FORMATS.md, \"Limits of a prediction\")"
-            ));
-        }
-        let in_t = t >= t0 && t <= t1;
-        let in_s = s >= s0 && s <= s1;
-        Ok(match (in_t, in_s) {
-            (true, true) => Extrapolation::None,
-            (true, false) => Extrapolation::Stress,
-            (false, true) => Extrapolation::Temperature,
-            (false, false) => Extrapolation::Both,
-        })
     }
 }
 
@@ -976,7 +805,7 @@ pub const BAND_COLUMNS: [&str; 6] = [
 ];
 
 /// Most measured points a plot draws per curve.
-const PLOT_POINTS: usize = 2000;
+pub const PLOT_POINTS: usize = 2000;
 
 /// A polyline of (time h, strain %).
 pub type Line = Vec<(f64, f64)>;
@@ -1158,58 +987,43 @@ fn plots(
     failures
 }
 
-/// The constants' reference temperature written with them (`T_ref` row of constants.csv),
-/// if the file has one.
-pub fn constants_t_ref(path: &Path) -> Result<Option<(f64, usize)>> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    constants_t_ref_text(path, &text)
-}
-
-/// [`constants_t_ref`] of a constants table's text in memory, named `path` in errors.
-pub fn constants_t_ref_text(path: &Path, text: &str) -> Result<Option<(f64, usize)>> {
-    for (i, line) in text.lines().enumerate() {
-        let mut f = line.split(',');
-        if f.next().map(str::trim) == Some(tables::T_REF_ROW) {
-            let v = f.next().unwrap_or("").trim();
-            let t: f64 = v.parse().map_err(|_| {
-                Error::data(
-                    path,
-                    i + 1,
-                    format!("column 'value': cannot parse '{v}' as a number"),
-                )
-            })?;
-            return Ok(Some((t, i + 1)));
-        }
-    }
-    Ok(None)
-}
-
-/// Constants fitted about another reference temperature than the configuration's mean
-/// different constants: an error naming both.
-pub fn check_t_ref(path: &Path, cfg: &RunConfig) -> Result<()> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    check_t_ref_text(path, &text, cfg)
-}
-
-/// [`check_t_ref`] of a constants table's text in memory, named `path` in errors.
-pub fn check_t_ref_text(path: &Path, text: &str, cfg: &RunConfig) -> Result<()> {
-    if let Some((t, line)) = constants_t_ref_text(path, text)? {
-        match cfg.t_ref {
-            Some(c) if c == t => {}
-            other => {
-                return Err(Error::data(
-                    path,
-                    line,
-                    format!(
-                        "T_ref: these constants are about T_ref = {t} °C, the configuration resolves T_ref = {}; set T_ref = {t} in {}",
-                        other.map_or("none (no temperature laws)".to_string(), |c| format!("{c} °C")),
-                        cfg.path.display()
-                    ),
-                ))
+/// Measured points and dense predicted curves for a plot.
+pub fn curve_plots(
+    cfg: &RunConfig,
+    data: &Dataset,
+    params: &[f64],
+    ode: &OdeOptions,
+    model: &dyn crate::model::Model,
+) -> Vec<CurvePlot> {
+    data.curves
+        .iter()
+        .map(|c| {
+            let load = Load::of_curve(c, cfg.objective.omega_f);
+            let span = c
+                .rupture_time_h
+                .unwrap_or(0.0)
+                .max(*c.times_h.last().unwrap_or(&0.0));
+            let o = OdeOptions {
+                t_end: crate::model::objective::HORIZON_FACTOR * span,
+                ..*ode
+            };
+            let res = model.simulate(params, &load, &[], &mut [], &o);
+            let grid = crate::predict::dense_grid(res.t_end, 400);
+            let (_, traj) = model.trajectory(params, &load, &grid, &o);
+            CurvePlot {
+                id: CurveId::of(c),
+                measured: tables::thin(
+                    c.times_h
+                        .iter()
+                        .zip(&c.strains)
+                        .map(|(t, e)| (*t, 100.0 * e))
+                        .collect(),
+                    PLOT_POINTS,
+                ),
+                predicted: traj.iter().map(|(t, e, _)| (*t, 100.0 * e)).collect(),
             }
-        }
-    }
-    Ok(())
+        })
+        .collect()
 }
 
 #[cfg(test)]

@@ -15,9 +15,11 @@
 
 use nalgebra::DMatrix;
 
-use crate::config::LifetimeTerm;
+use serde::{Deserialize, Serialize};
+
 use crate::data::Curve;
 use crate::dual::{Dual, Scalar, SENS, SENS_WIDE};
+use crate::lsq::LmOptions;
 use crate::lsq::{EvalFailure, LeastSquaresProblem, NormalEquations};
 use crate::model::{Load, Model, Scale};
 use crate::ode::{OdeOptions, Outcome, SimResult};
@@ -205,7 +207,7 @@ impl SimScalar for Dual<SENS_WIDE> {
 }
 
 /// What eq. 8 needs besides the model, the curves and the weights; taken from the resolved
-/// configuration ([`crate::fit::FitSettings::objective`]).
+/// configuration ([`FitSettings::objective`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ObjectiveSettings {
     /// Which lifetime errors count.
@@ -981,6 +983,62 @@ impl DualBuffer for Dual<SENS> {
 impl DualBuffer for Dual<SENS_WIDE> {
     fn with_buffer<R>(f: impl FnOnce(&mut Vec<Self>) -> R) -> R {
         DUAL_RESIDUALS_WIDE.with(|b| f(&mut b.borrow_mut()))
+    }
+}
+
+/// Which side of the lifetime error enters the objective (eq. 8).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LifetimeTerm {
+    /// Only when the prediction ruptures later than measured (the paper).
+    #[default]
+    Late,
+    /// Always.
+    Both,
+}
+
+/// What a local fit minimises.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ObjectiveKind {
+    /// The seed paper's eq. 8 at each lifetime weight w (README, "Choices").
+    #[default]
+    Eq8,
+    /// −2 ln L under the error model ([`crate::likelihood`]: AR(1) reading error per curve,
+    /// log-normal rupture-time scatter, both estimated with the constants): the strain and
+    /// lifetime terms weighed by their own measured scatter instead of by w, and a densely
+    /// logged curve counts as much as its correlated errors say, not by its point count.
+    Likelihood,
+}
+
+/// Numerical settings of a fit: a view of the resolved `RunConfig`, derived from it only
+/// by `FitSettings::from_config` (in `crate::config`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FitSettings {
+    /// Levenberg–Marquardt options (unit-box coordinates).
+    pub lm: LmOptions,
+    /// Integration options.
+    pub ode: OdeOptions,
+    /// Damage at rupture ω_f.
+    pub omega_f: f64,
+    /// Lifetime term of eq. 8.
+    pub lifetime: LifetimeTerm,
+    /// How the local fits' Jacobian is computed.
+    pub jacobian: JacobianMethod,
+    /// What the local fits minimise.
+    pub kind: ObjectiveKind,
+    /// Floor of the rupture-time scatter (ln scale) under [`ObjectiveKind::Likelihood`].
+    pub lifetime_sd_floor: f64,
+}
+
+impl FitSettings {
+    /// What eq. 8 takes of these settings.
+    pub fn objective(&self) -> ObjectiveSettings {
+        ObjectiveSettings {
+            lifetime: self.lifetime,
+            omega_f: self.omega_f,
+            ode: self.ode,
+        }
     }
 }
 

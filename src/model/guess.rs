@@ -13,8 +13,8 @@ use serde::Serialize;
 
 use crate::data::Curve;
 use crate::model::law::Laws;
+use crate::model::objective::ParamSpace;
 use crate::model::{LawKind, Model, Scale, ZERO_CELSIUS_K};
-use crate::objective::ParamSpace;
 use crate::ode::OdeOptions;
 
 /// How a start point was made.
