@@ -344,7 +344,7 @@ class Problem:
 
     def jacobian_unit(self, u, step):
         """Forward differences with an absolute step in the unit box, stepping inward where a
-        forward step would leave [0, 1] -- creepfit's scheme (src/lsq/mod.rs fd_jacobian).
+        forward step would leave [0, 1] -- creepfit's scheme (src/numerics/lsq/mod.rs fd_jacobian).
 
         SciPy's own jac="2-point" takes diff_step as a *relative* step (h = diff_step * |u|),
         which vanishes near u = 0: at a constant close to its lower bound (A, H* here) the

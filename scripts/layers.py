@@ -1,16 +1,16 @@
 #!/usr/bin/env python3
 """The crate's layers: import circles and upward imports between top-level modules (issue 21).
 
-Reads every src/**/*.rs, maps it to its top-level module (src/fit.rs -> fit,
-src/diagnose/gof.rs -> diagnose), collects references to `crate::<module>` in code (`use`
+Reads every src/**/*.rs, maps it to its top-level module (src/calibration/fit.rs -> fit,
+src/analysis/diagnose/gof.rs -> diagnose; each layer is a folder of src/), collects references to `crate::<module>` in code (`use`
 lines and paths; comment lines, and so doc links, do not count: they are no dependency; test
 modules do not count either: they may reach anywhere), and checks that graph against the
 LAYER table below: a module may import only from its own layer or a lower one.
 
 Prints every circle (strongly connected component of more than one module) with its edge
 count, every upward edge (an import from a higher layer), and a one-line summary. Exit status
-1 when there is a circle, when more than MAX_UPWARD edges go upward, or when a module is
-missing from the table.
+1 when there is a circle, when more than MAX_UPWARD edges go upward, when a module is
+missing from the table, or when a module's file is not in its layer's folder.
 
     scripts/layers.py            # the check
     scripts/layers.py --edges    # also every edge, module -> module (files that make it)
@@ -54,8 +54,36 @@ MAX_UPWARD = 2
 
 LAYER = {m: i for i, (_, ms) in enumerate(LAYERS) for m in ms}
 src = Path(__file__).resolve().parent.parent / "src"
-mods = {p.stem for p in src.glob("*.rs")} | {p.name for p in src.iterdir() if p.is_dir()}
-mods -= {"lib", "main"}
+# Each layer is a folder of src/ holding its modules (src/numerics/ode/, src/calibration/fit.rs);
+# `data` and `model` are themselves the data and model layers' folders (src/data/specimen.rs is
+# the data layer's second module). The crate root re-exports every module under its own name.
+FOLDERS = {name for name, _ in LAYERS} - {"data", "model"}
+
+
+def module_of(rel):
+    """The top-level module a file of src/ belongs to (None: lib.rs, main.rs, a layer's mod.rs)."""
+    p = rel.parts
+    if p[0] in FOLDERS:
+        return None if len(p) == 1 or p[1] == "mod.rs" else Path(p[1]).stem
+    if p[0] == "data" and len(p) > 1 and Path(p[1]).stem == "specimen":
+        return "specimen"
+    if len(p) == 1 and rel.stem in ("lib", "main"):
+        return None
+    return p[0] if len(p) > 1 else rel.stem
+
+
+def layer_folder(rel):
+    """The layer a file's folder says it is in."""
+    return "data" if rel.parts[0] in ("data", "data.rs") else rel.parts[0].removesuffix(".rs")
+
+
+def referenced(m, n):
+    """The module a path `crate::m::n` reaches (through a layer folder or directly)."""
+    if m in FOLDERS:
+        return n
+    if m == "data" and n == "specimen":
+        return "specimen"
+    return m
 
 
 def code_of(text):
@@ -64,14 +92,17 @@ def code_of(text):
     return "\n".join(l for l in text.splitlines() if not l.lstrip().startswith("//"))
 
 
+files = {f.relative_to(src): module_of(f.relative_to(src)) for f in src.rglob("*.rs")}
+mods = {m for m in files.values() if m}
+misplaced = sorted({(m, str(rel)) for rel, m in files.items()
+                    if m in LAYER and layer_folder(rel) != LAYERS[LAYER[m]][0]})
 edges = defaultdict(set)
-for f in src.rglob("*.rs"):
-    rel = f.relative_to(src)
-    me = rel.parts[0] if len(rel.parts) > 1 else rel.stem
-    if me in ("lib", "main"):
+for rel, me in files.items():
+    if me is None:
         continue
-    text = code_of(f.read_text())
-    for m in re.findall(r"crate::([a-z_0-9]+)", text):
+    text = code_of((src / rel).read_text())
+    for m, n in re.findall(r"crate::([a-z_0-9]+)(?:::([a-z_0-9]+))?", text):
+        m = referenced(m, n)
         if m in mods and m != me:
             edges[(me, m)].add(str(rel))
     for m in re.findall(r"use crate::\{([^}]*)\}", text):
@@ -118,7 +149,9 @@ upward = sorted((a, b) for (a, b) in edges if a in LAYER and b in LAYER and LAYE
 for a, b in upward:
     print(f"upward: {a} ({LAYERS[LAYER[a]][0]}) -> {b} ({LAYERS[LAYER[b]][0]}): "
           f"{', '.join(sorted(edges[(a, b)]))}")
-ok = not circles and not unplaced and len(upward) <= MAX_UPWARD
+for m, f in misplaced:
+    print(f"{f}: module {m} is in layer {LAYERS[LAYER[m]][0]}, not in this folder")
+ok = not circles and not unplaced and not misplaced and len(upward) <= MAX_UPWARD
 print(f"{len(mods)} modules in {len(LAYERS)} layers, {len(edges)} edges, {len(circles)} circle(s), "
       f"{len(upward)} upward edge(s) (at most {MAX_UPWARD}): {'ok' if ok else 'FAILED'}")
 sys.exit(0 if ok else 1)

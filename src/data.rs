@@ -13,6 +13,7 @@ use std::path::Path;
 use crate::error::{Error, Result};
 
 mod min_rate;
+pub mod specimen;
 mod table;
 
 /// 0 °C in K: files give temperatures in °C, the model's load and the temperature laws work

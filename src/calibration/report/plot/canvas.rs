@@ -39,7 +39,7 @@ pub const PANEL_HEIGHT: u32 = 420;
 pub const PANEL_LEGEND_WIDTH: u32 = 290;
 
 /// The embedded font (DejaVu Sans, see `assets/DejaVu-LICENSE.txt`).
-static FONT_BYTES: &[u8] = include_bytes!("../../../assets/DejaVuSans.ttf");
+static FONT_BYTES: &[u8] = include_bytes!("../../../../assets/DejaVuSans.ttf");
 /// The family name under which the embedded font is registered and used.
 pub const FONT: &str = "sans-serif";
 

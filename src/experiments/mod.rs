@@ -1,0 +1,3 @@
+//! Experiments over many generated worlds: the battery that calibrates `diagnose`.
+
+pub mod battery;
