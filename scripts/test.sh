@@ -5,9 +5,9 @@
 # into a virtualenv, its pytest suite against the binary the Rust suite built).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-echo "== module layers (scripts/layers.py)"
+echo "== $(date +%T) module layers (scripts/layers.py)"
 python3 scripts/layers.py
-echo "== cargo test --release"
+echo "== $(date +%T) cargo test --release"
 cargo test --release
-echo "== Python package (scripts/test_python.sh)"
+echo "== $(date +%T) Python package (scripts/test_python.sh)"
 scripts/test_python.sh
