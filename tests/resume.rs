@@ -359,15 +359,15 @@ fn on_a_terminal(args: &[&str]) -> (std::process::ExitStatus, String) {
             OwnedFd::from_raw_fd(slave),
         )
     };
-    let child = {
+    // `cmd`, and with it the parent's copy of the terminal's other end, is dropped at the end
+    // of this block, so that reading ends once the child has exited.
+    let mut child = {
         let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_creepfit"));
         cmd.args(args)
             .current_dir(root())
             .stdout(std::process::Stdio::null())
             .stderr(std::process::Stdio::from(slave));
         cmd.spawn().expect("binary runs")
-        // `cmd` and with it the parent's copy of the terminal's other end are dropped here,
-        // so that reading ends once the child has exited.
     };
     let reader = std::thread::spawn(move || {
         let mut out = Vec::new();
@@ -381,7 +381,6 @@ fn on_a_terminal(args: &[&str]) -> (std::process::ExitStatus, String) {
         }
         String::from_utf8_lossy(&out).into_owned()
     });
-    let mut child = child;
     let status = child.wait().unwrap();
     (status, reader.join().unwrap())
 }

@@ -345,14 +345,14 @@ pub fn run_battery(
     world: World,
     progress: bool,
 ) -> Result<Vec<SetResult>> {
-    let bars;
-    let observer: &dyn crate::progress::Observer = if progress {
-        bars = crate::progress::Bars::new(false);
-        &bars
-    } else {
-        &crate::progress::SILENT
-    };
-    run_battery_observed(dir, first_seed, n, world, observer)
+    // Quiet bars draw and print nothing.
+    run_battery_observed(
+        dir,
+        first_seed,
+        n,
+        world,
+        &crate::progress::Bars::new(!progress),
+    )
 }
 
 /// [`run_battery`] telling `observer` of every finished set (a step, and a line with its

@@ -379,14 +379,14 @@ pub fn run_coverage(
     s: &CoverageSettings,
     progress: bool,
 ) -> Result<Vec<SetCoverage>> {
-    let bars;
-    let observer: &dyn crate::progress::Observer = if progress {
-        bars = crate::progress::Bars::new(false);
-        &bars
-    } else {
-        &crate::progress::SILENT
-    };
-    run_coverage_observed(dir, first_seed, n, s, observer)
+    // Quiet bars draw and print nothing.
+    run_coverage_observed(
+        dir,
+        first_seed,
+        n,
+        s,
+        &crate::progress::Bars::new(!progress),
+    )
 }
 
 /// [`run_coverage`] telling `observer` of every finished set (a step, and a line with its
