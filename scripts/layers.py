@@ -44,11 +44,14 @@ LAYERS = [
     # through `report`).
     ("calibration", ["fit", "report", "sweep"]),
     # Analysis commands on calibrated models.
-    ("analysis", ["predict", "diagnose", "uncertainty", "holdout"]),
+    ("analysis", ["predict", "simulate", "diagnose", "uncertainty", "holdout"]),
     # Experiments over many synthetic worlds.
     ("experiments", ["battery"]),
-    # The command line (src/main.rs is only its entry point).
-    ("app", ["cli"]),
+    # Exporters: each command's result written to its files and the console.
+    ("io", ["export"]),
+    # The command line parsed, resolved and dispatched to the commands (src/main.rs is only
+    # its entry point).
+    ("app", ["cli", "commands"]),
 ]
 MAX_UPWARD = 2
 

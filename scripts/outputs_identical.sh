@@ -5,7 +5,8 @@
 #
 # Runs each binary, one after the other, on the bundled data: fit (560 °C and alloy 617), a
 # small sweep (tests/data/sweep_small.toml), diagnose and profile (560 °C), predict at
-# 560:70 with intervals from that binary's own fit, and holdout (cmv-joint, which refuses:
+# 560:70 with intervals from that binary's own fit, simulate with the objective at w 0.5,
+# two synth sets, one shard of the small sweep merged (partial; refused under --require-all), and holdout (cmv-joint, which refuses:
 # two temperatures; alloy 617 with 950 °C left out, with intervals). stdout and stderr of
 # the whole run are compared too.
 # Both runs use the same paths (the binary copied to one place, the outputs under one
@@ -37,6 +38,14 @@ run_all() { # $1: binary; runs in $work/run, outputs under out/
         "$bin" profile "$cfg/560C.toml" --out out/profile -q
         "$bin" predict "$cfg/560C.toml" --constants out/fit-560C/constants.csv \
             --at 560:70 --intervals --out out/predict -q
+        "$bin" simulate "$cfg/560C.toml" --constants out/fit-560C/constants.csv --w 0.5 \
+            --out out/simulate
+        "$bin" synth out/synth --sets 2 --seed 7
+        "$bin" sweep "$root/tests/data/sweep_small.toml" --shard 1/2 --out out/shard-1 -q
+        "$bin" merge out/shard-1 out/shard-2 --out out/merge-partial \
+            || echo "merge: exit $?"
+        "$bin" merge out/shard-1 --require-all --out out/merge-refused \
+            || echo "merge --require-all: exit $?"
         # cmv-joint has two temperatures: leaving one out leaves too few for its laws, and
         # both binaries must refuse it alike (the message is compared in stderr.txt).
         "$bin" holdout "$cfg/cmv-joint.toml" --temperature 590 --starts 4 --out out/holdout-cmv -q \

@@ -524,7 +524,7 @@ fn diagnose(
     run_detached(py, progress.as_ref(), move |_| {
         let mut warnings = Vec::new();
         let (cfg, data) = resolve(&src, &cli, tables.as_ref(), &mut warnings)?;
-        creepfit::cli::diagnose_check(&cfg, &data)?;
+        creepfit::diagnose::check(&cfg, &data)?;
         let d = with_threads(cfg.run.threads, || {
             creepfit::diagnose::diagnose(&cfg, &data)
         })?;

@@ -4,4 +4,5 @@
 pub mod diagnose;
 pub mod holdout;
 pub mod predict;
+pub mod simulate;
 pub mod uncertainty;

@@ -992,6 +992,25 @@ fn gof_bootstrap(
         .collect())
 }
 
+/// What `diagnose` refuses before it starts: data at several temperatures without a
+/// temperature law.
+pub fn check(cfg: &RunConfig, data: &Dataset) -> Result<()> {
+    let mut temps: Vec<f64> = data.curves.iter().map(|c| c.temperature_c).collect();
+    temps.sort_by(f64::total_cmp);
+    temps.dedup();
+    if temps.len() > 1 && !cfg.has_laws() {
+        return Err(Error::config(
+            &cfg.path,
+            format!(
+                "temperature_C: diagnose works at one temperature unless a constant follows a temperature law; the data have {} ({} °C): set temperature_C",
+                temps.len(),
+                temps.iter().map(|t| t.to_string()).collect::<Vec<_>>().join(", ")
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// Diagnose the configuration's data with the configuration's `[diagnose]` settings.
 pub fn diagnose(cfg: &RunConfig, data: &Dataset) -> Result<Diagnosis> {
     diagnose_with(cfg, data, &cfg.diagnose)

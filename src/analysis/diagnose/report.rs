@@ -312,3 +312,62 @@ fn specimens_md(d: &Diagnosis, cfg: &RunConfig) -> String {
     }
     s
 }
+
+/// The residual series of the base model and of the chosen (else the lowest-AIC) extension,
+/// on the curves diagnose worked on (each binned to `max_points`): per curve, (t / t_f,
+/// predicted − measured strain in % of the rupture strain), thinned to
+/// [`crate::report::plot::PLOT_POINTS`]. Returned as (candidate name, series), base first.
+pub fn residual_series(
+    cfg: &RunConfig,
+    data: &crate::data::Dataset,
+    d: &Diagnosis,
+) -> crate::error::Result<Vec<(String, Vec<crate::report::plot::CurveSeries>)>> {
+    use crate::report::plot::{CurveId, CurveSeries};
+    let chosen = d
+        .candidates
+        .iter()
+        .find(|c| Some(&c.name) == d.cause.as_ref())
+        .or_else(|| {
+            d.candidates
+                .iter()
+                .filter(|c| c.aic.is_finite())
+                .min_by(|a, b| a.aic.total_cmp(&b.aic))
+        });
+    let curves: Vec<crate::data::Curve> = data
+        .curves
+        .iter()
+        .map(|c| crate::data::binned(c, cfg.diagnose.max_points))
+        .collect();
+    let settings = crate::fit::FitSettings::from_config(cfg);
+    let mut out = Vec::new();
+    for c in std::iter::once(&d.base).chain(chosen) {
+        let mut exts = cfg.extensions.clone();
+        if c.name != "base" {
+            exts.push(c.name.clone());
+        }
+        let model = cfg.build_model_with(&exts)?;
+        let x: Vec<f64> = c.constants.iter().map(|p| p.1).collect();
+        let obj = crate::likelihood::raw_objective(model.as_ref(), &curves, &settings);
+        let ev = obj.evaluate(&x);
+        let series: Vec<CurveSeries> = curves
+            .iter()
+            .zip(&ev.curves)
+            .map(|(cu, p)| CurveSeries {
+                id: CurveId::of(cu),
+                points: crate::report::tables::thin(
+                    (0..cu.times_h.len())
+                        .map(|k| {
+                            (
+                                cu.times_h[k] / cu.life_h(),
+                                100.0 * (p.strain[k] - cu.strains[k]) / cu.rupture_strain,
+                            )
+                        })
+                        .collect(),
+                    crate::report::plot::PLOT_POINTS,
+                ),
+            })
+            .collect();
+        out.push((c.name.clone(), series));
+    }
+    Ok(out)
+}

@@ -804,8 +804,7 @@ pub const BAND_COLUMNS: [&str; 6] = [
     "strain_conf_hi95_pct",
 ];
 
-/// Most measured points a plot draws per curve.
-pub const PLOT_POINTS: usize = 2000;
+pub use crate::report::plot::PLOT_POINTS;
 
 /// A polyline of (time h, strain %).
 pub type Line = Vec<(f64, f64)>;

@@ -16,7 +16,7 @@ use super::profile::{profile_constants, wald_se, ConstantProfile};
 use super::{fit_reference, reference_from, starts, Context, Reference, Thresholds};
 use crate::config::{ProfileConfig, RunConfig};
 use crate::data::Dataset;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::fit::{param_space, FitSettings};
 use crate::likelihood::MlOptions;
 use crate::model::guess::initial_guess;
@@ -827,17 +827,9 @@ pub fn identity(cfg: &RunConfig, given: Option<&[f64]>) -> serde_json::Value {
     id
 }
 
-/// Run `creepfit profile` on a configuration: compute, write, print the report.
-pub fn profile_command(cfg: &RunConfig, data: &Dataset, constants: Option<&Path>) -> Result<()> {
-    let model = cfg.build_model()?;
-    let given = match constants {
-        Some(p) => Some(crate::report::tables::read_constants_for(
-            p,
-            cfg,
-            model.as_ref(),
-        )?),
-        None => None,
-    };
+/// What `profile` refuses before it starts: a prediction load outside what the data tested
+/// (at a temperature not tested without a temperature law).
+pub fn check(cfg: &RunConfig, data: &Dataset) -> Result<()> {
     let tested = crate::baseline::Tested::of(data, cfg.has_laws());
     for (t, l) in loads(cfg, data, &cfg.profile) {
         let c = crate::data::Condition {
@@ -848,37 +840,5 @@ pub fn profile_command(cfg: &RunConfig, data: &Dataset, constants: Option<&Path>
             return Err(cfg.error_at("profile.predict_stress_MPa", why));
         }
     }
-    let out = cfg.out_dir("profile");
-    let (mut folder, journal) =
-        crate::journal::take_with_journal(&out, "profile", &identity(cfg, given.as_deref()))?;
-    crate::data::note_data(&mut folder, data);
-    let bars = crate::progress::Bars::new(!cfg.run.progress);
-    let stop = crate::progress::stop_after(&bars, &journal, cfg.run.stop_after);
-    let hooks = Hooks {
-        observer: &stop,
-        journal: Some(&journal),
-    };
-    folder.finish((|| {
-        let run = run_observed(cfg, data, given.as_deref(), &cfg.profile, &hooks);
-        bars.clear();
-        let run = run?;
-        let failures = write_outputs(cfg, &run, &out)?;
-        crate::report::tables::write_timings(
-            &out,
-            "profile",
-            Some(&journal),
-            json!({ "timings_s": run.timings }),
-        )?;
-        print!("{}", report_md(cfg, &run));
-        print!("{}", timings_line(&run));
-        println!("wrote {}", out.display());
-        if failures.is_empty() {
-            Ok(())
-        } else {
-            Err(Error::PlotsNotWritten {
-                out: out.to_path_buf(),
-                failures,
-            })
-        }
-    })())
+    Ok(())
 }

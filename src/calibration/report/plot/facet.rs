@@ -8,6 +8,9 @@ use super::CurveId;
 /// Most curves drawn in one panel.
 pub const MAX_PER_PANEL: usize = 6;
 
+/// Most measured points a plot draws per curve (thinned evenly beyond).
+pub const PLOT_POINTS: usize = 2000;
+
 /// One panel: its caption and the indices of its curves (ascending stress, then specimen).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Facet {

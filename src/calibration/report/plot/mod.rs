@@ -37,7 +37,7 @@ mod xy;
 
 pub use canvas::{HEIGHT, LEGEND_WIDTH, PANEL_HEIGHT, PANEL_WIDTH, WIDTH};
 pub use creep::{plot_creep_curves, CurvePlot, MAX_MARKERS, PREDICTED_EXTENT};
-pub use facet::MAX_PER_PANEL;
+pub use facet::{MAX_PER_PANEL, PLOT_POINTS};
 pub use profile::{plot_profile, ProfilePlot};
 pub use residuals::{plot_curve_residuals, plot_residuals, CurveSeries, Series};
 pub use style::{temperature_colors, Dash, MarkerShape, Rgb};
