@@ -10,7 +10,7 @@ use criterion::{black_box, criterion_group, criterion_main, Criterion};
 
 use creepfit::config::RunConfig;
 use creepfit::dual::{Dual, Scalar, SENS};
-use creepfit::fit::{local_fit, param_space, FitSettings};
+use creepfit::fit::{local_fit, FitSettings};
 use creepfit::lsq::LeastSquaresProblem;
 use creepfit::model::objective::{CreepProblem, JacobianMethod, Objective};
 use creepfit::model::{registry, CreepModel, Khd, KhdReduced, Load};
@@ -73,7 +73,7 @@ fn bench(c: &mut Criterion) {
     c.bench_function("residuals_560C", |b| {
         b.iter(|| objective.residuals(black_box(&start), &mut r).unwrap())
     });
-    let space = param_space(&cfg);
+    let space = cfg.space();
     let problem = CreepProblem {
         objective,
         space: space.clone(),

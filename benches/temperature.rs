@@ -24,7 +24,7 @@ use criterion::{black_box, criterion_group, criterion_main, Criterion};
 
 use creepfit::config::{RunConfig, StartChoice};
 use creepfit::data::{estimate_min_rate, Curve, Dataset};
-use creepfit::fit::{local_fit, param_space, run_fit, FitSettings};
+use creepfit::fit::{local_fit, run_fit, FitSettings};
 use creepfit::model::guess::initial_guess;
 use creepfit::model::objective::{Objective, ParamSpace};
 use creepfit::model::{build, with_laws, LawKind, Load, Model, Scale};
@@ -86,7 +86,7 @@ fn bench(c: &mut Criterion) {
     for name in ["560C.toml", "590C.toml", "cmv-joint.toml"] {
         let (cfg, data) = resolved(name, true);
         let model = cfg.build_model().unwrap();
-        let space = param_space(&cfg);
+        let space = cfg.space();
         let settings = FitSettings::from_config(&cfg);
         let guess = initial_guess(
             model.as_ref(),
@@ -178,7 +178,7 @@ fn bench(c: &mut Criterion) {
             })
         });
         g.bench_function(format!("fit_procedure_{stem}_guess"), |b| {
-            b.iter(|| run_fit(black_box(&cfg), &data).unwrap())
+            b.iter(|| run_fit(black_box(&cfg).calibration(&data).unwrap(), &data).unwrap())
         });
     }
     // Where a joint evaluation's time goes: eq. 8's residuals of the joint model at its

@@ -10,7 +10,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use creepfit::config::{Overrides, RunConfig};
-use creepfit::fit::{local_fit, param_space, FitSettings};
+use creepfit::fit::{local_fit, FitSettings};
 use creepfit::model::build;
 use creepfit::sweep::plan;
 use rayon::prelude::*;
@@ -27,9 +27,9 @@ fn main() -> anyhow::Result<()> {
         ..Overrides::default()
     };
     let (cfg, data) = RunConfig::resolve(Path::new(&args[1]), &cli)?;
-    let p = plan(&cfg, &data)?;
+    let p = plan(&cfg, &cfg.calibration(&data)?, &data)?;
     let model = build(&cfg.model, &cfg.extensions)?;
-    let space = param_space(&cfg);
+    let space = cfg.space();
     let settings = FitSettings::from_config(&cfg);
     let jobs: Vec<(usize, usize)> = (0..p.starts.len())
         .step_by(stride.max(1))

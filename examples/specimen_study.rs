@@ -6,7 +6,7 @@
 use std::time::Instant;
 
 use creepfit::config::RunConfig;
-use creepfit::fit::{param_space, FitSettings};
+use creepfit::fit::FitSettings;
 use creepfit::likelihood::{ml_fit, MlOptions, SpecimenOptions};
 use creepfit::synth::{generate_in, write_set, World};
 use rayon::prelude::*;
@@ -31,7 +31,7 @@ fn main() {
                 .map(|c| creepfit::data::binned(c, cfg.diagnose.max_points))
                 .collect();
             let model = cfg.build_model().expect("model");
-            let space = param_space(&cfg);
+            let space = cfg.space();
             let settings = FitSettings::from_config(&cfg);
             let start = set.truth.constants.clone();
             let t0 = Instant::now();

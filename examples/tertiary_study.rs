@@ -14,7 +14,7 @@ use std::path::Path;
 
 use creepfit::config::RunConfig;
 use creepfit::data::Curve;
-use creepfit::fit::{param_space, FitSettings};
+use creepfit::fit::FitSettings;
 use creepfit::likelihood::{ml_fit, MlFit, MlOptions};
 use creepfit::model::objective::ParamSpace;
 use creepfit::model::{build, ext, Load, Model};
@@ -98,7 +98,7 @@ fn main() {
             .map(|c| creepfit::data::binned(c, 60))
             .collect();
         let settings = FitSettings::from_config(&cfg);
-        let base_space = param_space(&cfg);
+        let base_space = cfg.space();
         let mut fitted: Vec<(Box<dyn Model>, MlFit)> = Vec::new();
         for exts in MODELS {
             let names: Vec<String> = exts.iter().map(|s| s.to_string()).collect();

@@ -63,7 +63,7 @@
 //! assert_eq!(data.curves.len(), 3); // 85, 100 and 110 MPa
 //!
 //! // The paper's procedure: local fits from the guess and the configured start.
-//! let run = creepfit::fit::run_fit(&cfg, &data)?;
+//! let run = creepfit::fit::run_fit(cfg.calibration(&data)?, &data)?;
 //! let best = &run.fits[run.best];
 //! let names: Vec<&str> = run.model.constants().iter().map(|c| c.name).collect();
 //! assert_eq!(names, ["A", "B", "Hstar", "h", "Kc", "C"]);

@@ -117,7 +117,9 @@ fn write_journal(dir: &Path, header: &Header) {
 }
 
 fn shard_journal(cfg: &RunConfig, data: &Dataset, dir: &Path, shard: (usize, usize)) {
-    let mut h = plan(cfg, data).unwrap().header;
+    let mut h = plan(cfg, &cfg.calibration(data).unwrap(), data)
+        .unwrap()
+        .header;
     h.shard = shard;
     write_journal(dir, &h);
 }

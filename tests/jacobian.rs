@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use creepfit::config::RunConfig;
-use creepfit::fit::{param_space, FitSettings};
+use creepfit::fit::FitSettings;
 use creepfit::lsq::LeastSquaresProblem;
 use creepfit::model::objective::{CreepProblem, JacobianMethod, Objective, ObjectiveSettings};
 use creepfit::model::registry;
@@ -44,7 +44,7 @@ fn column_errors(cfg_name: &str, model: &str, u: &[f64], w: f64) -> Vec<f64> {
             vec![w; data.curves.len()],
             settings,
         ),
-        space: param_space(&cfg),
+        space: cfg.space(),
         jacobian: JacobianMethod::Sensitivity,
     };
     let (m, n) = (problem.n_residuals(), problem.n_params());
@@ -122,7 +122,7 @@ fn fast_path_matches_four_state_path() {
     for cfg_name in ["560C.toml", "590C.toml"] {
         let cfg = config(cfg_name);
         let data = cfg.load_data().unwrap();
-        let space = param_space(&cfg);
+        let space = cfg.space();
         for u in POINTS {
             let mut x = vec![0.0; 6];
             space.from_unit(&u, &mut x);
@@ -181,7 +181,7 @@ fn fused_residuals_and_jacobian_agree_with_the_separate_calls() {
             vec![0.5; data.curves.len()],
             settings.objective(),
         ),
-        space: param_space(&cfg),
+        space: cfg.space(),
         jacobian: JacobianMethod::Sensitivity,
     };
     let (m, n) = (problem.n_residuals(), problem.n_params());

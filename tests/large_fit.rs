@@ -7,9 +7,7 @@ use std::path::Path;
 
 use creepfit::config::RunConfig;
 use creepfit::data::{estimate_min_rate, Curve};
-use creepfit::fit::{
-    is_large, local_fit, param_space, with_predictions, FitSettings, MULTIRES_BINNED_POINTS,
-};
+use creepfit::fit::{is_large, local_fit, with_predictions, FitSettings, MULTIRES_BINNED_POINTS};
 use creepfit::lsq::minimize;
 use creepfit::model::objective::{bin_curves, CreepProblem, Objective};
 use creepfit::model::{build, Load};
@@ -72,7 +70,7 @@ fn logged_curves(n: usize) -> Vec<Curve> {
 fn two_stage_fit_reaches_the_minimum_of_the_plain_fit() {
     let cfg = config();
     let settings = FitSettings::from_config(&cfg);
-    let space = param_space(&cfg);
+    let space = cfg.space();
     let model = build("khd", &[]).unwrap();
     let curves = logged_curves(100_000);
     assert!(is_large(&curves));

@@ -6,7 +6,7 @@
 use std::path::Path;
 
 use creepfit::config::RunConfig;
-use creepfit::fit::{param_space, FitSettings};
+use creepfit::fit::FitSettings;
 use creepfit::lsq::{LeastSquaresProblem, NormalEquations};
 use creepfit::model::objective::{CreepProblem, JacobianMethod, Objective};
 use nalgebra::{DMatrix, DVector};
@@ -47,7 +47,7 @@ fn streamed_normal_equations_equal_those_of_the_stored_jacobian() {
             let w: Vec<f64> = data.curves.iter().map(|_| rng.gen::<f64>()).collect();
             let problem = CreepProblem {
                 objective: Objective::new(model.as_ref(), &data.curves, w, settings.objective()),
-                space: param_space(&cfg),
+                space: cfg.space(),
                 jacobian: JacobianMethod::Sensitivity,
             };
             let (m, n) = (problem.n_residuals(), problem.n_params());

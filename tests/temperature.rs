@@ -72,7 +72,7 @@ fn assert_same_fit(base: &creepfit::fit::FitRun, laws: &creepfit::fit::FitRun) {
 #[test]
 fn joint_fit_at_one_temperature_equals_todays_fit() {
     let (cfg, data) = resolved(&file("560C.toml"), "560C.toml");
-    let base = run_fit(&cfg, &data).unwrap();
+    let base = run_fit(cfg.calibration(&data).unwrap(), &data).unwrap();
     assert!((base.fits[base.best].eval.objective - 0.381015).abs() < 5e-7);
 
     // Laws declared, one temperature in the data: T_ref is that temperature and the
@@ -90,7 +90,7 @@ fn joint_fit_at_one_temperature_equals_todays_fit() {
         "{:?}",
         lcfg.warnings
     );
-    let laws = run_fit(&lcfg, &ldata).unwrap();
+    let laws = run_fit(lcfg.calibration(&ldata).unwrap(), &ldata).unwrap();
     assert_eq!(laws.model.constants().len(), 8);
     assert_same_fit(&base, &laws);
 
@@ -100,7 +100,7 @@ fn joint_fit_at_one_temperature_equals_todays_fit() {
         .replace("model = \"khd\"", "model = \"khd\"\nT_ref = 575");
     let (zcfg, zdata) = resolved(&text, "560C-q0.toml");
     assert_eq!(zcfg.t_ref, Some(575.0));
-    let zero = run_fit(&zcfg, &zdata).unwrap();
+    let zero = run_fit(zcfg.calibration(&zdata).unwrap(), &zdata).unwrap();
     assert_same_fit(&base, &zero);
 }
 

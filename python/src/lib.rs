@@ -392,7 +392,7 @@ fn fit(
     run_detached(py, None, move |_| {
         let mut warnings = Vec::new();
         let (cfg, data) = resolve(&src, &cli, tables.as_ref(), &mut warnings)?;
-        let run = creepfit::fit::run_fit(&cfg, &data)?;
+        let run = creepfit::fit::run_fit(cfg.calibration(&data)?, &data)?;
         let best = &run.fits[run.best];
         let mut out = HashMap::new();
         let constants = tables::constants_rows(

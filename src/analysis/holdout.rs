@@ -356,7 +356,12 @@ pub fn holdout_observed(
         warnings: Vec::new(),
         dropped: Vec::new(),
     };
-    let fit = run_fit_observed(cfg, &train_data, cfg.sweep.starts, hooks)?;
+    let fit = run_fit_observed(
+        cfg.calibration(&train_data)?,
+        &train_data,
+        cfg.sweep.starts,
+        hooks,
+    )?;
     let best = &fit.fits[fit.best];
     let lmp = LarsonMiller::fit_curves(&train_data.curves, cfg.predict.lmp_degree)
         .map_err(|e| e.to_string());

@@ -46,7 +46,9 @@ pub fn fit(config: &Path, cli: &Overrides) -> Result<()> {
         journal: None,
     };
     let outcome = (|| {
-        let run = crate::fit::run_fit_observed(&cfg, &data, 0, &hooks);
+        let run = cfg
+            .calibration(&data)
+            .and_then(|cal| crate::fit::run_fit_observed(cal, &data, 0, &hooks));
         bars.clear();
         export::fit::write(&cfg, &data, &run?, &out)
     })();

@@ -23,7 +23,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use crate::config::RunConfig;
+use crate::config::Calibration;
 pub use crate::config::StartChoice;
 use crate::data::{Curve, Dataset};
 use crate::error::{Error, Result};
@@ -74,25 +74,6 @@ impl LocalFit {
     pub fn ok(&self) -> bool {
         self.lm.termination != Termination::SimulationFailure && self.eval.objective.is_finite()
     }
-}
-
-/// Bounds and scales of a configuration as a [`ParamSpace`]; held constants (law
-/// parameters given as a number, or of data at one temperature) are held at their start.
-pub fn param_space(cfg: &RunConfig) -> ParamSpace {
-    let mut space = ParamSpace::new(
-        cfg.constants.iter().map(|c| c.lb).collect(),
-        cfg.constants.iter().map(|c| c.ub).collect(),
-        cfg.constants.iter().map(|c| c.scale).collect(),
-    );
-    for (j, c) in cfg.constants.iter().enumerate() {
-        if c.held {
-            space.hold(
-                j,
-                c.start.expect("a held constant has its value (validated)"),
-            );
-        }
-    }
-    space
 }
 
 /// A fit whose data has a curve of more than this many points runs in two stages (module
@@ -572,19 +553,20 @@ pub fn evaluable_anchor(
         .map(|(_, x)| x)
 }
 
-/// The paper's procedure on a configuration and its data: the initial guess, and — from the
-/// configured start (if every constant has one) and from the guess — a local fit for every
-/// weight vector; the best by [`choose_best`]. The starts are `cfg.fit.starts`, the weights
-/// `cfg.objective`'s.
-pub fn run_fit(cfg: &RunConfig, data: &Dataset) -> Result<FitRun> {
-    run_fit_multistart(cfg, data, 0)
+/// The paper's procedure on a calibration and its data: the initial guess, and — from the
+/// given start (if every constant has one) and from the guess — a local fit for every
+/// weight vector; the best by [`choose_best`]. `cal` comes from
+/// [`crate::config::RunConfig::calibration`] on the same data (the fit owns it: its model
+/// and space end in the [`FitRun`]).
+pub fn run_fit(cal: Calibration, data: &Dataset) -> Result<FitRun> {
+    run_fit_multistart(cal, data, 0)
 }
 
-/// [`run_fit`] with `lhs` Latin-hypercube starts in the box besides the configured start and
-/// the guess (drawn from `cfg.sweep.seed`, as a sweep's): a global search in one command, for
-/// joint calibrations whose guess can lie in a poor basin (`holdout`).
-pub fn run_fit_multistart(cfg: &RunConfig, data: &Dataset, lhs: usize) -> Result<FitRun> {
-    run_fit_observed(cfg, data, lhs, &crate::progress::Hooks::default())
+/// [`run_fit`] with `lhs` Latin-hypercube starts in the box besides the given start and the
+/// guess (drawn from `cal.seed`, as a sweep's): a global search in one command, for joint
+/// calibrations whose guess can lie in a poor basin (`holdout`).
+pub fn run_fit_multistart(cal: Calibration, data: &Dataset, lhs: usize) -> Result<FitRun> {
+    run_fit_observed(cal, data, lhs, &crate::progress::Hooks::default())
 }
 
 /// [`run_fit_multistart`] telling `hooks.observer` of every finished local fit (phase `local
@@ -593,16 +575,14 @@ pub fn run_fit_multistart(cfg: &RunConfig, data: &Dataset, lhs: usize) -> Result
 /// stop, the fits not yet started are skipped and the run ends with [`Error::Interrupted`]
 /// (the finished ones are journaled).
 pub fn run_fit_observed(
-    cfg: &RunConfig,
+    cal: Calibration,
     data: &Dataset,
     lhs: usize,
     hooks: &crate::progress::Hooks,
 ) -> Result<FitRun> {
     let (observer, journal) = (hooks.observer, hooks.journal);
     let t0 = Instant::now();
-    let model = cfg.build_model()?;
-    let space = param_space(cfg);
-    let settings = FitSettings::from_config(cfg);
+    let (model, space, settings) = (cal.model, cal.space, cal.settings);
     let curves = &data.curves;
     let guess = initial_guess(
         model.as_ref(),
@@ -612,13 +592,13 @@ pub fn run_fit_observed(
         &settings.ode,
     );
     let mut starts: Vec<(String, Vec<f64>)> = Vec::new();
-    let choice = cfg.fit.starts;
+    let choice = cal.start_choice;
     if choice != StartChoice::Guess {
-        match cfg.starts_all_given() {
-            Some(s) => starts.push(("config".to_string(), s)),
+        match &cal.given_start {
+            Some(s) => starts.push(("config".to_string(), s.clone())),
             None if choice == StartChoice::Config => {
                 return Err(Error::config(
-                    &cfg.path,
+                    &cal.source,
                     "--start config needs a start value for every constant",
                 ))
             }
@@ -629,7 +609,7 @@ pub fn run_fit_observed(
         starts.push(("guess".to_string(), guess.params.clone()));
     }
     if lhs > 0 {
-        let mut rng = <rand_chacha::ChaCha8Rng as rand::SeedableRng>::seed_from_u64(cfg.sweep.seed);
+        let mut rng = <rand_chacha::ChaCha8Rng as rand::SeedableRng>::seed_from_u64(cal.seed);
         for (k, u) in crate::sampling::latin_hypercube(lhs, space.n_free(), &mut rng)
             .into_iter()
             .enumerate()
@@ -652,7 +632,7 @@ pub fn run_fit_observed(
             &space,
             &settings,
             &guess.params,
-            cfg.sweep.seed,
+            cal.seed,
         ) {
             for (label, x) in starts.iter_mut() {
                 let mut one = vec![x.clone()];
@@ -664,7 +644,7 @@ pub fn run_fit_observed(
             }
         }
     }
-    let ws = cfg.objective.weight_vectors(curves.len(), &cfg.path)?;
+    let ws = &cal.weights;
     let jobs: Vec<_> = starts
         .iter()
         .flat_map(|s| ws.iter().map(move |w| (s, w)))
@@ -737,7 +717,7 @@ pub fn run_fit_observed(
     })?;
     let mut chosen = fits.swap_remove(best);
     let specimens = if settings.kind == ObjectiveKind::Likelihood {
-        let (kinds, note) = cfg.objective.specimen_effects.resolve(curves);
+        let (kinds, note) = (cal.specimen_effects, cal.specimen_note.clone());
         let (replicate_curves, replicate_sd_ln_life) = replicate_scatter(curves);
         let mut sp = FitSpecimens {
             fit: None,

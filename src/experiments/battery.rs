@@ -26,7 +26,7 @@ use crate::data::Curve;
 use crate::diagnose::{diagnose_with, Verdict};
 use crate::errmodel::{Ar1, ErrorModel};
 use crate::error::{Error, Result};
-use crate::fit::{param_space, FitSettings};
+use crate::fit::FitSettings;
 use crate::likelihood::min_whitened_ss;
 use crate::likelihood::EffectKind;
 use crate::model::build;
@@ -165,7 +165,7 @@ pub fn oracle_lambda(cfg: &RunConfig, truth: &Truth) -> f64 {
             .collect(),
         lifetime_sd: truth.lifetime_sd,
     };
-    let space = param_space(cfg);
+    let space = cfg.space();
     let guess = crate::model::guess::initial_guess(
         model.as_ref(),
         &curves,

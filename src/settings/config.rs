@@ -22,7 +22,7 @@ use crate::data::{self, Dataset, LoadOptions};
 use crate::error::{Error, Result};
 use crate::lsq::LmOptions;
 use crate::model::law::{self as laws, LawKind};
-use crate::model::objective::{FitSettings, JacobianMethod};
+use crate::model::objective::{FitSettings, JacobianMethod, ParamSpace};
 pub use crate::model::objective::{LifetimeTerm, ObjectiveKind};
 use crate::model::{self, Model, Scale};
 use crate::ode::OdeOptions;
@@ -683,6 +683,32 @@ pub struct RunConfig {
     /// default bounds); printed on stderr by the binary. Not a setting.
     #[serde(skip)]
     pub warnings: Vec<String>,
+}
+
+/// What `fit` takes: the calibration of one data set, built once from the configuration by
+/// [`RunConfig::calibration`] (ripgrep's LowArgs → HiArgs: the resolved object hands out
+/// built things; the library never reads the whole configuration).
+pub struct Calibration {
+    /// The model (family, extensions, temperature laws).
+    pub model: Box<dyn Model>,
+    /// Bounds, scales and held constants.
+    pub space: ParamSpace,
+    /// Objective, integrator and solver settings.
+    pub settings: FitSettings,
+    /// Which starts: the given one, the computed initial guess, or both.
+    pub start_choice: StartChoice,
+    /// The configuration's start (model order) when every constant has one.
+    pub given_start: Option<Vec<f64>>,
+    /// Seed of the Latin-hypercube starts (a multistart fit, the fallback anchor).
+    pub seed: u64,
+    /// Every per-curve lifetime-weight vector to fit with (one under the likelihood).
+    pub weights: Vec<Vec<f64>>,
+    /// The specimen effects the likelihood fits after the best fit (none under eq. 8).
+    pub specimen_effects: crate::likelihood::SpecimenOptions,
+    /// Why there are none (`auto` without replicates), for the user.
+    pub specimen_note: Option<String>,
+    /// The configuration file, named in errors.
+    pub source: PathBuf,
 }
 
 #[derive(Deserialize)]
@@ -1348,6 +1374,45 @@ impl RunConfig {
             }
         }
         data
+    }
+
+    /// Bounds and scales of the constants as a [`ParamSpace`]; held constants (law
+    /// parameters given as a number, or of data at one temperature) are held at their start.
+    pub fn space(&self) -> ParamSpace {
+        let mut space = ParamSpace::new(self.lower(), self.upper(), self.scales());
+        for (j, c) in self.constants.iter().enumerate() {
+            if c.held {
+                space.hold(
+                    j,
+                    c.start.expect("a held constant has its value (validated)"),
+                );
+            }
+        }
+        space
+    }
+
+    /// The calibration this configuration asks for on `data`, built once: the model, its
+    /// parameter space, the fit settings, the starts and the lifetime weights
+    /// ([`Calibration`]). Refused here, before any work: a `w_sets` entry of the wrong
+    /// length.
+    pub fn calibration(&self, data: &Dataset) -> Result<Calibration> {
+        let given_start = self.starts_all_given();
+        let (specimen_effects, specimen_note) =
+            self.objective.specimen_effects.resolve(&data.curves);
+        Ok(Calibration {
+            model: self.build_model()?,
+            space: self.space(),
+            settings: FitSettings::from_config(self),
+            start_choice: self.fit.starts,
+            given_start,
+            seed: self.sweep.seed,
+            weights: self
+                .objective
+                .weight_vectors(data.curves.len(), &self.path)?,
+            specimen_effects,
+            specimen_note,
+            source: self.path.clone(),
+        })
     }
 
     /// The start vector (model order) if every constant has a start, else `None`.

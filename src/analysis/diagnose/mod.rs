@@ -38,7 +38,7 @@ use crate::config::RunConfig;
 use crate::data::binned;
 use crate::data::{Curve, Dataset};
 use crate::error::{Error, Result};
-use crate::fit::{param_space, FitSettings};
+use crate::fit::FitSettings;
 use crate::likelihood::{
     ml_fit, ml_fit_from, raw_objective, with_specimens, EffectStart, MlFit, MlOptions,
 };
@@ -116,7 +116,7 @@ impl Spec {
 /// to test. Bounds come from the configuration where it names the constant, else from the
 /// extension's defaults.
 fn specs(cfg: &RunConfig) -> Result<Vec<Spec>> {
-    let base_space = param_space(cfg);
+    let base_space = cfg.space();
     let mut out = Vec::new();
     // By default the extensions the model's family composes with (its registry entry's).
     let wanted: Vec<String> = if cfg.diagnose.extensions.is_empty() {
@@ -1051,7 +1051,7 @@ pub fn diagnose_observed(
     let khd = cfg.build_model_with(&[])?;
     let khd_names: Vec<&str> = khd.constants().iter().map(|c| c.name).collect();
     let khd_space = {
-        let s = param_space(cfg);
+        let s = cfg.space();
         let idx: Vec<usize> = khd_names
             .iter()
             .map(|n| {

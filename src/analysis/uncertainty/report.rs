@@ -17,7 +17,7 @@ use super::{fit_reference, reference_from, starts, Context, Reference, Threshold
 use crate::config::{ProfileConfig, RunConfig};
 use crate::data::Dataset;
 use crate::error::Result;
-use crate::fit::{param_space, FitSettings};
+use crate::fit::FitSettings;
 use crate::likelihood::MlOptions;
 use crate::model::guess::initial_guess;
 use crate::model::{Load, Scale};
@@ -96,7 +96,7 @@ pub fn context<'a>(
     Context::new(
         model,
         &data.curves,
-        param_space(cfg),
+        cfg.space(),
         FitSettings::from_config(cfg),
         MlOptions {
             lifetime_sd_floor: cfg.profile.lifetime_sd_floor,

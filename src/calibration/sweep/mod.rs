@@ -34,10 +34,10 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::config::RunConfig;
+use crate::config::{Calibration, RunConfig};
 use crate::data::Dataset;
 use crate::error::{Error, Result};
-use crate::fit::{local_fit, param_space, FitSettings};
+use crate::fit::{local_fit, FitSettings};
 use crate::model::guess::initial_guess;
 use crate::model::objective::mean_abs;
 use crate::output::{lock_folder, RunFolder};
@@ -105,16 +105,15 @@ pub struct Plan {
     pub ws: Vec<Vec<f64>>,
 }
 
-/// Draw the starts (`cfg.sweep`) and fix the w candidates for a configuration.
-pub fn plan(cfg: &RunConfig, data: &Dataset) -> Result<Plan> {
+/// Draw the starts (`cfg.sweep`) and fix the w candidates for a configuration, whose
+/// calibration of `data` ([`RunConfig::calibration`]) is `cal`.
+pub fn plan(cfg: &RunConfig, cal: &Calibration, data: &Dataset) -> Result<Plan> {
     let (starts, seed) = (cfg.sweep.starts, cfg.sweep.seed);
     if starts == 0 {
         return Err(Error::Invalid("--starts must be at least 1".into()));
     }
-    let model = cfg.build_model()?;
-    let space = param_space(cfg);
-    let settings = FitSettings::from_config(cfg);
-    let ws = cfg.objective.weight_vectors(data.curves.len(), &cfg.path)?;
+    let (model, space, settings) = (&cal.model, &cal.space, &cal.settings);
+    let ws = cal.weights.clone();
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let k = space.n_free();
     let mut start_params: Vec<Vec<f64>> = latin_hypercube(starts, k, &mut rng)
@@ -126,14 +125,14 @@ pub fn plan(cfg: &RunConfig, data: &Dataset) -> Result<Plan> {
         })
         .collect();
     // The extra start: the configuration's start values, else the model's initial guess.
-    let (label, anchor) = match cfg.starts_all_given() {
+    let (label, anchor) = match cal.given_start.clone() {
         Some(x) => ("config", x),
         None => (
             "guess",
             initial_guess(
                 model.as_ref(),
                 &data.curves,
-                &space,
+                space,
                 settings.omega_f,
                 &settings.ode,
             )
@@ -148,8 +147,8 @@ pub fn plan(cfg: &RunConfig, data: &Dataset) -> Result<Plan> {
     let target = if crate::fit::evaluable(
         model.as_ref(),
         &data.curves,
-        &space,
-        &settings,
+        space,
+        settings,
         &start_params[n - 1],
     ) {
         Some(start_params[n - 1].clone())
@@ -157,8 +156,8 @@ pub fn plan(cfg: &RunConfig, data: &Dataset) -> Result<Plan> {
         crate::fit::evaluable_anchor(
             model.as_ref(),
             &data.curves,
-            &space,
-            &settings,
+            space,
+            settings,
             &start_params[n - 1],
             seed,
         )
@@ -167,8 +166,8 @@ pub fn plan(cfg: &RunConfig, data: &Dataset) -> Result<Plan> {
         Some(t) if cfg.sweep.repair => crate::fit::repair_starts(
             model.as_ref(),
             &data.curves,
-            &space,
-            &settings,
+            space,
+            settings,
             &mut start_params,
             t,
         ),
@@ -187,7 +186,7 @@ pub fn plan(cfg: &RunConfig, data: &Dataset) -> Result<Plan> {
         .iter()
         .map(|c| c.name.to_string())
         .collect();
-    let mut header = Header::new(cfg, data, &names, &space, extra, &ws, &start_params);
+    let mut header = Header::new(cfg, data, &names, space, extra, &ws, &start_params);
     header.repaired_starts = repaired;
     Ok(Plan {
         header,
@@ -221,10 +220,9 @@ pub fn run_sweep(cfg: &RunConfig, data: &Dataset) -> Result<(Plan, SweepRun)> {
     let t0 = Instant::now();
     STOP.store(false, Ordering::SeqCst);
     let out = cfg.out_dir("sweep");
-    let plan = plan(cfg, data)?;
-    let model = cfg.build_model()?;
-    let space = param_space(cfg);
-    let settings = FitSettings::from_config(cfg);
+    let cal = cfg.calibration(data)?;
+    let plan = plan(cfg, &cal, data)?;
+    let (model, space, settings) = (&cal.model, &cal.space, &cal.settings);
     let (shard_i, shard_n) = cfg.run.shard.unwrap_or((1, 1));
     if shard_n == 0 || shard_i == 0 || shard_i > shard_n {
         return Err(Error::Invalid(format!(
@@ -294,7 +292,7 @@ pub fn run_sweep(cfg: &RunConfig, data: &Dataset) -> Result<(Plan, SweepRun)> {
                     return;
                 }
             }
-            let sol = solve(model.as_ref(), data, &space, &settings, &plan, (s, wi));
+            let sol = solve(model.as_ref(), data, space, settings, &plan, (s, wi));
             if let Err(e) = writer.lock().unwrap().append(&sol) {
                 write_error.lock().unwrap().get_or_insert(e);
                 STOP.store(true, Ordering::SeqCst);
@@ -388,10 +386,9 @@ pub fn run_in_memory(
 ) -> Result<MemoryRun> {
     let t0 = Instant::now();
     check_bound(cfg, data)?;
-    let plan = plan(cfg, data)?;
-    let model = cfg.build_model()?;
-    let space = param_space(cfg);
-    let settings = FitSettings::from_config(cfg);
+    let cal = cfg.calibration(data)?;
+    let plan = plan(cfg, &cal, data)?;
+    let (model, space, settings) = (&cal.model, &cal.space, &cal.settings);
     let jobs = missing(&plan.header, &[]);
     let threads = cfg
         .run
@@ -409,7 +406,7 @@ pub fn run_in_memory(
                 if stop.load(Ordering::SeqCst) {
                     return None;
                 }
-                let sol = solve(model.as_ref(), data, &space, &settings, &plan, job);
+                let sol = solve(model.as_ref(), data, space, settings, &plan, job);
                 on_fit(done.fetch_add(1, Ordering::SeqCst) + 1, jobs.len());
                 Some(sol)
             })
