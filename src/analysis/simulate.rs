@@ -1,9 +1,9 @@
 //! `simulate`: the measured tests simulated at given constants, each to its rupture or to
-//! the integration horizon ([`HORIZON_FACTOR`] × the test's span), with a dense trajectory
+//! the integration horizon ([`crate::model::objective::curve_horizon`]), with a dense trajectory
 //! for the curve files and plots. The computation only: `crate::export::simulate` writes it.
 
 use crate::data::{Curve, Dataset};
-use crate::model::objective::{Evaluation, Objective, ObjectiveSettings, HORIZON_FACTOR};
+use crate::model::objective::{Evaluation, Objective, ObjectiveSettings};
 use crate::model::{Load, Model};
 use crate::ode::{OdeOptions, SimResult};
 
@@ -42,14 +42,7 @@ pub fn simulate<'a>(
         .iter()
         .map(|c| {
             let load = Load::of_curve(c, omega_f);
-            let span = c
-                .rupture_time_h
-                .unwrap_or(0.0)
-                .max(*c.times_h.last().unwrap_or(&0.0));
-            let o = OdeOptions {
-                t_end: HORIZON_FACTOR * span,
-                ..*ode
-            };
+            let o = crate::model::objective::curve_horizon(c, ode);
             let result = model.simulate(params, &load, &[], &mut [], &o);
             let mut grid = crate::predict::dense_grid(result.t_end, GRID_POINTS);
             grid.extend(c.times_h.iter().copied().filter(|t| *t <= result.t_end));

@@ -28,6 +28,18 @@ use crate::ode::{OdeOptions, Outcome, SimResult};
 /// or last point): a prediction that has not ruptured by then is a failed simulation.
 pub const HORIZON_FACTOR: f64 = 1000.0;
 
+/// `ode` integrating curve `c` up to its horizon: [`HORIZON_FACTOR`] × the longest measured
+/// time (rupture time or last point), h. The one rule every simulation of a measured curve
+/// uses (the objective, `simulate`, the plots).
+pub fn curve_horizon(c: &Curve, ode: &OdeOptions) -> OdeOptions {
+    let last = c.times_h.last().copied().unwrap_or(0.0);
+    let span = c.rupture_time_h.unwrap_or(0.0).max(last);
+    OdeOptions {
+        t_end: HORIZON_FACTOR * span,
+        ..*ode
+    }
+}
+
 /// Largest number of constants a model may have (fixed-size parameter buffers): the base
 /// model's six, the extensions' three and a temperature-law constant for each of them fit.
 pub const MAX_PARAMS: usize = 32;
@@ -486,12 +498,7 @@ impl<'a> Objective<'a> {
     }
 
     fn ode_for(&self, c: &Curve) -> OdeOptions {
-        let last = c.times_h.last().copied().unwrap_or(0.0);
-        let span = c.rupture_time_h.unwrap_or(0.0).max(last);
-        OdeOptions {
-            t_end: HORIZON_FACTOR * span,
-            ..self.ode
-        }
+        curve_horizon(c, &self.ode)
     }
 
     /// Simulate curve `i` at `params`, writing the predicted strain (with continuation) into

@@ -998,14 +998,7 @@ pub fn curve_plots(
         .iter()
         .map(|c| {
             let load = Load::of_curve(c, cfg.objective.omega_f);
-            let span = c
-                .rupture_time_h
-                .unwrap_or(0.0)
-                .max(*c.times_h.last().unwrap_or(&0.0));
-            let o = OdeOptions {
-                t_end: crate::model::objective::HORIZON_FACTOR * span,
-                ..*ode
-            };
+            let o = crate::model::objective::curve_horizon(c, ode);
             let res = model.simulate(params, &load, &[], &mut [], &o);
             let grid = crate::predict::dense_grid(res.t_end, 400);
             let (_, traj) = model.trajectory(params, &load, &grid, &o);
