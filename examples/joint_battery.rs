@@ -35,7 +35,7 @@ fn main() -> anyhow::Result<()> {
         let cfg = RunConfig::from_str(TWO_TEMPERATURE_CONFIG, Path::new("joint-battery.toml"))?
             .with_data(&data);
         let t0 = std::time::Instant::now();
-        match diagnose(&cfg, &data) {
+        match diagnose(&cfg.diagnose_setup()?, &data, &cfg.diagnose) {
             Ok(d) => {
                 let v = format!("{:?} {}", d.verdict, d.cause.clone().unwrap_or_default());
                 println!("{seed} {v} ({:.1} s)", t0.elapsed().as_secs_f64());

@@ -355,7 +355,11 @@ fn a_null_set_with_specimen_scatter_is_adequate() {
     // report.md gives the scatter between specimens and each specimen's factor.
     let cfg =
         creepfit::config::RunConfig::load(&dir.path().join("sets/set-95001/config.toml")).unwrap();
-    let md = creepfit::diagnose::report::report_md(&cfg, &d.unwrap());
+    let md = creepfit::diagnose::report::report_md(
+        &cfg.name,
+        &cfg.diagnose_setup().unwrap(),
+        &d.unwrap(),
+    );
     assert!(md.contains("## Specimens"), "{md}");
     assert!(
         md.contains("varies") && md.contains("between specimens"),

@@ -548,8 +548,18 @@ fn diagnose_with_laws_at_one_temperature_is_todays() {
         c.diagnose.bootstrap = 19;
         c.diagnose.alpha = 0.5;
     }
-    let plain = diagnose(&plain_cfg, &data).unwrap();
-    let laws = diagnose(&laws_cfg, &laws_data).unwrap();
+    let plain = diagnose(
+        &plain_cfg.diagnose_setup().unwrap(),
+        &data,
+        &plain_cfg.diagnose,
+    )
+    .unwrap();
+    let laws = diagnose(
+        &laws_cfg.diagnose_setup().unwrap(),
+        &laws_data,
+        &laws_cfg.diagnose,
+    )
+    .unwrap();
     assert_eq!(plain.verdict, laws.verdict);
     assert_eq!(plain.cause, laws.cause);
     assert_eq!(plain.candidates.len(), laws.candidates.len());
@@ -582,7 +592,7 @@ fn joint_diagnose_names_a_hidden_effect_and_passes_a_clean_set() {
         let cfg = RunConfig::from_str(TWO_TEMPERATURE_CONFIG, Path::new("two.toml"))
             .unwrap()
             .with_data(&data);
-        diagnose(&cfg, &data).unwrap()
+        diagnose(&cfg.diagnose_setup().unwrap(), &data, &cfg.diagnose).unwrap()
     };
     let d = run(Some(("loading_strain", 3e4)), 93001);
     assert_eq!(d.verdict, Verdict::Extension, "{:?}", d.decision);

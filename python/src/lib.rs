@@ -524,9 +524,9 @@ fn diagnose(
     run_detached(py, progress.as_ref(), move |_| {
         let mut warnings = Vec::new();
         let (cfg, data) = resolve(&src, &cli, tables.as_ref(), &mut warnings)?;
-        creepfit::diagnose::check(&cfg, &data)?;
+        cfg.check_diagnose(&data)?;
         let d = with_threads(cfg.run.threads, || {
-            creepfit::diagnose::diagnose(&cfg, &data)
+            creepfit::diagnose::diagnose(&cfg.diagnose_setup()?, &data, &cfg.diagnose)
         })?;
         let mut out = HashMap::new();
         out.insert("diagnosis", json(&d));

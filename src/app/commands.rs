@@ -204,7 +204,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path, require_all: bool) -> Result<()> {
 /// `creepfit diagnose`.
 pub fn diagnose(config: &Path, cli: &Overrides) -> Result<()> {
     let (cfg, data) = load(config, cli)?;
-    crate::diagnose::check(&cfg, &data)?;
+    cfg.check_diagnose(&data)?;
     let out = cfg.out_dir("diagnose");
     let (mut folder, journal) =
         take_with_journal(&out, "diagnose", &crate::diagnose::hooks::identity(&cfg))?;
@@ -215,11 +215,13 @@ pub fn diagnose(config: &Path, cli: &Overrides) -> Result<()> {
         observer: &stop,
         journal: Some(&journal),
     };
-    let d = with_threads(cfg.run.threads, || {
-        crate::diagnose::diagnose_observed(&cfg, &data, &cfg.diagnose, &hooks)
+    let outcome = cfg.diagnose_setup().and_then(|setup| {
+        let d = with_threads(cfg.run.threads, || {
+            crate::diagnose::diagnose_observed(&setup, &data, &cfg.diagnose, &hooks)
+        });
+        bars.clear();
+        export::diagnose::write(&cfg, &setup, &data, &d?, Some(&journal), &out)
     });
-    bars.clear();
-    let outcome = d.and_then(|d| export::diagnose::write(&cfg, &data, &d, Some(&journal), &out));
     folder.finish(outcome)
 }
 

@@ -23,7 +23,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::config::RunConfig;
 use crate::data::Curve;
-use crate::diagnose::{diagnose_with, Verdict};
+use crate::diagnose::{diagnose, Verdict};
 use crate::errmodel::{Ar1, ErrorModel};
 use crate::error::{Error, Result};
 use crate::fit::FitSettings;
@@ -272,7 +272,7 @@ pub fn run_one_diagnosed(
         let data = cfg.load_data()?;
         r.lambda = oracle_lambda(&cfg, t);
         r.detectable = r.lambda >= DETECTABLE_LAMBDA;
-        let d = diagnose_with(&cfg, &data, &cfg.diagnose)?;
+        let d = diagnose(&cfg.diagnose_setup()?, &data, &cfg.diagnose)?;
         r.verdict = Some(d.verdict);
         r.cause = d.cause.clone();
         r.closest = d.closest.clone();

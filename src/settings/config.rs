@@ -685,6 +685,34 @@ pub struct RunConfig {
     pub warnings: Vec<String>,
 }
 
+/// A model `diagnose` compares: the configured model (`base`) or it with one extension more,
+/// on its parameter space.
+pub struct ModelVariant {
+    /// `base`, the extension's name, or `bare` (the family without extensions).
+    pub name: String,
+    /// The model (with the configuration's temperature laws).
+    pub model: Box<dyn Model>,
+    /// Bounds, scales and held constants.
+    pub space: ParamSpace,
+    /// Names of the constants this variant adds to the base model.
+    pub extra: Vec<String>,
+}
+
+/// What `diagnose` takes, built once from the configuration by [`RunConfig::diagnose_setup`]
+/// (its `[diagnose]` settings come beside it, so the command line's overrides apply).
+pub struct DiagnoseSetup {
+    /// The base model first, then each extension tried.
+    pub variants: Vec<ModelVariant>,
+    /// The family's model without extensions: the initial guess is made on it.
+    pub bare: ModelVariant,
+    /// Objective, integrator and solver settings.
+    pub settings: FitSettings,
+    /// Which specimen effects the likelihood carries (resolved on the curves diagnosed).
+    pub specimen_effects: SpecimenEffects,
+    /// The configured model's extensions.
+    pub extensions: Vec<String>,
+}
+
 /// What `fit` takes: the calibration of one data set, built once from the configuration by
 /// [`RunConfig::calibration`] (ripgrep's LowArgs → HiArgs: the resolved object hands out
 /// built things; the library never reads the whole configuration).
@@ -1412,6 +1440,132 @@ impl RunConfig {
             specimen_effects,
             specimen_note,
             source: self.path.clone(),
+        })
+    }
+
+    /// What `diagnose` refuses before it starts: data at several temperatures without a
+    /// temperature law.
+    pub fn check_diagnose(&self, data: &Dataset) -> Result<()> {
+        let mut temps: Vec<f64> = data.curves.iter().map(|c| c.temperature_c).collect();
+        temps.sort_by(f64::total_cmp);
+        temps.dedup();
+        if temps.len() > 1 && !self.has_laws() {
+            return Err(Error::config(
+                &self.path,
+                format!(
+                    "temperature_C: diagnose works at one temperature unless a constant follows a temperature law; the data have {} ({} °C): set temperature_C",
+                    temps.len(),
+                    temps.iter().map(|t| t.to_string()).collect::<Vec<_>>().join(", ")
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// What `diagnose` takes, built once ([`DiagnoseSetup`]): the configured model, then it
+    /// plus each extension to test (`[diagnose] extensions`, else the family's catalogue);
+    /// bounds from the configuration where it names the constant, else the extension's
+    /// defaults; and the family's bare model on the configuration's bounds for the initial
+    /// guess.
+    pub fn diagnose_setup(&self) -> Result<DiagnoseSetup> {
+        Ok(DiagnoseSetup {
+            variants: self.model_variants()?,
+            bare: self.bare_variant()?,
+            settings: FitSettings::from_config(self),
+            specimen_effects: self.objective.specimen_effects.clone(),
+            extensions: self.extensions.clone(),
+        })
+    }
+
+    fn model_variants(&self) -> Result<Vec<ModelVariant>> {
+        let base_space = self.space();
+        let mut out = Vec::new();
+        // By default the extensions the model's family composes with (its registry entry's).
+        let wanted: Vec<String> = if self.diagnose.extensions.is_empty() {
+            crate::model::entry(&self.model)?
+                .extensions
+                .iter()
+                .map(|s| s.to_string())
+                .collect()
+        } else {
+            self.diagnose.extensions.clone()
+        };
+        let mut lists: Vec<(String, Vec<String>)> = vec![("base".into(), self.extensions.clone())];
+        for e in wanted {
+            if self.extensions.contains(&e) {
+                continue;
+            }
+            let mut l = self.extensions.clone();
+            l.push(e.clone());
+            lists.push((e, l));
+        }
+        for (name, exts) in lists {
+            let model = self.build_model_with(&exts)?;
+            let (mut lb, mut ub, mut sc) = (vec![], vec![], vec![]);
+            let mut extra = vec![];
+            let mut held = vec![];
+            for (j, c) in model.constants().iter().enumerate() {
+                match self.constants.iter().position(|k| k.name == c.name) {
+                    Some(i) => {
+                        lb.push(base_space.lb[i]);
+                        ub.push(base_space.ub[i]);
+                        sc.push(base_space.scale[i]);
+                        if !base_space.free[i] {
+                            held.push((j, base_space.fixed[i]));
+                        }
+                    }
+                    None => {
+                        lb.push(c.lb);
+                        ub.push(c.ub);
+                        sc.push(c.scale);
+                        extra.push(c.name.to_string());
+                    }
+                }
+            }
+            let mut space = ParamSpace::new(lb, ub, sc);
+            for (j, v) in held {
+                space.hold(j, v);
+            }
+            out.push(ModelVariant {
+                name,
+                model,
+                space,
+                extra,
+            });
+        }
+        Ok(out)
+    }
+
+    /// The family's model without extensions (temperature laws kept) on the configuration's
+    /// bounds of its constants.
+    fn bare_variant(&self) -> Result<ModelVariant> {
+        let model = self.build_model_with(&[])?;
+        let s = self.space();
+        let idx: Vec<usize> = model
+            .constants()
+            .iter()
+            .map(|k| {
+                self.constants
+                    .iter()
+                    .position(|c| c.name == k.name)
+                    .expect("a constant of the family's model is configured (validated)")
+            })
+            .collect();
+        let mut space = ParamSpace::new(
+            idx.iter().map(|&i| s.lb[i]).collect(),
+            idx.iter().map(|&i| s.ub[i]).collect(),
+            idx.iter().map(|&i| s.scale[i]).collect(),
+        );
+        for (j, &i) in idx.iter().enumerate() {
+            if !s.free[i] {
+                space.hold(j, s.fixed[i]);
+            }
+        }
+        Ok(ModelVariant {
+            name: "bare".into(),
+            model,
+            space,
+            extra: Vec::new(),
         })
     }
 

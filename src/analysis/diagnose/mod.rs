@@ -34,7 +34,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 pub use crate::config::DiagnoseConfig;
-use crate::config::RunConfig;
+use crate::config::DiagnoseSetup;
 use crate::data::binned;
 use crate::data::{Curve, Dataset};
 use crate::error::{Error, Result};
@@ -42,9 +42,9 @@ use crate::fit::FitSettings;
 use crate::likelihood::{
     ml_fit, ml_fit_from, raw_objective, with_specimens, EffectStart, MlFit, MlOptions,
 };
+use crate::model::ext;
 use crate::model::guess::initial_guess;
-use crate::model::objective::{mean_abs, ParamSpace};
-use crate::model::{ext, Model};
+use crate::model::objective::mean_abs;
 use crate::sampling::latin_hypercube;
 pub use decide::Verdict;
 use decide::{ExtensionEvidence, SelectInput};
@@ -55,17 +55,19 @@ use signature::{curve_signature, findings, CurveSignature, Finding};
 const NULL_STREAM: u64 = 1;
 const GOF_STREAM: u64 = 2;
 
-/// One model in the comparison: the base model or the base plus one extension.
-struct Spec {
-    /// `base` or the extension's name.
-    name: String,
-    model: Box<dyn Model>,
-    space: ParamSpace,
-    /// Names of the constants this candidate adds to the base model.
-    extra: Vec<String>,
+// One model in the comparison: the base model or the base plus one extension, built by
+// `RunConfig::diagnose_setup`.
+use crate::config::ModelVariant as Spec;
+
+/// What diagnose does with a model of the comparison.
+trait SpecExt {
+    fn names(&self) -> Vec<&'static str>;
+    fn start_from_base(&self, base_names: &[&str], base: &[f64]) -> Vec<f64>;
+    fn grid_from(&self, from_base: &[f64]) -> Vec<Vec<f64>>;
+    fn random_start(&self, rng: &mut ChaCha8Rng) -> Vec<f64>;
 }
 
-impl Spec {
+impl SpecExt for Spec {
     fn names(&self) -> Vec<&'static str> {
         self.model.constants().iter().map(|c| c.name).collect()
     }
@@ -110,68 +112,6 @@ impl Spec {
         self.space.from_unit(&u, &mut x);
         x
     }
-}
-
-/// The specs of a run: the configured model, then the configured model plus each extension
-/// to test. Bounds come from the configuration where it names the constant, else from the
-/// extension's defaults.
-fn specs(cfg: &RunConfig) -> Result<Vec<Spec>> {
-    let base_space = cfg.space();
-    let mut out = Vec::new();
-    // By default the extensions the model's family composes with (its registry entry's).
-    let wanted: Vec<String> = if cfg.diagnose.extensions.is_empty() {
-        crate::model::entry(&cfg.model)?
-            .extensions
-            .iter()
-            .map(|s| s.to_string())
-            .collect()
-    } else {
-        cfg.diagnose.extensions.clone()
-    };
-    let mut lists: Vec<(String, Vec<String>)> = vec![("base".into(), cfg.extensions.clone())];
-    for e in wanted {
-        if cfg.extensions.contains(&e) {
-            continue;
-        }
-        let mut l = cfg.extensions.clone();
-        l.push(e.clone());
-        lists.push((e, l));
-    }
-    for (name, exts) in lists {
-        let model = cfg.build_model_with(&exts)?;
-        let (mut lb, mut ub, mut sc) = (vec![], vec![], vec![]);
-        let mut extra = vec![];
-        let mut held = vec![];
-        for (j, c) in model.constants().iter().enumerate() {
-            match cfg.constants.iter().position(|k| k.name == c.name) {
-                Some(i) => {
-                    lb.push(base_space.lb[i]);
-                    ub.push(base_space.ub[i]);
-                    sc.push(base_space.scale[i]);
-                    if !base_space.free[i] {
-                        held.push((j, base_space.fixed[i]));
-                    }
-                }
-                None => {
-                    lb.push(c.lb);
-                    ub.push(c.ub);
-                    sc.push(c.scale);
-                    extra.push(c.name.to_string());
-                }
-            }
-        }
-        let mut space = ParamSpace::new(lb, ub, sc);
-        for (j, v) in held {
-            space.hold(j, v);
-        }
-        out.push(Spec {
-            name,
-            model,
-            space,
-            extra,
-        });
-    }
-    Ok(out)
 }
 
 /// The best (lowest −2 ln L) of maximum-likelihood fits from `starts`, the first `warm` of
@@ -992,39 +932,16 @@ fn gof_bootstrap(
         .collect())
 }
 
-/// What `diagnose` refuses before it starts: data at several temperatures without a
-/// temperature law.
-pub fn check(cfg: &RunConfig, data: &Dataset) -> Result<()> {
-    let mut temps: Vec<f64> = data.curves.iter().map(|c| c.temperature_c).collect();
-    temps.sort_by(f64::total_cmp);
-    temps.dedup();
-    if temps.len() > 1 && !cfg.has_laws() {
-        return Err(Error::config(
-            &cfg.path,
-            format!(
-                "temperature_C: diagnose works at one temperature unless a constant follows a temperature law; the data have {} ({} °C): set temperature_C",
-                temps.len(),
-                temps.iter().map(|t| t.to_string()).collect::<Vec<_>>().join(", ")
-            ),
-        ));
-    }
-    Ok(())
+/// Diagnose `data` with the models of `setup` ([`crate::config::RunConfig::diagnose_setup`]) and the
+/// `[diagnose]` settings `dc` (the configuration's, with the command line's overrides).
+pub fn diagnose(setup: &DiagnoseSetup, data: &Dataset, dc: &DiagnoseConfig) -> Result<Diagnosis> {
+    diagnose_observed(setup, data, dc, &Hooks::default())
 }
 
-/// Diagnose the configuration's data with the configuration's `[diagnose]` settings.
-pub fn diagnose(cfg: &RunConfig, data: &Dataset) -> Result<Diagnosis> {
-    diagnose_with(cfg, data, &cfg.diagnose)
-}
-
-/// Diagnose with explicit settings `dc` (the command line's overrides applied).
-pub fn diagnose_with(cfg: &RunConfig, data: &Dataset, dc: &DiagnoseConfig) -> Result<Diagnosis> {
-    diagnose_observed(cfg, data, dc, &Hooks::default())
-}
-
-/// [`diagnose_with`] reporting its phases to `hooks.observer` (and stopping when it asks
-/// to), its bootstrap replicates journaled in (and resumed from) `hooks.journal`.
+/// [`diagnose`] reporting its phases to `hooks.observer` (and stopping when it asks to), its
+/// bootstrap replicates journaled in (and resumed from) `hooks.journal`.
 pub fn diagnose_observed(
-    cfg: &RunConfig,
+    setup: &DiagnoseSetup,
     data: &Dataset,
     dc: &DiagnoseConfig,
     hooks: &Hooks,
@@ -1038,45 +955,23 @@ pub fn diagnose_observed(
         .map(|c| binned(c, dc.max_points))
         .collect();
     let curves = &binned_curves;
-    let settings = FitSettings::from_config(cfg);
+    let settings = setup.settings;
     let ml = MlOptions {
         lifetime_sd_floor: dc.lifetime_sd_floor,
         white_first: true,
-        specimen: cfg.objective.specimen_effects.resolve(curves).0,
+        specimen: setup.specimen_effects.resolve(curves).0,
     };
-    let specs = specs(cfg)?;
+    let specs = &setup.variants;
 
-    // The initial guess (the KHD procedure, on the KHD constants, per temperature with the
+    // The initial guess (the family's procedure on its bare model, per temperature with the
     // laws), extended by name.
-    let khd = cfg.build_model_with(&[])?;
+    let khd = &setup.bare.model;
     let khd_names: Vec<&str> = khd.constants().iter().map(|c| c.name).collect();
-    let khd_space = {
-        let s = cfg.space();
-        let idx: Vec<usize> = khd_names
-            .iter()
-            .map(|n| {
-                cfg.constants
-                    .iter()
-                    .position(|c| c.name == *n)
-                    .expect("KHD constant")
-            })
-            .collect();
-        let mut space = ParamSpace::new(
-            idx.iter().map(|&i| s.lb[i]).collect(),
-            idx.iter().map(|&i| s.ub[i]).collect(),
-            idx.iter().map(|&i| s.scale[i]).collect(),
-        );
-        for (j, &i) in idx.iter().enumerate() {
-            if !s.free[i] {
-                space.hold(j, s.fixed[i]);
-            }
-        }
-        space
-    };
+    let khd_space = &setup.bare.space;
     let guess = initial_guess(
         khd.as_ref(),
         curves,
-        &khd_space,
+        khd_space,
         settings.omega_f,
         &settings.ode,
     );
@@ -1181,7 +1076,7 @@ pub fn diagnose_observed(
         failed_starts.push(failed);
         start_sets.push(starts);
     }
-    for j in cross_start(&specs, &mut fits, curves, &settings, &ml) {
+    for j in cross_start(specs, &mut fits, curves, &settings, &ml) {
         let f = fits[j].as_mut().expect("replaced by a fit");
         let spec = &specs[j];
         crate::likelihood::scatter_intervals(
@@ -1244,7 +1139,7 @@ pub fn diagnose_observed(
         &key,
         &observed,
         dc.bootstrap,
-        |b| null_replicate(&specs, &fits, &basins, curves, &warm, &ml, dc, b),
+        |b| null_replicate(specs, &fits, &basins, curves, &warm, &ml, dc, b),
     )?;
     phase.null_bootstrap = t0.elapsed().as_secs_f64() - phase.fits;
     let failed_base_refits = reps.iter().filter(|r| r[n_ext + ng] > 0.0).count();
@@ -1337,7 +1232,7 @@ pub fn diagnose_observed(
             c.p_value = Some(p_ext[k]);
             c.p_holm = Some(sel.adjusted[k]);
             c.significant = sel.rejected[k];
-            c.delta_bic = -lr_obs[k] + (c.k as f64 - cands_k0(&specs)) * n_eff.ln();
+            c.delta_bic = -lr_obs[k] + (c.k as f64 - cands_k0(specs)) * n_eff.ln();
         } else {
             c.lr = 0.0;
             c.delta_bic = 0.0;
@@ -1513,6 +1408,7 @@ fn decision_words(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::config::RunConfig;
     use std::path::Path;
 
     fn seed_config(extra: &str) -> RunConfig {
@@ -1576,7 +1472,7 @@ mod tests {
     fn a_candidate_that_could_not_be_fitted_is_reported() {
         let cfg = seed_config("");
         let data = cfg.load_data().unwrap();
-        let sp = specs(&cfg).unwrap();
+        let sp = cfg.diagnose_setup().unwrap().variants;
         let c = candidate(&sp[1], &data.curves, None, 17);
         assert_eq!(c.status, FitStatus::Failed);
         assert_eq!(c.failed_starts, 17);
@@ -1589,7 +1485,7 @@ mod tests {
         // B so small that no curve ruptures within the horizon: every fold fails.
         let cfg = seed_config("");
         let data = cfg.load_data().unwrap();
-        let mut sp = specs(&cfg).unwrap().remove(0);
+        let mut sp = cfg.diagnose_setup().unwrap().variants.remove(0);
         sp.space.lb[1] = 1e-7;
         sp.space.ub[1] = 2e-7;
         let settings = FitSettings::from_config(&cfg);

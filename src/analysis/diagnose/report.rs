@@ -1,7 +1,7 @@
 //! `report.md`: the diagnosis for a person.
 
 use super::{Candidate, Diagnosis, Verdict};
-use crate::config::RunConfig;
+use crate::config::DiagnoseSetup;
 use crate::diagnose::gof::KNOTS;
 use crate::diagnose::signature::STAGES;
 
@@ -45,8 +45,8 @@ fn curve_label(c: &super::CurveSignature, several_t: bool) -> String {
 }
 
 /// The markdown report.
-pub fn report_md(cfg: &RunConfig, d: &Diagnosis) -> String {
-    let mut s = format!("# Diagnosis of {}\n\n", cfg.name);
+pub fn report_md(name: &str, setup: &DiagnoseSetup, d: &Diagnosis) -> String {
+    let mut s = format!("# Diagnosis of {name}\n\n");
     s += &format!("**Verdict: {}**", d.verdict.as_str());
     match (&d.cause, &d.closest) {
         (Some(c), _) => s += &format!(" — cause: `{c}`"),
@@ -210,7 +210,7 @@ pub fn report_md(cfg: &RunConfig, d: &Diagnosis) -> String {
             100.0 * d.settings.lifetime_sd_floor
         );
     }
-    s += &specimens_md(d, cfg);
+    s += &specimens_md(d, setup);
     if d.bootstrap.failed_base_refits > 0
         || d.bootstrap.failed_extension_refits.iter().any(|f| f.1 > 0)
     {
@@ -256,7 +256,7 @@ pub fn report_md(cfg: &RunConfig, d: &Diagnosis) -> String {
 
 /// The report's section on the scatter between specimens: what the base fit estimated (and
 /// each specimen's factors), or why it carries none.
-fn specimens_md(d: &Diagnosis, cfg: &RunConfig) -> String {
+fn specimens_md(d: &Diagnosis, setup: &DiagnoseSetup) -> String {
     use crate::likelihood::EffectKind;
     let mut s = String::from("\n## Specimens\n\n");
     let Some(sp) = &d.base.specimen else {
@@ -266,7 +266,7 @@ fn specimens_md(d: &Diagnosis, cfg: &RunConfig) -> String {
                 .iter()
                 .any(|b| a.temperature_c == b.temperature_c && a.stress_mpa == b.stress_mpa)
         });
-        let auto = cfg.objective.specimen_effects
+        let auto = setup.specimen_effects
             == crate::config::SpecimenEffects::Auto(crate::config::AutoWord::Auto);
         let why = if auto && !replicates {
             "no two specimens share a temperature and stress, so specimen-to-specimen scatter cannot be told from the stress dependence of the constants ([objective] specimen_effects fits it anyway)".to_string()
@@ -318,8 +318,9 @@ fn specimens_md(d: &Diagnosis, cfg: &RunConfig) -> String {
 /// predicted − measured strain in % of the rupture strain), thinned to
 /// [`crate::report::plot::PLOT_POINTS`]. Returned as (candidate name, series), base first.
 pub fn residual_series(
-    cfg: &RunConfig,
+    setup: &DiagnoseSetup,
     data: &crate::data::Dataset,
+    max_points: usize,
     d: &Diagnosis,
 ) -> crate::error::Result<Vec<(String, Vec<crate::report::plot::CurveSeries>)>> {
     use crate::report::plot::{CurveId, CurveSeries};
@@ -336,18 +337,20 @@ pub fn residual_series(
     let curves: Vec<crate::data::Curve> = data
         .curves
         .iter()
-        .map(|c| crate::data::binned(c, cfg.diagnose.max_points))
+        .map(|c| crate::data::binned(c, max_points))
         .collect();
-    let settings = crate::fit::FitSettings::from_config(cfg);
+    let settings = &setup.settings;
     let mut out = Vec::new();
     for c in std::iter::once(&d.base).chain(chosen) {
-        let mut exts = cfg.extensions.clone();
-        if c.name != "base" {
-            exts.push(c.name.clone());
-        }
-        let model = cfg.build_model_with(&exts)?;
+        let variant = setup
+            .variants
+            .iter()
+            .find(|v| v.name == c.name)
+            .ok_or_else(|| {
+                crate::error::Error::Diagnose(format!("no model '{}' was compared", c.name))
+            })?;
         let x: Vec<f64> = c.constants.iter().map(|p| p.1).collect();
-        let obj = crate::likelihood::raw_objective(model.as_ref(), &curves, &settings);
+        let obj = crate::likelihood::raw_objective(variant.model.as_ref(), &curves, settings);
         let ev = obj.evaluate(&x);
         let series: Vec<CurveSeries> = curves
             .iter()

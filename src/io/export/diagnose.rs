@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use crate::config::RunConfig;
+use crate::config::{DiagnoseSetup, RunConfig};
 use crate::data::Dataset;
 use crate::diagnose::Diagnosis;
 use crate::error::Result;
@@ -13,9 +13,11 @@ use crate::report::tables::{write_text, write_timings};
 
 use super::plots_done;
 
-/// Write a finished diagnosis of `data` under `cfg` into `out` and print its report.
+/// Write a finished diagnosis of `data` under `cfg` (its models: `setup`) into `out` and print
+/// its report.
 pub fn write(
     cfg: &RunConfig,
+    setup: &DiagnoseSetup,
     data: &Dataset,
     d: &Diagnosis,
     journal: Option<&Journal>,
@@ -31,10 +33,12 @@ pub fn write(
         journal,
         serde_json::json!({ "wall_s": d.wall_s, "phase_s": d.phase_s }),
     )?;
-    let md = crate::diagnose::report::report_md(cfg, d);
+    let md = crate::diagnose::report::report_md(&cfg.name, setup, d);
     write_text(&out.join("report.md"), &md)?;
     let mut failures = Vec::new();
-    for (name, series) in crate::diagnose::report::residual_series(cfg, data, d)? {
+    for (name, series) in
+        crate::diagnose::report::residual_series(setup, data, cfg.diagnose.max_points, d)?
+    {
         let path = out.join(format!("residuals_{name}.png"));
         if let Err(e) = plot_curve_residuals(
             &path,
