@@ -19,7 +19,7 @@ fn main() {
     let path = PathBuf::from(&args[0]);
     let (cfg, data) = RunConfig::resolve(&path, &Overrides::default()).unwrap();
     let model = cfg.build_model().unwrap();
-    let ctx = context(&cfg, model.as_ref(), &data);
+    let ctx = context(&cfg.likelihood_setup(&data), model.as_ref(), &data);
     let given: Vec<f64> = args[1..].iter().map(|s| s.parse().unwrap()).collect();
     let f = ctx.fit(&ctx.space, &given, false);
     let reference = reference_from(&ctx, vec![f]).unwrap();

@@ -575,7 +575,8 @@ fn predict(
             &tested,
             &cfg.predict.at,
         ));
-        let run = creepfit::predict::run(&cfg, &data, model.as_ref(), &params)?;
+        let run =
+            creepfit::predict::run(&cfg.predict_setup(&data), &data, model.as_ref(), &params)?;
         let mut out = HashMap::new();
         let (h, rows) = creepfit::predict::predictions_table(&run);
         out.insert("predictions", tables::csv_text(&h, rows.iter()));

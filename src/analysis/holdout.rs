@@ -395,7 +395,7 @@ pub fn holdout_observed(
             .map(|&s| Load::new(s, temperature_c, cfg.objective.omega_f))
             .collect();
         let iv = crate::uncertainty::predict::intervals_at_observed(
-            cfg,
+            &cfg.likelihood_setup(&train_data),
             fit.model.as_ref(),
             &train_data,
             &best.params,

@@ -125,7 +125,8 @@ pub fn predict(config: &Path, constants: &Path, cli: &Overrides) -> Result<()> {
         journal: None,
     };
     let outcome = (|| {
-        let run = crate::predict::run_observed(&cfg, &data, model.as_ref(), &params, &hooks);
+        let setup = cfg.predict_setup(&data);
+        let run = crate::predict::run_observed(&setup, &data, model.as_ref(), &params, &hooks);
         bars.clear();
         export::predict::write(&cfg, &data, model.as_ref(), &run?, &out)
     })();

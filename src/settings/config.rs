@@ -685,6 +685,35 @@ pub struct RunConfig {
     pub warnings: Vec<String>,
 }
 
+/// What the likelihood analyses (`profile`, `predict --intervals`, coverage) take, built once
+/// from the configuration on its data by [`RunConfig::likelihood_setup`].
+pub struct LikelihoodSetup {
+    /// Bounds, scales and held constants.
+    pub space: ParamSpace,
+    /// Objective, integrator and solver settings.
+    pub settings: FitSettings,
+    /// The maximum-likelihood options (`[profile]`'s rupture-time floor, the specimen
+    /// effects resolved on the data).
+    pub ml: crate::likelihood::MlOptions,
+    /// `[profile]`: thresholds, calibration, steps.
+    pub profile: ProfileConfig,
+}
+
+/// What `predict` takes, built once from the configuration on its data by
+/// [`RunConfig::predict_setup`].
+pub struct PredictSetup {
+    /// The integrator's settings (the horizon is set per condition).
+    pub ode: OdeOptions,
+    /// Rupture damage of the loads.
+    pub omega_f: f64,
+    /// `[predict]`: the conditions, intervals or not, the baselines' settings.
+    pub predict: PredictConfig,
+    /// Whether a constant follows a temperature law (what counts as tested).
+    pub has_laws: bool,
+    /// The intervals' likelihood setup.
+    pub likelihood: LikelihoodSetup,
+}
+
 /// A model `diagnose` compares: the configured model (`base`) or it with one extension more,
 /// on its parameter space.
 pub struct ModelVariant {
@@ -1460,6 +1489,33 @@ impl RunConfig {
             ));
         }
         Ok(())
+    }
+
+    /// What the likelihood analyses take on `data` ([`LikelihoodSetup`]).
+    pub fn likelihood_setup(&self, data: &Dataset) -> LikelihoodSetup {
+        LikelihoodSetup {
+            space: self.space(),
+            settings: FitSettings::from_config(self),
+            ml: crate::likelihood::MlOptions {
+                lifetime_sd_floor: self.profile.lifetime_sd_floor,
+                // Not read by the profile's fits: they are scaled AR(1) fits from their
+                // starts (`uncertainty::constrained::ml_fit_scaled`).
+                white_first: false,
+                specimen: self.objective.specimen_effects.resolve(&data.curves).0,
+            },
+            profile: self.profile.clone(),
+        }
+    }
+
+    /// What `predict` takes on `data` ([`PredictSetup`]).
+    pub fn predict_setup(&self, data: &Dataset) -> PredictSetup {
+        PredictSetup {
+            ode: self.solver.ode_options(),
+            omega_f: self.objective.omega_f,
+            predict: self.predict.clone(),
+            has_laws: self.has_laws(),
+            likelihood: self.likelihood_setup(data),
+        }
     }
 
     /// What `diagnose` takes, built once ([`DiagnoseSetup`]): the configured model, then it

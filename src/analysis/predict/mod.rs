@@ -19,7 +19,7 @@ use serde_json::{json, Value};
 pub use crate::baseline::Extrapolation;
 use crate::baseline::{self, Baseline, BaselineKind, BaselineSettings};
 use crate::baseline::{Tested, STRESS_MARGIN_FACTOR, TEMPERATURE_MARGIN_C};
-use crate::config::RunConfig;
+use crate::config::{PredictSetup, RunConfig};
 use crate::data::Condition;
 use crate::data::Dataset;
 use crate::error::{Error, Result};
@@ -198,21 +198,21 @@ pub fn simulate_at(
 /// Predict at `conditions` with `model` at `params`; the baseline is fitted to the rupture
 /// times of `data`.
 pub fn predict(
-    cfg: &RunConfig,
+    setup: &PredictSetup,
     data: &Dataset,
     model: &dyn Model,
     params: &[f64],
     conditions: &[Condition],
 ) -> PredictRun {
-    let ode = cfg.solver.ode_options();
-    let omega_f = cfg.objective.omega_f;
+    let ode = setup.ode;
+    let omega_f = setup.omega_f;
     let lmp =
-        LarsonMiller::fit_curves(&data.curves, cfg.predict.lmp_degree).map_err(|e| e.to_string());
+        LarsonMiller::fit_curves(&data.curves, setup.predict.lmp_degree).map_err(|e| e.to_string());
     let baselines = baseline::fit_all(
         &baseline::rupture_tests(&data.curves),
         &BaselineSettings {
-            degree: cfg.predict.lmp_degree,
-            tensile: &cfg.predict.tensile_strength,
+            degree: setup.predict.lmp_degree,
+            tensile: &setup.predict.tensile_strength,
         },
     );
     let predictions = conditions
@@ -256,7 +256,7 @@ pub fn predict(
             }
         })
         .collect();
-    let tested = Tested::of(data, cfg.has_laws());
+    let tested = Tested::of(data, setup.has_laws);
     PredictRun {
         params: params.to_vec(),
         source: ConstantsSource::Given,
@@ -277,38 +277,48 @@ pub fn predict(
 /// `predict`'s computation at the configuration's conditions (`[predict] at`): at the given
 /// constants `params`, or under `[predict] intervals` at the maximum-likelihood refit the
 /// intervals are centred on ([`centre_on_intervals`]; the given constants' predictions
-/// beside).
+/// beside). `setup` is [`crate::config::RunConfig::predict_setup`] on `data`.
 pub fn run(
-    cfg: &RunConfig,
+    setup: &PredictSetup,
     data: &Dataset,
     model: &dyn Model,
     params: &[f64],
 ) -> Result<PredictRun> {
-    run_observed(cfg, data, model, params, &crate::progress::Hooks::default())
+    run_observed(
+        setup,
+        data,
+        model,
+        params,
+        &crate::progress::Hooks::default(),
+    )
 }
 
 /// [`run`] reporting the phases of the intervals to `hooks.observer`.
 pub fn run_observed(
-    cfg: &RunConfig,
+    setup: &PredictSetup,
     data: &Dataset,
     model: &dyn Model,
     params: &[f64],
     hooks: &crate::progress::Hooks,
 ) -> Result<PredictRun> {
-    let given = predict(cfg, data, model, params, &cfg.predict.at);
-    if !cfg.predict.intervals {
+    let at = &setup.predict.at;
+    let given = predict(setup, data, model, params, at);
+    if !setup.predict.intervals {
         return Ok(given);
     }
-    let loads: Vec<Load> = cfg
-        .predict
-        .at
+    let loads: Vec<Load> = at
         .iter()
-        .map(|c| Load::new(c.stress_mpa, c.temperature_c, cfg.objective.omega_f))
+        .map(|c| Load::new(c.stress_mpa, c.temperature_c, setup.omega_f))
         .collect();
     let iv = crate::uncertainty::predict::intervals_at_observed(
-        cfg, model, data, params, &loads, hooks,
+        &setup.likelihood,
+        model,
+        data,
+        params,
+        &loads,
+        hooks,
     )?;
-    let centre = predict(cfg, data, model, &iv.refit.params, &cfg.predict.at);
+    let centre = predict(setup, data, model, &iv.refit.params, at);
     Ok(centre_on_intervals(centre, iv, given.predictions))
 }
 

@@ -212,7 +212,7 @@ fn measure(dir: &Path, seed: u64, s: &CoverageSettings, out: &mut SetCoverage) -
     let cfg = RunConfig::load(&folder.join("config.toml"))?;
     let data = cfg.load_data()?;
     let model = cfg.build_model()?;
-    let ctx = context(&cfg, model.as_ref(), &data);
+    let ctx = context(&cfg.likelihood_setup(&data), model.as_ref(), &data);
 
     // The untested load and its true rupture time.
     let lowest = t.stresses.iter().copied().fold(f64::INFINITY, f64::min);

@@ -446,14 +446,14 @@ pub fn band_fractions(n: usize) -> Vec<f64> {
 /// bootstrap replicates over the rupture times at the conditions; plain χ² with 0), then
 /// [`prediction_intervals`] and [`prediction_band`] at each `load`.
 pub fn intervals_at(
-    cfg: &crate::config::RunConfig,
+    setup: &crate::config::LikelihoodSetup,
     model: &dyn crate::model::Model,
     data: &crate::data::Dataset,
     params: &[f64],
     loads: &[Load],
 ) -> crate::error::Result<IntervalsRun> {
     intervals_at_observed(
-        cfg,
+        setup,
         model,
         data,
         params,
@@ -466,7 +466,7 @@ pub fn intervals_at(
 /// one step per condition's intervals and band); `Err` when it asks to stop. Nothing is
 /// journaled (the calibration replicates only if `hooks.journal` is given).
 pub fn intervals_at_observed(
-    cfg: &crate::config::RunConfig,
+    setup: &crate::config::LikelihoodSetup,
     model: &dyn crate::model::Model,
     data: &crate::data::Dataset,
     params: &[f64],
@@ -474,7 +474,7 @@ pub fn intervals_at_observed(
     hooks: &crate::progress::Hooks,
 ) -> crate::error::Result<IntervalsRun> {
     hooks.observer.phase("maximum-likelihood refit", None);
-    let ctx = super::report::context(cfg, model, data);
+    let ctx = super::report::context(setup, model, data);
     let f = ctx.fit(&ctx.space, params, false);
     let reference = super::reference_from(&ctx, vec![f])?;
     let refit = Refit {
@@ -483,7 +483,7 @@ pub fn intervals_at_observed(
         neg2ll: reference.neg2ll,
         given_neg2ll: super::report::neg2ll_at(&ctx, params).unwrap_or(f64::NAN),
     };
-    let pc = &cfg.profile;
+    let pc = &setup.profile;
     let th = if pc.calibrate > 0 {
         let cons = super::report::calibration_constants(&ctx, &reference);
         let qs: Vec<(String, Quantity)> = loads

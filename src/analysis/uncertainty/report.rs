@@ -14,11 +14,9 @@ use super::constrained::{Predicted, Quantity};
 use super::predict::{prediction_band, prediction_intervals, BandPoint, PredictedInterval};
 use super::profile::{profile_constants, wald_se, ConstantProfile};
 use super::{fit_reference, reference_from, starts, Context, Reference, Thresholds};
-use crate::config::{ProfileConfig, RunConfig};
+use crate::config::{LikelihoodSetup, ProfileConfig, RunConfig};
 use crate::data::Dataset;
 use crate::error::Result;
-use crate::fit::FitSettings;
-use crate::likelihood::MlOptions;
 use crate::model::guess::initial_guess;
 use crate::model::{Load, Scale};
 use crate::progress::Hooks;
@@ -87,24 +85,18 @@ pub struct ProfileRun {
     pub timings: Timings,
 }
 
-/// The context of a configuration and its data.
+/// The context of a likelihood setup and its data.
 pub fn context<'a>(
-    cfg: &RunConfig,
+    setup: &LikelihoodSetup,
     model: &'a dyn crate::model::Model,
     data: &'a Dataset,
 ) -> Context<'a> {
     Context::new(
         model,
         &data.curves,
-        cfg.space(),
-        FitSettings::from_config(cfg),
-        MlOptions {
-            lifetime_sd_floor: cfg.profile.lifetime_sd_floor,
-            // Not read here: the profile's fits are scaled AR(1) fits from their starts
-            // ([`super::constrained::ml_fit_scaled`]), as before the two-stage `ml_fit`.
-            white_first: false,
-            specimen: cfg.objective.specimen_effects.resolve(&data.curves).0,
-        },
+        setup.space.clone(),
+        setup.settings,
+        setup.ml,
     )
 }
 
@@ -292,7 +284,7 @@ pub fn run_observed(
 ) -> Result<ProfileRun> {
     let t0 = Instant::now();
     let model = cfg.build_model()?;
-    let ctx = context(cfg, model.as_ref(), data);
+    let ctx = context(&cfg.likelihood_setup(data), model.as_ref(), data);
     let loads = loads(cfg, data, pc);
     let only: Vec<Load> = loads.iter().map(|l| l.1).collect();
     let c = core(&ctx, cfg, given, pc, &only, hooks)?;
