@@ -84,11 +84,13 @@
 //! # Ok::<(), creepfit::Error>(())
 //! ```
 //!
-//! The same configuration goes to [`diagnose::diagnose`] (what the fitted model still gets
-//! wrong, as a [`diagnose::Diagnosis`] with its [`diagnose::Verdict`]),
-//! [`uncertainty`] (profiles and intervals) and [`predict`]; the command line
-//! ([`cli`]) wraps these calls with output folders, journals and exporters, and the Python
-//! package (`python/`) with pandas DataFrames.
+//! The configuration hands out what each analysis takes, built once: `cfg.diagnose_setup()`
+//! to [`diagnose::diagnose`] (what the fitted model still gets wrong, as a
+//! [`diagnose::Diagnosis`] with its [`diagnose::Verdict`]), `cfg.predict_setup(&data)` to
+//! [`predict::run`], `cfg.likelihood_setup(&data)` to [`uncertainty`] (profiles and
+//! intervals); the command line ([`cli`], [`commands`]) wraps these calls with output
+//! folders, journals and exporters ([`export`]), and the Python package (`python/`) with
+//! pandas DataFrames.
 
 // `!(x > 0.0)` is deliberate throughout: it is true for NaN, which must take the failure path.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
