@@ -11,7 +11,7 @@ use crate::data::{note_data, Dataset};
 use crate::error::{Error, Result};
 use crate::export;
 use crate::fit::FitSettings;
-use crate::journal::take_with_journal;
+use crate::journal::{take_with_journal, Journal};
 use crate::output::RunFolder;
 use crate::progress::{stop_after, Bars, Hooks};
 use crate::sweep;
@@ -32,6 +32,28 @@ pub fn with_threads<T: Send>(
             .map_err(|e| Error::Invalid(format!("--threads {n}: {e}")))?
             .install(f),
     }
+}
+
+/// Take `out` for `command` (lock, manifest) with its journal bound to `identity`, note the
+/// data, and run `work` with its hooks (progress bars, the test-only stop, the journal); the
+/// folder is finished with the outcome. `work` clears the bars before it writes.
+fn journaled(
+    cfg: &RunConfig,
+    data: &Dataset,
+    out: &Path,
+    command: &str,
+    identity: &serde_json::Value,
+    work: impl FnOnce(&Hooks, &Bars, &Journal) -> Result<()>,
+) -> Result<()> {
+    let (mut folder, journal) = take_with_journal(out, command, identity)?;
+    note_data(&mut folder, data);
+    let bars = Bars::new(!cfg.run.progress);
+    let stop = stop_after(&bars, &journal, cfg.run.stop_after);
+    let hooks = Hooks {
+        observer: &stop,
+        journal: Some(&journal),
+    };
+    folder.finish(work(&hooks, &bars, &journal))
 }
 
 /// `creepfit fit`.
@@ -138,35 +160,36 @@ pub fn predict(config: &Path, constants: &Path, cli: &Overrides) -> Result<()> {
 pub fn holdout(config: &Path, temperature_c: f64, cli: &Overrides) -> Result<()> {
     let (cfg, data) = load(config, cli)?;
     let out = cfg.out_dir(&format!("holdout-{temperature_c}C"));
-    let (mut folder, journal) = take_with_journal(
+    let identity = crate::holdout::identity(&cfg, temperature_c);
+    journaled(
+        &cfg,
+        &data,
         &out,
         "holdout",
-        &crate::holdout::identity(&cfg, temperature_c),
-    )?;
-    note_data(&mut folder, &data);
-    let bars = Bars::new(!cfg.run.progress);
-    let stop = stop_after(&bars, &journal, cfg.run.stop_after);
-    let hooks = Hooks {
-        observer: &stop,
-        journal: Some(&journal),
-    };
-    let t0 = std::time::Instant::now();
-    let h =
-        crate::holdout::holdout_observed(&cfg, &data, temperature_c, cfg.predict.intervals, &hooks);
-    bars.clear();
-    let outcome = h.and_then(|h| {
-        crate::report::tables::write_timings(
-            &out,
-            "holdout",
-            Some(&journal),
-            serde_json::json!({
-                "wall_s": t0.elapsed().as_secs_f64(),
-                "training_fit_s": h.fit.wall_s,
-            }),
-        )?;
-        export::holdout::write(&cfg, &data, &h, &out)
-    });
-    folder.finish(outcome)
+        &identity,
+        |hooks, bars, journal| {
+            let t0 = std::time::Instant::now();
+            let h = crate::holdout::holdout_observed(
+                &cfg,
+                &data,
+                temperature_c,
+                cfg.predict.intervals,
+                hooks,
+            );
+            bars.clear();
+            let h = h?;
+            crate::report::tables::write_timings(
+                &out,
+                "holdout",
+                Some(journal),
+                serde_json::json!({
+                    "wall_s": t0.elapsed().as_secs_f64(),
+                    "training_fit_s": h.fit.wall_s,
+                }),
+            )?;
+            export::holdout::write(&cfg, &data, &h, &out)
+        },
+    )
 }
 
 /// `creepfit sweep` (one part of a job array when `cfg.run.shard` says so).
@@ -207,23 +230,22 @@ pub fn diagnose(config: &Path, cli: &Overrides) -> Result<()> {
     let (cfg, data) = load(config, cli)?;
     cfg.check_diagnose(&data)?;
     let out = cfg.out_dir("diagnose");
-    let (mut folder, journal) =
-        take_with_journal(&out, "diagnose", &crate::diagnose::hooks::identity(&cfg))?;
-    note_data(&mut folder, &data);
-    let bars = Bars::new(!cfg.run.progress);
-    let stop = stop_after(&bars, &journal, cfg.run.stop_after);
-    let hooks = crate::diagnose::Hooks {
-        observer: &stop,
-        journal: Some(&journal),
-    };
-    let outcome = cfg.diagnose_setup().and_then(|setup| {
-        let d = with_threads(cfg.run.threads, || {
-            crate::diagnose::diagnose_observed(&setup, &data, &cfg.diagnose, &hooks)
-        });
-        bars.clear();
-        export::diagnose::write(&cfg, &setup, &data, &d?, Some(&journal), &out)
-    });
-    folder.finish(outcome)
+    let identity = crate::diagnose::hooks::identity(&cfg);
+    journaled(
+        &cfg,
+        &data,
+        &out,
+        "diagnose",
+        &identity,
+        |hooks, bars, journal| {
+            let setup = cfg.diagnose_setup()?;
+            let d = with_threads(cfg.run.threads, || {
+                crate::diagnose::diagnose_observed(&setup, &data, &cfg.diagnose, hooks)
+            });
+            bars.clear();
+            export::diagnose::write(&cfg, &setup, &data, &d?, Some(journal), &out)
+        },
+    )
 }
 
 /// `creepfit profile`, from the constants of `constants` when given (else from a fit).
@@ -241,28 +263,25 @@ pub fn profile(config: &Path, constants: Option<&Path>, cli: &Overrides) -> Resu
         };
         crate::uncertainty::report::check(&cfg, &data)?;
         let out = cfg.out_dir("profile");
-        let (mut folder, journal) = take_with_journal(
-            &out,
-            "profile",
-            &crate::uncertainty::report::identity(&cfg, given.as_deref()),
-        )?;
-        note_data(&mut folder, &data);
-        let bars = Bars::new(!cfg.run.progress);
-        let stop = stop_after(&bars, &journal, cfg.run.stop_after);
-        let hooks = Hooks {
-            observer: &stop,
-            journal: Some(&journal),
-        };
-        let run = crate::uncertainty::report::run_observed(
+        let identity = crate::uncertainty::report::identity(&cfg, given.as_deref());
+        journaled(
             &cfg,
             &data,
-            given.as_deref(),
-            &cfg.profile,
-            &hooks,
-        );
-        bars.clear();
-        let outcome = run.and_then(|run| export::profile::write(&cfg, &run, Some(&journal), &out));
-        folder.finish(outcome)
+            &out,
+            "profile",
+            &identity,
+            |hooks, bars, journal| {
+                let run = crate::uncertainty::report::run_observed(
+                    &cfg,
+                    &data,
+                    given.as_deref(),
+                    &cfg.profile,
+                    hooks,
+                );
+                bars.clear();
+                export::profile::write(&cfg, &run?, Some(journal), &out)
+            },
+        )
     })
 }
 
