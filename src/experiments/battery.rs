@@ -13,10 +13,8 @@
 //! `results.jsonl`, so an interrupted battery resumes where it stopped.
 
 use std::collections::BTreeMap;
-use std::fs::OpenOptions;
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
 
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -101,10 +99,7 @@ fn de_vec_f64<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Vec
     Ok(v.into_iter().map(|x| x.unwrap_or(f64::NAN)).collect())
 }
 
-/// A number JSON wrote as `null` (NaN) reads back as NaN.
-fn de_f64<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<f64, D::Error> {
-    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
-}
+use crate::journal::de_nan_f64 as de_f64;
 
 /// [`de_vec_f64`] for named numbers.
 fn de_named_f64<'de, D: serde::Deserializer<'de>>(
@@ -312,27 +307,11 @@ pub fn run_one_diagnosed(
 
 /// Results already in `dir/results.jsonl` (an interrupted battery), by seed.
 pub fn read_results(dir: &Path) -> Result<BTreeMap<u64, SetResult>> {
-    let p = dir.join("results.jsonl");
-    let text = match std::fs::read_to_string(&p) {
-        Ok(t) => t,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(BTreeMap::new()),
-        Err(e) => return Err(Error::io(&p, e)),
-    };
-    let mut out = BTreeMap::new();
-    let lines: Vec<&str> = text.lines().collect();
-    for (i, l) in lines.iter().enumerate() {
-        if l.trim().is_empty() {
-            continue;
-        }
-        match serde_json::from_str::<SetResult>(l) {
-            Ok(r) => {
-                out.insert(r.seed, r);
-            }
-            Err(_) if i + 1 == lines.len() => {} // torn last line: recomputed
-            Err(e) => return Err(Error::data(&p, i + 1, format!("not a battery result: {e}"))),
-        }
-    }
-    Ok(out)
+    crate::journal::read_lines_by(
+        &dir.join("results.jsonl"),
+        "a battery result",
+        |r: &SetResult| r.seed,
+    )
 }
 
 /// Run sets `first_seed .. first_seed + n` (set i gets scenario [`scenario_of`]`(i)`) into
@@ -367,19 +346,7 @@ pub fn run_battery_observed(
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     let done = read_results(dir)?;
     let path: PathBuf = dir.join("results.jsonl");
-    // Cut a torn last line before appending.
-    if let Ok(bytes) = std::fs::read(&path) {
-        let keep = bytes.iter().rposition(|b| *b == b'\n').map_or(0, |p| p + 1);
-        if keep < bytes.len() {
-            std::fs::write(&path, &bytes[..keep]).map_err(|e| Error::io(&path, e))?;
-        }
-    }
-    let file = OpenOptions::new()
-        .create(true)
-        .append(true)
-        .open(&path)
-        .map_err(|e| Error::io(&path, e))?;
-    let file = Mutex::new(file);
+    let file = crate::journal::append_lines(&path)?;
     let todo: Vec<(usize, u64)> = (0..n)
         .map(|i| (i, first_seed + i as u64))
         .filter(|(_, s)| !done.contains_key(s))

@@ -383,6 +383,60 @@ pub fn take_with_journal(
     Ok((folder, journal))
 }
 
+/// The records of a JSON-lines results file (one finished set per line, appended as each
+/// finishes: a battery's `results.jsonl`, a coverage run's `coverage.jsonl`), by `key`. A
+/// missing file is none; a torn last line (the run was killed while writing it) is skipped
+/// and recomputed; any other unreadable line is an error naming the file, the line and
+/// `what` the line should be.
+pub fn read_lines_by<T: DeserializeOwned>(
+    path: &Path,
+    what: &str,
+    key: impl Fn(&T) -> u64,
+) -> Result<std::collections::BTreeMap<u64, T>> {
+    let text = match std::fs::read_to_string(path) {
+        Ok(t) => t,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Default::default()),
+        Err(e) => return Err(Error::io(path, e)),
+    };
+    let lines: Vec<&str> = text.lines().collect();
+    let mut out = std::collections::BTreeMap::new();
+    for (i, l) in lines.iter().enumerate() {
+        if l.trim().is_empty() {
+            continue;
+        }
+        match serde_json::from_str::<T>(l) {
+            Ok(r) => {
+                out.insert(key(&r), r);
+            }
+            Err(_) if i + 1 == lines.len() => {} // torn last line: recomputed
+            Err(e) => return Err(Error::data(path, i + 1, format!("not {what}: {e}"))),
+        }
+    }
+    Ok(out)
+}
+
+/// `path` opened for appending results after cutting a torn last line (what
+/// [`read_lines_by`] skipped), shared by the workers that append to it.
+pub fn append_lines(path: &Path) -> Result<Mutex<File>> {
+    if let Ok(bytes) = std::fs::read(path) {
+        let keep = bytes.iter().rposition(|b| *b == b'\n').map_or(0, |p| p + 1);
+        if keep < bytes.len() {
+            std::fs::write(path, &bytes[..keep]).map_err(|e| Error::io(path, e))?;
+        }
+    }
+    let file = OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(path)
+        .map_err(|e| Error::io(path, e))?;
+    Ok(Mutex::new(file))
+}
+
+/// A number JSON wrote as `null` (NaN, ±∞) reads back as NaN (`#[serde(deserialize_with)]`).
+pub fn de_nan_f64<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

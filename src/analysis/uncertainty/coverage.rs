@@ -13,10 +13,8 @@
 //! stopped and never loses a finished set.
 
 use std::collections::BTreeMap;
-use std::fs::OpenOptions;
 use std::io::Write;
 use std::path::Path;
-use std::sync::Mutex;
 use std::time::Instant;
 
 use rand::SeedableRng;
@@ -67,10 +65,7 @@ fn nan() -> f64 {
     f64::NAN
 }
 
-/// An f64 that JSON wrote as `null` (NaN, ±∞) reads back as NaN.
-fn de_f64<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<f64, D::Error> {
-    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
-}
+use crate::journal::de_nan_f64 as de_f64;
 
 /// [`de_f64`] for an interval.
 fn de_iv<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Iv, D::Error> {
@@ -341,33 +336,11 @@ fn measure(dir: &Path, seed: u64, s: &CoverageSettings, out: &mut SetCoverage) -
 
 /// Results already in `dir/coverage.jsonl`, by seed.
 pub fn read_results(dir: &Path) -> Result<BTreeMap<u64, SetCoverage>> {
-    let p = dir.join("coverage.jsonl");
-    let text = match std::fs::read_to_string(&p) {
-        Ok(t) => t,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(BTreeMap::new()),
-        Err(e) => return Err(Error::io(&p, e)),
-    };
-    let lines: Vec<&str> = text.lines().collect();
-    let mut out = BTreeMap::new();
-    for (i, l) in lines.iter().enumerate() {
-        if l.trim().is_empty() {
-            continue;
-        }
-        match serde_json::from_str::<SetCoverage>(l) {
-            Ok(r) => {
-                out.insert(r.seed, r);
-            }
-            Err(_) if i + 1 == lines.len() => {} // torn last line: recomputed
-            Err(e) => {
-                return Err(Error::data(
-                    &p,
-                    i + 1,
-                    format!("not a coverage result: {e}"),
-                ))
-            }
-        }
-    }
-    Ok(out)
+    crate::journal::read_lines_by(
+        &dir.join("coverage.jsonl"),
+        "a coverage result",
+        |r: &SetCoverage| r.seed,
+    )
 }
 
 /// Measure sets `first_seed .. first_seed + n` into `dir`, skipping those already in
@@ -401,19 +374,7 @@ pub fn run_coverage_observed(
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     let done = read_results(dir)?;
     let path = dir.join("coverage.jsonl");
-    if let Ok(bytes) = std::fs::read(&path) {
-        let keep = bytes.iter().rposition(|b| *b == b'\n').map_or(0, |p| p + 1);
-        if keep < bytes.len() {
-            std::fs::write(&path, &bytes[..keep]).map_err(|e| Error::io(&path, e))?;
-        }
-    }
-    let file = Mutex::new(
-        OpenOptions::new()
-            .create(true)
-            .append(true)
-            .open(&path)
-            .map_err(|e| Error::io(&path, e))?,
-    );
+    let file = crate::journal::append_lines(&path)?;
     let todo: Vec<u64> = (0..n as u64)
         .map(|i| first_seed + i)
         .filter(|s| !done.contains_key(s))
