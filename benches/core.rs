@@ -1,7 +1,9 @@
 //! Criterion benchmarks of the core: one right-hand-side evaluation (four-state and reduced
 //! model), one simulation of one measured curve (560 °C, 100 MPa, the paper's start) in f64 and
 //! in dual numbers, one eq. 8 residual evaluation and one sensitivity Jacobian (three curves),
-//! and one local fit (560 °C, w = 1, from the paper's start). The 1,000-start × 10-w sweep is
+//! and one local fit (560 °C, w = 1, from the paper's start); JᵀJ of a Jacobian shaped like the
+//! hierarchical problem's at Alloy 617 850 °C (8,716 rows, 7 constants, 13 curves × 2 specimen
+//! effects), by nalgebra's `tr_mul` and by `lsq::gram` (the same numbers bit for bit). The 1,000-start × 10-w sweep is
 //! timed by `scripts/bench_sweep.sh` (a criterion sample of it would take minutes).
 
 use std::path::Path;
@@ -103,6 +105,37 @@ fn bench(c: &mut Criterion) {
                 &settings,
             )
         })
+    });
+    g.finish();
+
+    // 8,677 data rows + 13 rupture rows of 13 curves, 26 penalty rows; 7 dense columns, each
+    // effect column non-zero on its curve's rows and its penalty row.
+    let (curves, kinds, dense) = (13usize, 2usize, 7usize);
+    let per = 668usize;
+    let md = curves * per;
+    let m = md + curves * kinds;
+    let n = dense + curves * kinds;
+    let mut jac = DMatrix::<f64>::zeros(m, n);
+    for k in 0..dense {
+        for r in 0..md {
+            jac[(r, k)] = ((r * 7 + k * 13) as f64 * 0.001).sin();
+        }
+    }
+    for kk in 0..kinds {
+        for i in 0..curves {
+            let col = dense + kk * curves + i;
+            for r in i * per..(i + 1) * per {
+                jac[(r, col)] = ((r + kk) as f64 * 0.01).cos();
+            }
+            jac[(md + kk * curves + i, col)] = 2.0;
+        }
+    }
+    let mut g = c.benchmark_group("normal_equations_850C_effects");
+    g.bench_function("nalgebra_tr_mul", |b| {
+        b.iter(|| black_box(&jac).tr_mul(&jac))
+    });
+    g.bench_function("lsq_gram", |b| {
+        b.iter(|| creepfit::lsq::gram(black_box(&jac)))
     });
     g.finish();
 }

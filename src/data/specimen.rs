@@ -105,16 +105,22 @@ impl Lmm {
         eta: &[f64],
     ) -> Lmm {
         let n = rows.len();
+        let m = jac.nrows();
+        let data = jac.as_slice();
         let blocks = (0..n)
             .map(|i| {
                 let (a, b) = rows[i];
-                let zc = |kk: usize| p + kk * n + i;
+                // Column c of the Jacobian on curve i's rows.
+                let col = |c: usize| &data[c * m + a..c * m + b];
+                let zc = |kk: usize| col(p + kk * n + i);
+                let dot =
+                    |x: &[f64], y: &[f64]| -> f64 { x.iter().zip(y).map(|(u, v)| u * v).sum() };
                 // y = Z η⁰ − r⁰.
                 let y: Vec<f64> = (a..b)
                     .map(|row| {
                         let mut v = -r[row];
                         for kk in 0..k {
-                            v += jac[(row, zc(kk))] * eta[kk * n + i];
+                            v += zc(kk)[row - a] * eta[kk * n + i];
                         }
                         v
                     })
@@ -123,30 +129,29 @@ impl Lmm {
                 let mut zy = [0.0; 2];
                 for kk in 0..k {
                     for ll in 0..k {
-                        zz[kk][ll] = (a..b)
-                            .map(|row| jac[(row, zc(kk))] * jac[(row, zc(ll))])
-                            .sum();
+                        zz[kk][ll] = dot(zc(kk), zc(ll));
                     }
-                    zy[kk] = (a..b)
-                        .zip(&y)
-                        .map(|(row, yv)| jac[(row, zc(kk))] * yv)
-                        .sum();
+                    zy[kk] = dot(zc(kk), &y);
                 }
                 let xz: Vec<[f64; 2]> = (0..p)
                     .map(|c| {
                         let mut v = [0.0; 2];
                         for kk in 0..k {
-                            v[kk] = (a..b).map(|row| jac[(row, c)] * jac[(row, zc(kk))]).sum();
+                            v[kk] = dot(col(c), zc(kk));
                         }
                         v
                     })
                     .collect();
-                let xx = DMatrix::from_fn(p, p, |c, d| {
-                    (a..b).map(|row| jac[(row, c)] * jac[(row, d)]).sum()
-                });
-                let xy = DVector::from_fn(p, |c, _| {
-                    (a..b).zip(&y).map(|(row, yv)| jac[(row, c)] * yv).sum()
-                });
+                // Symmetric: each product commutes exactly, so the mirror is the same sum.
+                let mut xx = DMatrix::zeros(p, p);
+                for c in 0..p {
+                    for d in c..p {
+                        let v = dot(col(c), col(d));
+                        xx[(c, d)] = v;
+                        xx[(d, c)] = v;
+                    }
+                }
+                let xy = DVector::from_fn(p, |c, _| dot(col(c), &y));
                 let yy = y.iter().map(|v| v * v).sum();
                 CurveBlock {
                     zz,
@@ -169,6 +174,7 @@ impl Lmm {
         let mut b = DVector::<f64>::zeros(p);
         let mut q = 0.0;
         let mut ld = 0.0;
+        let mut xzm = vec![[0.0; 2]; p];
         for bl in &self.blocks {
             let mi = m_inv(k, &bl.zz, tau);
             ld += ln_det_idg(k, &bl.zz, tau);
@@ -181,26 +187,22 @@ impl Lmm {
             }
             q += bl.yy - s;
             // (XᵀZ) M⁻¹.
-            let xzm: Vec<[f64; 2]> = bl
-                .xz
-                .iter()
-                .map(|row| {
-                    let mut v = [0.0; 2];
-                    for ll in 0..k {
-                        for kk in 0..k {
-                            v[ll] += row[kk] * mi[kk][ll];
-                        }
+            for (v, row) in xzm.iter_mut().zip(&bl.xz) {
+                *v = [0.0; 2];
+                for ll in 0..k {
+                    for kk in 0..k {
+                        v[ll] += row[kk] * mi[kk][ll];
                     }
-                    v
-                })
-                .collect();
+                }
+            }
             for c in 0..p {
                 let mut bc = bl.xy[c];
                 for kk in 0..k {
                     bc -= xzm[c][kk] * bl.zy[kk];
                 }
                 b[c] += bc;
-                for d in 0..p {
+                // The lower triangle: all the Cholesky factorisation below reads.
+                for d in 0..=c {
                     let mut v = bl.xx[(c, d)];
                     for kk in 0..k {
                         v -= xzm[c][kk] * bl.xz[d][kk];
@@ -223,7 +225,7 @@ impl Lmm {
         for c in 0..p {
             a[(c, c)] += 1e-12 * scale;
         }
-        let Some(ch) = a.clone().cholesky() else {
+        let Some(ch) = a.cholesky() else {
             return f64::INFINITY;
         };
         let sol = ch.solve(&b);

@@ -541,6 +541,11 @@ impl<'a> LikelihoodProblem<'a> {
                 let nrows = j.nrows();
                 for k in 0..j.ncols() {
                     let col = &mut j.as_mut_slice()[k * nrows + off..k * nrows + off + n];
+                    // Both maps are linear and keep +0 exactly: an effect column of
+                    // another curve (zero on these rows) is left as it is.
+                    if col.iter().all(|&v| v == 0.0) {
+                        continue;
+                    }
                     po.unwhiten_strided(col, n, 1);
                     pn.whiten(col);
                 }

@@ -136,8 +136,7 @@ fn whitened(
 
 /// Least-squares coefficients of `r` on the columns of `x` (pseudo-inverse when singular).
 fn solve(x: &DMatrix<f64>, r: &DVector<f64>) -> DVector<f64> {
-    let xtx = x.tr_mul(x);
-    let xtr = x.tr_mul(r);
+    let (xtr, xtx) = crate::lsq::normal_products(x, r.as_slice());
     match xtx.clone().cholesky() {
         Some(ch) => ch.solve(&xtr),
         None => {

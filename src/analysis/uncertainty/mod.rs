@@ -226,7 +226,7 @@ pub fn information(
             crate::lsq::fd_jacobian(&problem, &u, &r, &lb, &ub, 1e-6, &mut jac, &mut ev).ok()?;
         }
     }
-    let i = jac.tr_mul(&jac);
+    let i = crate::lsq::gram(&jac);
     i.iter().all(|v| v.is_finite()).then_some(i)
 }
 

@@ -130,11 +130,8 @@ impl NormalEquations {
     /// From a stored Jacobian `jac` (m × n) and residuals `r`: the products the iteration
     /// forms on the stored path.
     pub fn from_jacobian(jac: &DMatrix<f64>, r: &[f64]) -> Self {
-        let rv = DVector::from_column_slice(r);
-        NormalEquations {
-            jtj: jac.tr_mul(jac),
-            jtr: jac.tr_mul(&rv),
-        }
+        let (jtr, jtj) = normal_products(jac, r);
+        NormalEquations { jtj, jtr }
     }
 }
 
@@ -525,11 +522,12 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
             return fail(x, iter, evaluations, e, f, r);
         }
         // ∇(½‖r‖²) and JᵀJ.
-        let (g, jtj) = if normal {
-            (ne.jtr.clone(), ne.jtj.clone())
-        } else {
-            let rv = DVector::from_column_slice(&r);
-            (jac.tr_mul(&rv), jac.tr_mul(&jac))
+        // The stored Jacobian's non-zero blocks, for its products with vectors below.
+        let blocks = if normal { None } else { Blocks::of(&jac) };
+        let (g, jtj) = match (&blocks, normal) {
+            (_, true) => (ne.jtr.clone(), ne.jtj.clone()),
+            (Some(bl), false) => (bl.tr_vec(&jac, &r), bl.gram(&jac)),
+            (None, false) => normal_products(&jac, &r),
         };
         let lin = if normal {
             Linear::Normal(&jtj, &g)
@@ -669,7 +667,11 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
                             m,
                             (0..m).map(|i| 2.0 / hh * ((r_probe[i] - r[i]) / hh - jv[i])),
                         );
-                        jt_rvv.copy_from_slice(jac.tr_mul(&rvv).as_slice());
+                        let jt = match &blocks {
+                            Some(bl) => bl.tr_vec(&jac, rvv.as_slice()),
+                            None => jac.tr_mul(&rvv),
+                        };
+                        jt_rvv.copy_from_slice(jt.as_slice());
                     }
                     ok
                 };
@@ -763,4 +765,205 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
         evaluations,
         Termination::IterationLimit,
     )
+}
+
+/// Rows per block of [`gram`]'s zero-skipping (nalgebra's dot product unrolls by 8).
+const GRAM_BLOCK: usize = 8;
+
+/// JᵀJ of an m × n matrix, bit for bit nalgebra's `jac.tr_mul(jac)`, at a fraction of its
+/// cost for the Jacobians of problems with specimen effects: each entry is the same 8-way
+/// unrolled dot product, computed once for the upper triangle and mirrored (the products
+/// commute exactly), and 8-row blocks where either column is exactly zero are skipped (they
+/// add exact zeros; an effect column is zero outside its curve's rows). A matrix with a
+/// non-finite entry goes to nalgebra unchanged (0·∞ must stay NaN).
+pub fn gram(jac: &DMatrix<f64>) -> DMatrix<f64> {
+    match Blocks::of(jac) {
+        Some(bl) => bl.gram(jac),
+        None => jac.tr_mul(jac),
+    }
+}
+
+/// Jᵀr and JᵀJ, bit for bit nalgebra's `jac.tr_mul(&r)` and `jac.tr_mul(jac)` (see [`gram`]).
+pub fn normal_products(jac: &DMatrix<f64>, r: &[f64]) -> (DVector<f64>, DMatrix<f64>) {
+    match Blocks::of(jac) {
+        Some(bl) => (bl.tr_vec(jac, r), bl.gram(jac)),
+        None => {
+            let rv = DVector::from_column_slice(r);
+            (jac.tr_mul(&rv), jac.tr_mul(jac))
+        }
+    }
+}
+
+/// Which 8-row blocks of each column of a finite matrix hold a non-zero entry.
+struct Blocks {
+    active: Vec<Vec<usize>>,
+}
+
+impl Blocks {
+    /// None if the matrix has a non-finite entry.
+    fn of(jac: &DMatrix<f64>) -> Option<Blocks> {
+        let (m, n) = jac.shape();
+        let data = jac.as_slice();
+        if !data.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        let full = m / GRAM_BLOCK;
+        let active = (0..n)
+            .map(|k| {
+                let col = &data[k * m..(k + 1) * m];
+                (0..full)
+                    .filter(|&b| {
+                        col[b * GRAM_BLOCK..(b + 1) * GRAM_BLOCK]
+                            .iter()
+                            .any(|&v| v != 0.0)
+                    })
+                    .collect()
+            })
+            .collect();
+        Some(Blocks { active })
+    }
+
+    /// nalgebra's dot product of `a` and `b` over the blocks `blocks` (the others add exact
+    /// zeros) and the tail rows past the last whole block.
+    #[inline]
+    fn dot(a: &[f64], b: &[f64], blocks: impl Iterator<Item = usize>) -> f64 {
+        let mut acc = [0.0f64; GRAM_BLOCK];
+        for blk in blocks {
+            let r0 = blk * GRAM_BLOCK;
+            for (k, s) in acc.iter_mut().enumerate() {
+                *s += a[r0 + k] * b[r0 + k];
+            }
+        }
+        let mut res = 0.0;
+        res += acc[0] + acc[4];
+        res += acc[1] + acc[5];
+        res += acc[2] + acc[6];
+        res += acc[3] + acc[7];
+        for k in (a.len() / GRAM_BLOCK) * GRAM_BLOCK..a.len() {
+            res += a[k] * b[k];
+        }
+        res
+    }
+
+    fn gram(&self, jac: &DMatrix<f64>) -> DMatrix<f64> {
+        let (m, n) = jac.shape();
+        let data = jac.as_slice();
+        let mut out = DMatrix::zeros(n, n);
+        for i in 0..n {
+            let a = &data[i * m..(i + 1) * m];
+            for j in i..n {
+                let b = &data[j * m..(j + 1) * m];
+                let res = Self::dot(a, b, Both::new(&self.active[i], &self.active[j]));
+                out[(i, j)] = res;
+                out[(j, i)] = res;
+            }
+        }
+        out
+    }
+
+    fn tr_vec(&self, jac: &DMatrix<f64>, r: &[f64]) -> DVector<f64> {
+        let (m, n) = jac.shape();
+        let data = jac.as_slice();
+        DVector::from_fn(n, |i, _| {
+            Self::dot(&data[i * m..(i + 1) * m], r, self.active[i].iter().copied())
+        })
+    }
+}
+
+/// The blocks in both of two increasing lists, in increasing order.
+struct Both<'a> {
+    a: &'a [usize],
+    b: &'a [usize],
+}
+
+impl<'a> Both<'a> {
+    fn new(a: &'a [usize], b: &'a [usize]) -> Self {
+        Both { a, b }
+    }
+}
+
+impl Iterator for Both<'_> {
+    type Item = usize;
+    #[inline]
+    fn next(&mut self) -> Option<usize> {
+        while let (Some(&x), Some(&y)) = (self.a.first(), self.b.first()) {
+            match x.cmp(&y) {
+                std::cmp::Ordering::Less => self.a = &self.a[1..],
+                std::cmp::Ordering::Greater => self.b = &self.b[1..],
+                std::cmp::Ordering::Equal => {
+                    self.a = &self.a[1..];
+                    self.b = &self.b[1..];
+                    return Some(x);
+                }
+            }
+        }
+        None
+    }
+}
+
+#[cfg(test)]
+mod gram_tests {
+    use super::{gram, normal_products};
+    use nalgebra::DMatrix;
+    use rand::{Rng, SeedableRng};
+
+    /// A Jacobian shaped like one with specimen effects: dense columns, and columns non-zero
+    /// only on one curve's rows (block boundaries not multiples of 8), plus a penalty row.
+    fn effects_like(m: usize, dense: usize, curves: usize, seed: u64) -> DMatrix<f64> {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
+        let n = dense + curves;
+        let mut j = DMatrix::zeros(m, n);
+        for k in 0..dense {
+            for r in 0..m {
+                j[(r, k)] = rng.gen_range(-1e3..1e3) * 10f64.powi(rng.gen_range(-6..6));
+            }
+        }
+        let per = (m - curves) / curves.max(1);
+        for c in 0..curves {
+            for r in c * per + 3..((c + 1) * per + 1).min(m) {
+                j[(r, dense + c)] = rng.gen_range(-5.0..5.0);
+            }
+            j[(m - curves + c, dense + c)] = 0.7;
+        }
+        j
+    }
+
+    #[test]
+    fn gram_is_nalgebras_tr_mul_bit_for_bit() {
+        for (m, dense, curves, seed) in [
+            (1, 1, 0, 1),
+            (7, 2, 1, 2),
+            (64, 3, 2, 3),
+            (1003, 6, 13, 4),
+            (5000, 8, 26, 5),
+        ] {
+            let j = effects_like(m.max(curves + 1), dense, curves, seed);
+            let want = j.tr_mul(&j);
+            let got = gram(&j);
+            assert_eq!(got.shape(), want.shape());
+            let r: Vec<f64> = (0..j.nrows()).map(|i| (i as f64 * 0.37).sin()).collect();
+            let (jtr, jtj) = normal_products(&j, &r);
+            let want_r = j.tr_mul(&nalgebra::DVector::from_column_slice(&r));
+            assert_eq!(jtj, got);
+            for (g, w) in jtr.iter().zip(want_r.iter()) {
+                assert_eq!(g.to_bits(), w.to_bits(), "Jᵀr, m {m}: {g} vs {w}");
+            }
+            for (g, w) in got.iter().zip(want.iter()) {
+                assert_eq!(g.to_bits(), w.to_bits(), "m {m}: {g} vs {w}");
+            }
+        }
+    }
+
+    #[test]
+    fn gram_keeps_non_finite_entries_poisoning() {
+        let mut j = effects_like(40, 2, 2, 9);
+        // An infinity where the other effect column is zero: 0·∞ = NaN in JᵀJ.
+        j[(0, 0)] = f64::INFINITY;
+        let got = gram(&j);
+        let want = j.tr_mul(&j);
+        for (g, w) in got.iter().zip(want.iter()) {
+            assert!(g.to_bits() == w.to_bits() || (g.is_nan() && w.is_nan()));
+        }
+        assert!(got[(0, 3)].is_nan(), "0·∞ must stay NaN");
+    }
 }
