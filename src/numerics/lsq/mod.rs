@@ -794,9 +794,10 @@ pub fn normal_products(jac: &DMatrix<f64>, r: &[f64]) -> (DVector<f64>, DMatrix<
     }
 }
 
-/// Which 8-row blocks of each column of a finite matrix hold a non-zero entry.
+/// Which 8-row blocks of each column of a finite matrix hold a non-zero entry, as runs
+/// [first, end) of consecutive blocks.
 struct Blocks {
-    active: Vec<Vec<usize>>,
+    runs: Vec<Vec<(usize, usize)>>,
 }
 
 impl Blocks {
@@ -807,31 +808,38 @@ impl Blocks {
         if !data.iter().all(|v| v.is_finite()) {
             return None;
         }
-        let full = m / GRAM_BLOCK;
-        let active = (0..n)
+        let runs = (0..n)
             .map(|k| {
                 let col = &data[k * m..(k + 1) * m];
-                (0..full)
-                    .filter(|&b| {
-                        col[b * GRAM_BLOCK..(b + 1) * GRAM_BLOCK]
-                            .iter()
-                            .any(|&v| v != 0.0)
-                    })
-                    .collect()
+                let mut runs: Vec<(usize, usize)> = Vec::new();
+                for (b, chunk) in col.chunks_exact(GRAM_BLOCK).enumerate() {
+                    if chunk.iter().any(|&v| v != 0.0) {
+                        match runs.last_mut() {
+                            Some(last) if last.1 == b => last.1 = b + 1,
+                            _ => runs.push((b, b + 1)),
+                        }
+                    }
+                }
+                runs
             })
             .collect();
-        Some(Blocks { active })
+        Some(Blocks { runs })
     }
 
-    /// nalgebra's dot product of `a` and `b` over the blocks `blocks` (the others add exact
-    /// zeros) and the tail rows past the last whole block.
+    /// nalgebra's dot product of `a` and `b` over the block runs `runs` (the other blocks add
+    /// exact zeros) and the tail rows past the last whole block.
     #[inline]
-    fn dot(a: &[f64], b: &[f64], blocks: impl Iterator<Item = usize>) -> f64 {
+    fn dot(a: &[f64], b: &[f64], runs: impl Iterator<Item = (usize, usize)>) -> f64 {
         let mut acc = [0.0f64; GRAM_BLOCK];
-        for blk in blocks {
-            let r0 = blk * GRAM_BLOCK;
-            for (k, s) in acc.iter_mut().enumerate() {
-                *s += a[r0 + k] * b[r0 + k];
+        for (lo, hi) in runs {
+            let (ra, rb) = (
+                &a[lo * GRAM_BLOCK..hi * GRAM_BLOCK],
+                &b[lo * GRAM_BLOCK..hi * GRAM_BLOCK],
+            );
+            for (ca, cb) in ra.chunks_exact(GRAM_BLOCK).zip(rb.chunks_exact(GRAM_BLOCK)) {
+                for k in 0..GRAM_BLOCK {
+                    acc[k] += ca[k] * cb[k];
+                }
             }
         }
         let mut res = 0.0;
@@ -853,7 +861,7 @@ impl Blocks {
             let a = &data[i * m..(i + 1) * m];
             for j in i..n {
                 let b = &data[j * m..(j + 1) * m];
-                let res = Self::dot(a, b, Both::new(&self.active[i], &self.active[j]));
+                let res = Self::dot(a, b, Both::new(&self.runs[i], &self.runs[j]));
                 out[(i, j)] = res;
                 out[(j, i)] = res;
             }
@@ -865,36 +873,37 @@ impl Blocks {
         let (m, n) = jac.shape();
         let data = jac.as_slice();
         DVector::from_fn(n, |i, _| {
-            Self::dot(&data[i * m..(i + 1) * m], r, self.active[i].iter().copied())
+            Self::dot(&data[i * m..(i + 1) * m], r, self.runs[i].iter().copied())
         })
     }
 }
 
-/// The blocks in both of two increasing lists, in increasing order.
+/// The overlaps of two increasing lists of disjoint runs [first, end), in increasing order.
 struct Both<'a> {
-    a: &'a [usize],
-    b: &'a [usize],
+    a: &'a [(usize, usize)],
+    b: &'a [(usize, usize)],
 }
 
 impl<'a> Both<'a> {
-    fn new(a: &'a [usize], b: &'a [usize]) -> Self {
+    fn new(a: &'a [(usize, usize)], b: &'a [(usize, usize)]) -> Self {
         Both { a, b }
     }
 }
 
 impl Iterator for Both<'_> {
-    type Item = usize;
+    type Item = (usize, usize);
     #[inline]
-    fn next(&mut self) -> Option<usize> {
+    fn next(&mut self) -> Option<(usize, usize)> {
         while let (Some(&x), Some(&y)) = (self.a.first(), self.b.first()) {
-            match x.cmp(&y) {
-                std::cmp::Ordering::Less => self.a = &self.a[1..],
-                std::cmp::Ordering::Greater => self.b = &self.b[1..],
-                std::cmp::Ordering::Equal => {
-                    self.a = &self.a[1..];
-                    self.b = &self.b[1..];
-                    return Some(x);
-                }
+            let (lo, hi) = (x.0.max(y.0), x.1.min(y.1));
+            // The run that ends first has no further overlap.
+            if x.1 <= y.1 {
+                self.a = &self.a[1..];
+            } else {
+                self.b = &self.b[1..];
+            }
+            if lo < hi {
+                return Some((lo, hi));
             }
         }
         None
@@ -950,6 +959,37 @@ mod gram_tests {
             }
             for (g, w) in got.iter().zip(want.iter()) {
                 assert_eq!(g.to_bits(), w.to_bits(), "m {m}: {g} vs {w}");
+            }
+        }
+    }
+
+    #[test]
+    fn gram_is_tr_mul_for_random_zero_patterns() {
+        // Columns with random runs of zero rows (any length, any offset): every kind of
+        // overlap between two columns' non-zero block runs.
+        let mut rng = rand::rngs::StdRng::seed_from_u64(11);
+        for trial in 0..50 {
+            let (m, n) = (rng.gen_range(1..300), rng.gen_range(1..9));
+            let mut j = DMatrix::from_fn(m, n, |_, _| rng.gen_range(-2.0..2.0));
+            for k in 0..n {
+                for _ in 0..rng.gen_range(0..6) {
+                    let a = rng.gen_range(0..m);
+                    let b = (a + rng.gen_range(0..80)).min(m);
+                    for r in a..b {
+                        j[(r, k)] = if rng.gen_bool(0.5) { 0.0 } else { -0.0 };
+                    }
+                }
+            }
+            let r: Vec<f64> = (0..m).map(|_| rng.gen_range(-1.0..1.0)).collect();
+            let (jtr, jtj) = normal_products(&j, &r);
+            let want = j.tr_mul(&j);
+            let want_r = j.tr_mul(&nalgebra::DVector::from_column_slice(&r));
+            for (g, w) in jtj
+                .iter()
+                .zip(want.iter())
+                .chain(jtr.iter().zip(want_r.iter()))
+            {
+                assert_eq!(g.to_bits(), w.to_bits(), "trial {trial}: {g} vs {w}");
             }
         }
     }
