@@ -175,15 +175,17 @@ fn widen(g: f64, lo: f64, hi: f64, s: f64) -> (f64, f64) {
 }
 
 /// Confidence and prediction intervals of rupture time, minimum rate and rupture strain at
-/// `load` (the three profile searches in parallel). A quantity that cannot be predicted (no
+/// `load` (the three profile searches in parallel), the prediction intervals widened by
+/// `scatter` ([`specimen_scatter`], the same at every load: computed once per run, since
+/// with specimen effects it is a hierarchical fit). A quantity that cannot be predicted (no
 /// rupture within the horizon at the fitted constants) is left out.
 pub fn prediction_intervals(
     ctx: &Context,
     reference: &Reference,
     load: &Load,
     th: &Thresholds,
+    scatter: &[(f64, usize); 3],
 ) -> Vec<PredictedInterval> {
-    let scatter = specimen_scatter(ctx, reference);
     let qi: Vec<Option<QuantityInterval>> = QUANTITIES
         .par_iter()
         .map(|&(_, what, _)| {
@@ -194,7 +196,7 @@ pub fn prediction_intervals(
     QUANTITIES
         .iter()
         .zip(qi)
-        .zip(scatter)
+        .zip(scatter.iter().copied())
         .filter_map(|(((name, _, unit), qi), (s, n))| {
             let qi = qi?;
             let iv = qi.interval;
@@ -506,12 +508,17 @@ pub fn intervals_at_observed(
     };
     let fractions = band_fractions(pc.band_points);
     hooks.phase("intervals at the conditions", loads.len());
+    let scatter = if loads.is_empty() {
+        [(f64::NAN, 0); 3]
+    } else {
+        specimen_scatter(&ctx, &reference)
+    };
     let conditions = loads
         .iter()
         .map(|l| {
             hooks.check("intervals at the conditions")?;
             let c = ConditionIntervals {
-                quantities: prediction_intervals(&ctx, &reference, l, &th),
+                quantities: prediction_intervals(&ctx, &reference, l, &th, &scatter),
                 band: prediction_band(&ctx, &reference, l, &fractions, &th),
             };
             hooks.step();

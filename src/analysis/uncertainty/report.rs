@@ -306,6 +306,11 @@ pub fn run_observed(
     if !loads.is_empty() {
         hooks.phase("predictions", loads.len());
     }
+    let scatter = if loads.is_empty() {
+        [(f64::NAN, 0); 3]
+    } else {
+        super::predict::specimen_scatter(&ctx, &reference)
+    };
     for (t, l) in &loads {
         hooks.check("predictions")?;
         let condition = crate::data::Condition {
@@ -318,7 +323,7 @@ pub fn run_observed(
             .outcome
             .as_str();
         let ti = Instant::now();
-        let quantities = prediction_intervals(&ctx, &reference, l, &pth);
+        let quantities = prediction_intervals(&ctx, &reference, l, &pth, &scatter);
         timings.prediction_intervals += ti.elapsed().as_secs_f64();
         let tb = Instant::now();
         let band = prediction_band(&ctx, &reference, l, &fractions, &pth);
