@@ -226,10 +226,6 @@ fn fit_all(
         .collect()
 }
 
-/// One model's fits on the data: the best fit, the failed starts, the distinct optima (warm
-/// starts of the bootstrap's refits) and the starts.
-type ModelFitsOut = (Option<MlFit>, usize, Vec<Vec<f64>>, Vec<Vec<f64>>);
-
 /// A base refit that beats the base fit by less than this (−2 ln L) does not replace it.
 const CROSS_TOL: f64 = 1e-3;
 
@@ -988,7 +984,7 @@ pub fn diagnose_observed(
     hooks.phase("fits on the data", specs.len());
     // One model's fits: the base's optimum (`base`) seeds each extension's starts, so the
     // base is fitted first and the extensions, independent of each other, in parallel.
-    let fit_model = |i: usize, base: Option<&MlFit>| -> Result<ModelFitsOut> {
+    let fit_model = |i: usize, base: Option<&MlFit>| -> Result<(hooks::ModelFits, Vec<Vec<f64>>)> {
         let spec = &specs[i];
         let mut starts = vec![spec.start_from_base(&khd_names, &guess.params)];
         if i > 0 {
@@ -1008,7 +1004,7 @@ pub fn diagnose_observed(
         // 617: 110 s of 235 s), too long to redo after an interruption.
         let key = hooks::fits_key(i, &spec.name, &starts);
         if let Some(done) = hooks.fits_done(&key) {
-            return Ok((done.best, done.failed, done.basins, starts));
+            return Ok((done, starts));
         }
         hooks.check("fits on the data")?;
         // The base optimum (extension off) is polished directly: a nested extension then
@@ -1044,7 +1040,7 @@ pub fn diagnose_observed(
             &settings,
             &ml,
         ));
-        let model_basins = distinct_optima(spec, &all, dc.replicate_basins);
+        let basins = distinct_optima(spec, &all, dc.replicate_basins);
         let best =
             all.into_iter()
                 .filter(|f| f.ok())
@@ -1066,25 +1062,23 @@ pub fn diagnose_observed(
                 starts.len()
             )));
         }
-        hooks.fits_finished(
-            &key,
-            &hooks::ModelFits {
-                best: best.clone(),
-                failed,
-                basins: model_basins.clone(),
-            },
-        )?;
-        Ok((best, failed, model_basins, starts))
+        let done = hooks::ModelFits {
+            best,
+            failed,
+            basins,
+        };
+        hooks.fits_finished(&key, &done)?;
+        Ok((done, starts))
     };
     let base_out = fit_model(0, None)?;
-    let ext_out: Vec<ModelFitsOut> = (1..specs.len())
+    let ext_out: Vec<_> = (1..specs.len())
         .into_par_iter()
-        .map(|i| fit_model(i, base_out.0.as_ref()))
+        .map(|i| fit_model(i, base_out.0.best.as_ref()))
         .collect::<Result<_>>()?;
-    for (best, failed, model_basins, starts) in std::iter::once(base_out).chain(ext_out) {
-        fits.push(best);
-        failed_starts.push(failed);
-        basins.push(model_basins);
+    for (done, starts) in std::iter::once(base_out).chain(ext_out) {
+        fits.push(done.best);
+        failed_starts.push(done.failed);
+        basins.push(done.basins);
         start_sets.push(starts);
     }
     for j in cross_start(specs, &mut fits, curves, &settings, &ml) {

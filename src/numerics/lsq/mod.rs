@@ -524,10 +524,13 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
         // ∇(½‖r‖²) and JᵀJ.
         // The stored Jacobian's non-zero blocks, for its products with vectors below.
         let blocks = if normal { None } else { Blocks::of(&jac) };
-        let (g, jtj) = match (&blocks, normal) {
-            (_, true) => (ne.jtr.clone(), ne.jtj.clone()),
-            (Some(bl), false) => (bl.tr_vec(&jac, &r), bl.gram(&jac)),
-            (None, false) => normal_products(&jac, &r),
+        let (g, jtj) = if normal {
+            (ne.jtr.clone(), ne.jtj.clone())
+        } else {
+            (
+                tr_vec_with(blocks.as_ref(), &jac, &r),
+                gram_with(blocks.as_ref(), &jac),
+            )
         };
         let lin = if normal {
             Linear::Normal(&jtj, &g)
@@ -667,10 +670,7 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
                             m,
                             (0..m).map(|i| 2.0 / hh * ((r_probe[i] - r[i]) / hh - jv[i])),
                         );
-                        let jt = match &blocks {
-                            Some(bl) => bl.tr_vec(&jac, rvv.as_slice()),
-                            None => jac.tr_mul(&rvv),
-                        };
+                        let jt = tr_vec_with(blocks.as_ref(), &jac, rvv.as_slice());
                         jt_rvv.copy_from_slice(jt.as_slice());
                     }
                     ok
@@ -777,20 +777,31 @@ const GRAM_BLOCK: usize = 8;
 /// add exact zeros; an effect column is zero outside its curve's rows). A matrix with a
 /// non-finite entry goes to nalgebra unchanged (0·∞ must stay NaN).
 pub fn gram(jac: &DMatrix<f64>) -> DMatrix<f64> {
-    match Blocks::of(jac) {
+    gram_with(Blocks::of(jac).as_ref(), jac)
+}
+
+/// Jᵀr and JᵀJ, bit for bit nalgebra's `jac.tr_mul(&r)` and `jac.tr_mul(jac)` (see [`gram`]).
+pub fn normal_products(jac: &DMatrix<f64>, r: &[f64]) -> (DVector<f64>, DMatrix<f64>) {
+    let blocks = Blocks::of(jac);
+    (
+        tr_vec_with(blocks.as_ref(), jac, r),
+        gram_with(blocks.as_ref(), jac),
+    )
+}
+
+/// [`gram`] with the non-zero blocks of `jac` known (`None`: not finite, nalgebra's product).
+fn gram_with(blocks: Option<&Blocks>, jac: &DMatrix<f64>) -> DMatrix<f64> {
+    match blocks {
         Some(bl) => bl.gram(jac),
         None => jac.tr_mul(jac),
     }
 }
 
-/// Jᵀr and JᵀJ, bit for bit nalgebra's `jac.tr_mul(&r)` and `jac.tr_mul(jac)` (see [`gram`]).
-pub fn normal_products(jac: &DMatrix<f64>, r: &[f64]) -> (DVector<f64>, DMatrix<f64>) {
-    match Blocks::of(jac) {
-        Some(bl) => (bl.tr_vec(jac, r), bl.gram(jac)),
-        None => {
-            let rv = DVector::from_column_slice(r);
-            (jac.tr_mul(&rv), jac.tr_mul(jac))
-        }
+/// Jᵀv, bit for bit nalgebra's, with the non-zero blocks of `jac` known (see [`gram_with`]).
+fn tr_vec_with(blocks: Option<&Blocks>, jac: &DMatrix<f64>, v: &[f64]) -> DVector<f64> {
+    match blocks {
+        Some(bl) => bl.tr_vec(jac, v),
+        None => jac.tr_mul(&DVector::from_column_slice(v)),
     }
 }
 
