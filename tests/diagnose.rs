@@ -207,10 +207,24 @@ fn diagnosis_json_keeps_its_contract() {
             assert!(c.get(k).is_some(), "{} lacks {k}", c["name"]);
         }
     }
+    assert!(d["base"]["lr_critical"].is_null());
+    let alpha = d["alpha"].as_f64().unwrap();
     for c in cands {
         let p = c["p_value"].as_f64().unwrap();
         assert!(p > 0.0 && p <= 1.0, "{p}");
+        // The ratio needed for p ≤ α agrees with the p-value reported beside it (159
+        // replicates can give p ≤ 0.05, so it is a number unless refits failed).
+        if let Some(crit) = c["lr_critical"].as_f64() {
+            let lr = c["lr"].as_f64().unwrap();
+            assert_eq!(
+                lr > crit,
+                p <= alpha,
+                "{}: lr {lr}, needed {crit}, p {p}",
+                c["name"]
+            );
+        }
     }
+    assert!(cands.iter().any(|c| c["lr_critical"].is_f64()));
     let gof = d["gof"].as_array().unwrap();
     assert_eq!(gof.len(), 2);
     assert!(gof.iter().all(|g| g["p_value"].as_f64().unwrap() > 0.0));

@@ -174,6 +174,32 @@ pub fn p_value(obs: f64, sample: &[f64]) -> f64 {
     (1 + ge) as f64 / (sample.len() + 1) as f64
 }
 
+/// The critical value of the test at level `alpha` before any multiplicity adjustment: the
+/// statistic an observation needs for [`p_value`] ≤ `alpha` against `sample` (its null's upper
+/// `alpha` quantile, a replicate not computed counted as exceeding everything, plus
+/// [`TIE`]). `None` when no observation can reach it (fewer than 1/α − 1 replicates, or too
+/// many not computed). A wide null (a critical value far above a χ² quantile) says the
+/// replicates' refits disagree, so a real effect needs a large ratio to show.
+pub fn critical_value(sample: &[f64], alpha: f64) -> Option<f64> {
+    // p ≤ α ⇔ #{T* ≥ T − TIE or not computed} ≤ α(B + 1) − 1 =: k.
+    let k = (alpha * (sample.len() + 1) as f64 - 1.0 + 1e-9).floor();
+    if k < 0.0 {
+        return None;
+    }
+    let mut s: Vec<f64> = sample
+        .iter()
+        .map(|v| if v.is_nan() { f64::INFINITY } else { *v })
+        .collect();
+    s.sort_by(|a, b| b.total_cmp(a));
+    match s.get(k as usize) {
+        Some(v) if v.is_finite() => Some(v + TIE),
+        Some(_) => None,
+        // Every replicate may exceed the observation.
+        None => Some(f64::NEG_INFINITY),
+    }
+    .filter(|v| v.is_finite())
+}
+
 /// Run replicates `0..max` of `one` in batches; after each batch stop if every one of the
 /// `observed` statistics has at least [`STOP_EXCEEDANCES`] replicates at or above it. `one`
 /// returns one statistic per observed one (NaN: not computed). Returns the replicates' statistics
@@ -227,6 +253,52 @@ mod tests {
         // A nested extension at its switched-off value: T = 0 up to fitting noise on the data
         // and in the replicates; the noise's sign must not make it significant.
         assert_eq!(p_value(2e-7, &[-3e-6, -1e-5, -2e-4]), 1.0);
+    }
+
+    #[test]
+    fn critical_values_are_where_the_p_value_crosses_alpha() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(20261126);
+        let mut reached = 0;
+        for case in 0..2000 {
+            let b = rng.gen_range(1..200);
+            let sample: Vec<f64> = (0..b)
+                .map(|_| {
+                    if rng.gen_bool(0.05) {
+                        f64::NAN
+                    } else {
+                        // Ties on a coarse grid as well as continuous values.
+                        if case % 2 == 0 {
+                            rng.gen_range(-5.0f64..50.0)
+                        } else {
+                            rng.gen_range(0..20) as f64
+                        }
+                    }
+                })
+                .collect();
+            let alpha = [0.01, 0.05, 0.1][case % 3];
+            match critical_value(&sample, alpha) {
+                Some(c) => {
+                    reached += 1;
+                    // Just above it the test rejects, just below it does not.
+                    assert!(p_value(c + 1e-9, &sample) <= alpha, "case {case}");
+                    assert!(p_value(c - 1e-6, &sample) > alpha, "case {case}");
+                }
+                None => {
+                    // Nothing reaches α: not even an observation above every replicate.
+                    assert!(p_value(1e12, &sample) > alpha, "case {case}");
+                }
+            }
+        }
+        // Not vacuous: the property above ran on many samples that can reach α (809 of 2000).
+        assert!(reached >= 500, "{reached}");
+        // By hand: 19 replicates at α = 0.05 leave no room for any exceedance.
+        let s: Vec<f64> = (1..=19).map(f64::from).collect();
+        assert_eq!(critical_value(&s, 0.05), Some(19.0 + TIE));
+        assert_eq!(critical_value(&s[..18], 0.05), None);
+        let mut with_failure = s.clone();
+        with_failure[0] = f64::NAN;
+        assert_eq!(critical_value(&with_failure, 0.05), None);
     }
 
     #[test]

@@ -155,7 +155,7 @@ pub fn report_md(name: &str, setup: &DiagnoseSetup, d: &Diagnosis) -> String {
                 .join(", ")
         );
     }
-    s += "\n## Candidates\n\n| model | −2 ln L | AIC | LR | p | p (Holm) | ΔBIC (n_eff) | leave-one-stress-out RMSE | gain % | held-out lifetime error % | lifetime errors % | extra constants |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+    s += "\n## Candidates\n\n| model | −2 ln L | AIC | LR | LR needed (p ≤ α) | p | p (Holm) | ΔBIC (n_eff) | leave-one-stress-out RMSE | gain % | held-out lifetime error % | lifetime errors % | extra constants |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     let row = |c: &Candidate| -> String {
         let extra: Vec<String> = c
             .extra_constants
@@ -166,12 +166,13 @@ pub fn report_md(name: &str, setup: &DiagnoseSetup, d: &Diagnosis) -> String {
             })
             .collect();
         format!(
-            "| {}{} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            "| {}{} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
             c.name,
             if c.significant { " *" } else { "" },
             f(c.objective, 2),
             f(c.aic, 2),
             f(c.lr, 2),
+            opt(c.lr_critical, 2),
             opt(c.p_value, 3),
             opt(c.p_holm, 3),
             f(c.delta_bic, 1),
@@ -192,7 +193,10 @@ pub fn report_md(name: &str, setup: &DiagnoseSetup, d: &Diagnosis) -> String {
     }
     s += "\n`*`: rejects the base model at the family's level α. LR = −2 ln L(base) − (−2 ln L). \
           ΔBIC and the leave-one-stress-out errors are for orientation; the decision uses the \
-          bootstrap p-values only.\n";
+          bootstrap p-values only. LR needed: the ratio the extension would have needed for \
+          p ≤ α before Holm's adjustment (its null distribution's upper-α quantile); far above \
+          the χ² value (3.84 for one added constant) the null refits disagree and only a large \
+          effect can show.\n";
     for c in std::iter::once(&d.base).chain(&d.candidates) {
         if !c.loo_failed_folds.is_empty() {
             s += &format!(
