@@ -595,6 +595,7 @@ pub fn fit_summary(cfg: &RunConfig, run: &FitRun, curves: &[Curve]) -> Value {
         "wall_s": run.wall_s,
         "fit_wall_s": best.wall_s,
         "termination": best.lm.termination.as_str(),
+        "caution": crate::fit::no_fit_caution(&best.lifetime_err_pct),
         "constants": consts(&best.params),
         "pinned_at_bounds": pinned,
         "mean_lifetime_err_pct": jnum(best.mean_lifetime_err()),

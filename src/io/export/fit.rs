@@ -70,6 +70,9 @@ pub fn write(cfg: &RunConfig, data: &Dataset, run: &FitRun, out: &Path) -> Resul
         );
     }
     print!("{}", tables::error_table(&rows, run.used_min_rate));
+    if let Some(c) = summary.get("caution").and_then(|c| c.as_str()) {
+        println!("caution: {c}");
+    }
     print_specimens(&run.specimens);
     if let Some(a) = summary.get("activation_energy") {
         print_activation(a);
