@@ -322,25 +322,28 @@ pub const TIE_SCORE: f64 = 0.05;
 /// between heats, so a model off by 10× or more on every curve has fitted nothing.
 pub const NO_FIT_FACTOR: f64 = 10.0;
 
-/// A caution for a best fit whose every predicted rupture time misses its measurement by more
+/// A caution for a best fit whose every predicted rupture time misses its measurement by
 /// [`NO_FIT_FACTOR`] or more (`lifetime_err_pct`: (t_pred − t_f)/t_f in %, NaN without a measured
 /// rupture): its status only says the iteration stopped (measured: a generated 590 °C set with
 /// a hidden loading strain, seed 95102, `converged_gradient` after one iteration at lifetime
 /// errors of −99.7 to −99.97 %, from an initial guess that had to be moved). `None` otherwise,
 /// and without any measured rupture.
 pub fn no_fit_caution(lifetime_err_pct: &[f64]) -> Option<String> {
-    let ratios: Vec<f64> = lifetime_err_pct
+    let errs: Vec<f64> = lifetime_err_pct
         .iter()
+        .copied()
         .filter(|e| e.is_finite())
-        .map(|e| 1.0 + e / 100.0)
         .collect();
-    let off = |r: &f64| !(*r > 1.0 / NO_FIT_FACTOR && *r < NO_FIT_FACTOR);
-    if ratios.is_empty() || !ratios.iter().all(off) {
+    // t_pred / t_f = 1 + e/100, off when outside (1/NO_FIT_FACTOR, NO_FIT_FACTOR).
+    let off = |e: &f64| {
+        let r = 1.0 + e / 100.0;
+        !(r > 1.0 / NO_FIT_FACTOR && r < NO_FIT_FACTOR)
+    };
+    if errs.is_empty() || !errs.iter().all(off) {
         return None;
     }
-    let (lo, hi) = lifetime_err_pct
+    let (lo, hi) = errs
         .iter()
-        .filter(|e| e.is_finite())
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), e| {
             (a.min(*e), b.max(*e))
         });

@@ -178,7 +178,8 @@ pub fn p_value(obs: f64, sample: &[f64]) -> f64 {
 /// statistic an observation needs for [`p_value`] ≤ `alpha` against `sample` (its null's upper
 /// `alpha` quantile, a replicate not computed counted as exceeding everything, plus
 /// [`TIE`]). `None` when no observation can reach it (fewer than 1/α − 1 replicates, or too
-/// many not computed). A wide null (a critical value far above a χ² quantile) says the
+/// many not computed). For α < 1 (`diagnose` allows at most 0.5) the quantile is always one of
+/// the replicates. A wide null (a critical value far above a χ² quantile) says the
 /// replicates' refits disagree, so a real effect needs a large ratio to show.
 pub fn critical_value(sample: &[f64], alpha: f64) -> Option<f64> {
     // p ≤ α ⇔ #{T* ≥ T − TIE or not computed} ≤ α(B + 1) − 1 =: k.
@@ -191,13 +192,7 @@ pub fn critical_value(sample: &[f64], alpha: f64) -> Option<f64> {
         .map(|v| if v.is_nan() { f64::INFINITY } else { *v })
         .collect();
     s.sort_by(|a, b| b.total_cmp(a));
-    match s.get(k as usize) {
-        Some(v) if v.is_finite() => Some(v + TIE),
-        Some(_) => None,
-        // Every replicate may exceed the observation.
-        None => Some(f64::NEG_INFINITY),
-    }
-    .filter(|v| v.is_finite())
+    s.get(k as usize).filter(|v| v.is_finite()).map(|v| v + TIE)
 }
 
 /// Run replicates `0..max` of `one` in batches; after each batch stop if every one of the

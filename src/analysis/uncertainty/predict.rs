@@ -73,6 +73,20 @@ const QUANTITIES: [(&str, Predicted, f64); 3] = [
     ("rupture_strain_pct", Predicted::LnRuptureStrain, 100.0),
 ];
 
+/// [`specimen_scatter`] for a run that predicts at `loads` conditions, computed once for all
+/// of them (with specimen effects it is a hierarchical fit); none (NaN, 0) without loads.
+pub fn specimen_scatter_for(
+    ctx: &Context,
+    reference: &Reference,
+    loads: usize,
+) -> [(f64, usize); 3] {
+    if loads == 0 {
+        [(f64::NAN, 0); 3]
+    } else {
+        specimen_scatter(ctx, reference)
+    }
+}
+
 /// The specimen scatter (sd of ln) of rupture time, minimum rate and rupture strain, with
 /// the number of residuals behind each (see the module docs).
 pub fn specimen_scatter(ctx: &Context, reference: &Reference) -> [(f64, usize); 3] {
@@ -508,11 +522,7 @@ pub fn intervals_at_observed(
     };
     let fractions = band_fractions(pc.band_points);
     hooks.phase("intervals at the conditions", loads.len());
-    let scatter = if loads.is_empty() {
-        [(f64::NAN, 0); 3]
-    } else {
-        specimen_scatter(&ctx, &reference)
-    };
+    let scatter = specimen_scatter_for(&ctx, &reference, loads.len());
     let conditions = loads
         .iter()
         .map(|l| {

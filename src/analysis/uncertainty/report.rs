@@ -306,11 +306,7 @@ pub fn run_observed(
     if !loads.is_empty() {
         hooks.phase("predictions", loads.len());
     }
-    let scatter = if loads.is_empty() {
-        [(f64::NAN, 0); 3]
-    } else {
-        super::predict::specimen_scatter(&ctx, &reference)
-    };
+    let scatter = super::predict::specimen_scatter_for(&ctx, &reference, loads.len());
     for (t, l) in &loads {
         hooks.check("predictions")?;
         let condition = crate::data::Condition {
