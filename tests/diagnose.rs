@@ -32,6 +32,7 @@ fn battery_of_8_generated_sets() {
         1001,
         8,
         creepfit::synth::World::Identical,
+        None,
         &TestProgress::new("battery_of_8_generated_sets"),
     )
     .unwrap();
@@ -77,6 +78,7 @@ fn battery_of_8_generated_sets() {
         1001,
         8,
         creepfit::synth::World::Identical,
+        None,
         false,
     )
     .unwrap();
@@ -225,6 +227,29 @@ fn diagnosis_json_keeps_its_contract() {
         }
     }
     assert!(cands.iter().any(|c| c["lr_critical"].is_f64()));
+    // A test decided not significant early is dropped from the later replicates (no specimen
+    // effects here): it had at least 10 null ratios at or above its own, so it is not
+    // significant, and a significant one ran on every replicate.
+    let reps = d["bootstrap"]["replicates"].as_u64().unwrap();
+    assert!(d["base"]["null_replicates"].is_null());
+    for c in cands {
+        let l = c["null_replicates"].as_u64().unwrap();
+        assert!(l <= reps);
+        let p = c["p_value"].as_f64().unwrap();
+        if l < reps {
+            assert!(!c["significant"].as_bool().unwrap(), "{}", c["name"]);
+            assert!(p >= 11.0 / (l + 1) as f64, "{}: p {p} over {l}", c["name"]);
+        }
+        if c["significant"].as_bool().unwrap() {
+            assert_eq!(l, reps, "{}", c["name"]);
+        }
+    }
+    assert!(
+        cands
+            .iter()
+            .any(|c| c["null_replicates"].as_u64().unwrap() < reps),
+        "at 560 °C some extension is clearly not significant"
+    );
     let gof = d["gof"].as_array().unwrap();
     assert_eq!(gof.len(), 2);
     assert!(gof.iter().all(|g| g["p_value"].as_f64().unwrap() > 0.0));

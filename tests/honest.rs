@@ -1012,6 +1012,21 @@ fn battery_is_locked_and_keeps_its_identity() {
     assert_eq!(id["identity"]["seed"], 50001);
     let e = fails(&["battery", "--sets", "1", "--seed", "50002", o]);
     has(&e, &["battery.json", "seed = 50001", "50002"]);
+    // A battery of one scenario is another battery, and an unknown scenario is refused
+    // before anything is touched.
+    let e = fails(&[
+        "battery",
+        "--sets",
+        "1",
+        "--seed",
+        "50001",
+        "--scenario",
+        "none",
+        o,
+    ]);
+    has(&e, &["battery.json", "scenario"]);
+    let e = fails(&["battery", "--sets", "1", "--scenario", "nonn", o]);
+    has(&e, &["--scenario", "nonn", "known: none, constant_load"]);
     assert_eq!(json(&out.join("battery.json")), id, "nothing changed");
 }
 

@@ -344,7 +344,7 @@ fn a_null_set_with_specimen_scatter_is_adequate() {
     let dir = tempfile::TempDir::new().unwrap();
     let (r, d) = creepfit::battery::run_one_diagnosed(
         dir.path(),
-        0,
+        "none",
         95001,
         creepfit::synth::World::Specimens,
     );

@@ -174,6 +174,11 @@ pub enum Command {
         /// The laboratory the sets come from (see `synth --world`).
         #[arg(long, value_enum, default_value_t = crate::synth::World::Identical)]
         world: crate::synth::World,
+        /// Scenario of every set (default: cycle through none, constant_load,
+        /// loading_strain, dislocation_damage, none, stress_ductility, primary_transient,
+        /// mid_life_step). `--scenario none` measures the false-alarm rate alone.
+        #[arg(long)]
+        scenario: Option<String>,
         /// No progress bar and no line per set.
         #[arg(long, short)]
         quiet: bool,
@@ -429,9 +434,10 @@ pub fn run(cli: Cli) -> Result<()> {
             seed,
             threads,
             world,
+            scenario,
             quiet,
         } => commands::with_threads(threads, || {
-            commands::battery(&out, sets, seed, world, quiet)
+            commands::battery(&out, sets, seed, world, scenario.as_deref(), quiet)
         }),
     }
 }

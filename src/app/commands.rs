@@ -295,12 +295,7 @@ pub fn synth(
     world: crate::synth::World,
 ) -> Result<()> {
     if let Some(sc) = scenario {
-        if !crate::synth::SCENARIOS.contains(&sc) {
-            return Err(Error::Invalid(format!(
-                "--scenario: unknown scenario '{sc}' (known: {})",
-                crate::synth::SCENARIOS.join(", ")
-            )));
-        }
+        crate::synth::check_scenario(sc)?;
     }
     for i in 0..sets {
         let s = seed + i as u64;
@@ -320,25 +315,33 @@ pub fn battery(
     sets: usize,
     seed: u64,
     world: crate::synth::World,
+    scenario: Option<&str>,
     quiet: bool,
 ) -> Result<()> {
+    if let Some(sc) = scenario {
+        crate::synth::check_scenario(sc)?;
+    }
     // One writer, one battery per folder: the lock, then the identity (refused before
     // anything changes), then the folder is this run's (what it resumes from kept).
     let lock = crate::output::lock_folder(out)?;
-    let id = serde_json::json!({
+    let mut id = serde_json::json!({
         "command": "battery",
         "seed": seed,
         "world": world,
         "scenarios": crate::synth::SCENARIOS,
         "version": env!("CARGO_PKG_VERSION"),
     });
+    // Only when given: the folders of earlier batteries (the cycle of scenarios) resume.
+    if let Some(sc) = scenario {
+        id["scenario"] = sc.into();
+    }
     crate::identity::bind_folder(out, BATTERY_IDENTITY, "results.jsonl", &id)?;
     let folder = RunFolder::take_over(lock, "battery", &|f| {
         f == BATTERY_IDENTITY || f == "results.jsonl" || f.starts_with("sets/")
     })?;
     crate::output::record(&out.join(BATTERY_IDENTITY));
     let bars = Bars::new(quiet);
-    let results = crate::battery::run_battery_observed(out, seed, sets, world, &bars);
+    let results = crate::battery::run_battery_observed(out, seed, sets, world, scenario, &bars);
     bars.clear();
     export::battery::record_written(out);
     let outcome = results.and_then(|r| export::battery::write(out, &r, seed));

@@ -209,21 +209,22 @@ pub fn oracle_lambda(cfg: &RunConfig, truth: &Truth) -> f64 {
     .map_or(f64::NAN, |b| b.0)
 }
 
-/// Generate set `seed` into `dir/sets/set-<seed>/`, diagnose it, and compute its oracle λ.
+/// Generate set `seed` (the `index`-th of its battery, scenario [`scenario_of`]`(index)`) into
+/// `dir/sets/set-<seed>/`, diagnose it, and compute its oracle λ.
 pub fn run_one(dir: &Path, index: usize, seed: u64, world: World) -> SetResult {
-    run_one_diagnosed(dir, index, seed, world).0
+    run_one_diagnosed(dir, scenario_of(index), seed, world).0
 }
 
-/// [`run_one`] with the diagnosis itself (`None` where the set could not be generated or
-/// diagnosed: the result's `error` says why).
+/// [`run_one`] of a given scenario (one of [`crate::synth::SCENARIOS`]), with the diagnosis
+/// itself (`None` where the set could not be generated or diagnosed: the result's `error`
+/// says why).
 pub fn run_one_diagnosed(
     dir: &Path,
-    index: usize,
+    scenario: &str,
     seed: u64,
     world: World,
 ) -> (SetResult, Option<crate::diagnose::Diagnosis>) {
     let mut diagnosis = None;
-    let scenario = scenario_of(index);
     let name = format!("set-{seed}");
     let mut r = SetResult {
         name: name.clone(),
@@ -314,14 +315,16 @@ pub fn read_results(dir: &Path) -> Result<BTreeMap<u64, SetResult>> {
     )
 }
 
-/// Run sets `first_seed .. first_seed + n` (set i gets scenario [`scenario_of`]`(i)`) into
-/// `dir`, skipping those already in `results.jsonl`; returns all results, in seed order.
-/// With `progress`, a line per finished set on stderr (and a bar on a terminal).
+/// Run sets `first_seed .. first_seed + n` (set i gets scenario `scenario`, or by default
+/// [`scenario_of`]`(i)`: a battery of one scenario, e.g. `none` for the false-alarm rate
+/// alone) into `dir`, skipping those already in `results.jsonl`; returns all results, in seed
+/// order. With `progress`, a line per finished set on stderr (and a bar on a terminal).
 pub fn run_battery(
     dir: &Path,
     first_seed: u64,
     n: usize,
     world: World,
+    scenario: Option<&str>,
     progress: bool,
 ) -> Result<Vec<SetResult>> {
     // Quiet bars draw and print nothing.
@@ -330,6 +333,7 @@ pub fn run_battery(
         first_seed,
         n,
         world,
+        scenario,
         &crate::progress::Bars::new(!progress),
     )
 }
@@ -341,8 +345,12 @@ pub fn run_battery_observed(
     first_seed: u64,
     n: usize,
     world: World,
+    scenario: Option<&str>,
     observer: &dyn crate::progress::Observer,
 ) -> Result<Vec<SetResult>> {
+    if let Some(sc) = scenario {
+        crate::synth::check_scenario(sc)?;
+    }
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     let done = read_results(dir)?;
     let path: PathBuf = dir.join("results.jsonl");
@@ -358,7 +366,8 @@ pub fn run_battery_observed(
     let fresh: Vec<SetResult> = todo
         .par_iter()
         .map(|&(i, seed)| {
-            let r = run_one(dir, i, seed, world);
+            let sc = scenario.unwrap_or_else(|| scenario_of(i));
+            let r = run_one_diagnosed(dir, sc, seed, world).0;
             let line = serde_json::to_string(&r).expect("plain values") + "\n";
             {
                 let mut f = file.lock().expect("results lock");

@@ -678,6 +678,18 @@ pub fn write_set(set: &SynthSet, dir: &Path) -> Result<()> {
     )
 }
 
+/// `Ok` for a scenario of [`SCENARIOS`], else the error of a `--scenario` option naming the
+/// known ones.
+pub fn check_scenario(sc: &str) -> Result<()> {
+    if SCENARIOS.contains(&sc) {
+        return Ok(());
+    }
+    Err(Error::Invalid(format!(
+        "--scenario: unknown scenario '{sc}' (known: {})",
+        SCENARIOS.join(", ")
+    )))
+}
+
 /// The scenario of set `i` of a battery: sets cycle through [`SCENARIOS`] with `none` twice
 /// as often (a quarter of a battery is null data, for the false-alarm rate), except
 /// `strain_softening` and `rupture_damage`, which `synth --scenario` generates but the

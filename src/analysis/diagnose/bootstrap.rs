@@ -7,8 +7,11 @@
 //! Replicate b draws from its own random stream (seed, b), and replicates run in batches of
 //! [`BATCH`] whose size does not depend on the thread count: results are identical for any
 //! number of threads. Sampling stops early (Besag & Clifford 1991) once every test has at
-//! least [`STOP_EXCEEDANCES`] replicates at or above its observed statistic — the p-values are
-//! then at least 10/(b + 1) > 0.1 and no decision at α ≤ 0.1 can change.
+//! least [`STOP_EXCEEDANCES`] replicates at or above its observed statistic: the p-values are
+//! then at least 11/(b + 1), above 0.068 for the default 159 replicates. A test whose
+//! statistic costs a fit of its own (an extension's likelihood ratio) may be decided alone
+//! the same way and dropped from the later replicates; its p-value is then the one of the
+//! replicates up to its stop, still a valid p-value (Besag & Clifford's sequential test).
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -195,28 +198,73 @@ pub fn critical_value(sample: &[f64], alpha: f64) -> Option<f64> {
     s.get(k as usize).filter(|v| v.is_finite()).map(|v| v + TIE)
 }
 
+/// The replicates of [`sequential`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sampled {
+    /// Each replicate's statistics, replicate order; a statistic after its test was dropped
+    /// is NaN and not part of the test ([`Sampled::column`]).
+    pub reps: Vec<Vec<f64>>,
+    /// Per statistic: the leading replicates in which it was computed (all of them unless its
+    /// test was decided and dropped).
+    pub computed: Vec<usize>,
+    /// Sampling stopped before `max`: every test was clearly not significant.
+    pub stopped_early: bool,
+}
+
+impl Sampled {
+    /// Statistic `k` over the replicates in which it was computed.
+    pub fn column(&self, k: usize) -> Vec<f64> {
+        self.reps[..self.computed[k]].iter().map(|r| r[k]).collect()
+    }
+}
+
 /// Run replicates `0..max` of `one` in batches; after each batch stop if every one of the
-/// `observed` statistics has at least [`STOP_EXCEEDANCES`] replicates at or above it. `one`
-/// returns one statistic per observed one (NaN: not computed). Returns the replicates' statistics
-/// (replicate order) and whether sampling stopped early.
-pub fn sequential<F>(observed: &[f64], max: usize, one: F) -> (Vec<Vec<f64>>, bool)
+/// `observed` statistics has at least [`STOP_EXCEEDANCES`] replicates at or above it (NaN:
+/// a failed refit, counted as at or above). A statistic marked `droppable` whose test has
+/// reached that count on its own (or whose observed value is not finite) is decided: `one(b,
+/// active)` is told so through `active[k] = false` and may leave it NaN from then on.
+/// Every decision falls between batches of fixed size, so the result does not depend on the
+/// thread count.
+pub fn sequential<F>(observed: &[f64], droppable: &[bool], max: usize, one: F) -> Sampled
 where
-    F: Fn(usize) -> Vec<f64> + Sync,
+    F: Fn(usize, &[bool]) -> Vec<f64> + Sync,
 {
+    let n = observed.len();
+    let exceed = |out: &[Vec<f64>], k: usize| out.iter().filter(|r| !(r[k] < observed[k])).count();
     let mut out: Vec<Vec<f64>> = Vec::with_capacity(max);
+    let mut active: Vec<bool> = (0..n)
+        .map(|k| !droppable[k] || observed[k].is_finite())
+        .collect();
+    let mut computed = vec![0usize; n];
     while out.len() < max {
         let lo = out.len();
         let hi = (lo + BATCH).min(max);
-        let batch: Vec<Vec<f64>> = (lo..hi).into_par_iter().map(&one).collect();
+        let batch: Vec<Vec<f64>> = (lo..hi).into_par_iter().map(|b| one(b, &active)).collect();
         out.extend(batch);
-        let done = observed.iter().enumerate().all(|(k, &obs)| {
-            !obs.is_finite() || out.iter().filter(|r| !(r[k] < obs)).count() >= STOP_EXCEEDANCES
+        for k in 0..n {
+            if active[k] {
+                computed[k] = out.len();
+                if droppable[k] && exceed(&out[..computed[k]], k) >= STOP_EXCEEDANCES {
+                    active[k] = false;
+                }
+            }
+        }
+        let done = (0..n).all(|k| {
+            !observed[k].is_finite() || exceed(&out[..computed[k]], k) >= STOP_EXCEEDANCES
         });
         if done && out.len() < max {
-            return (out, true);
+            return Sampled {
+                reps: out,
+                computed,
+                stopped_early: true,
+            };
         }
     }
-    (out, false)
+    Sampled {
+        reps: out,
+        computed,
+        stopped_early: false,
+    }
 }
 
 /// The 95 % quantile of |a_b − c_b| over replicates where both are finite (NaN if none).
@@ -299,22 +347,66 @@ mod tests {
     #[test]
     fn sequential_stops_only_when_every_test_is_clearly_not_significant() {
         // Test 0 typical (T = 0.5 of uniform replicates), test 1 extreme: no early stop.
-        let one = |b: usize| vec![(b % 7) as f64 / 7.0, (b % 5) as f64];
-        let (r, early) = sequential(&[0.5, 100.0], 99, one);
-        assert_eq!(r.len(), 99);
-        assert!(!early);
+        let one = |b: usize, _: &[bool]| vec![(b % 7) as f64 / 7.0, (b % 5) as f64];
+        let none = [false, false];
+        let s = sequential(&[0.5, 100.0], &none, 99, one);
+        assert_eq!(s.reps.len(), 99);
+        assert_eq!(s.computed, vec![99, 99]);
+        assert!(!s.stopped_early);
         // Both typical: stops after the first batch with ≥ 10 exceedances each.
-        let (r, early) = sequential(&[0.1, 0.0], 99, one);
-        assert!(early);
-        assert_eq!(r.len() % BATCH, 0);
-        assert!(r.len() < 99);
+        let s = sequential(&[0.1, 0.0], &none, 99, one);
+        assert!(s.stopped_early);
+        assert_eq!(s.reps.len() % BATCH, 0);
+        assert!(s.reps.len() < 99);
         // Identical whatever the thread count.
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(1)
             .build()
             .unwrap();
-        let (r1, _) = pool.install(|| sequential(&[0.1, 0.0], 99, one));
-        assert_eq!(r, r1);
+        let s1 = pool.install(|| sequential(&[0.1, 0.0], &none, 99, one));
+        assert_eq!(s, s1);
+    }
+
+    /// A droppable test decided alone stops being computed after the batch that decided it;
+    /// the other tests run to the end with the same values as without dropping.
+    #[test]
+    fn a_decided_test_is_dropped_and_the_others_are_unchanged() {
+        use std::sync::Mutex;
+        let calls = Mutex::new(vec![0usize; 3]);
+        // Statistic 0 typical (decided after a few batches), 1 extreme, 2 typical but not
+        // droppable.
+        let one = |b: usize, active: &[bool]| {
+            let mut r = vec![f64::NAN; 3];
+            for k in 0..3 {
+                if active[k] {
+                    calls.lock().unwrap()[k] += 1;
+                    r[k] = ((b * (k + 3)) % 11) as f64 / 11.0;
+                }
+            }
+            r
+        };
+        let observed = [0.3, 5.0, 0.3];
+        let s = sequential(&observed, &[true, true, false], 159, one);
+        let full = sequential(&observed, &[false; 3], 159, one);
+        assert!(!s.stopped_early);
+        assert_eq!(s.reps.len(), 159);
+        // Test 0 reached 10 exceedances within its first 20 replicates.
+        let c0 = s.computed[0];
+        assert!(c0 > 0 && c0 <= 20 && c0 % BATCH == 0, "{c0}");
+        assert!(s.column(0).iter().filter(|v| **v >= 0.3).count() >= STOP_EXCEEDANCES);
+        assert!(s.reps[c0..].iter().all(|r| r[0].is_nan()));
+        assert_eq!(s.computed[1], 159);
+        assert_eq!(s.computed[2], 159);
+        assert_eq!(s.column(1), full.column(1));
+        assert_eq!(s.column(2), full.column(2));
+        assert_eq!(&full.column(0)[..c0], &s.column(0)[..]);
+        // A statistic not observed (its model not fitted on the data) is never computed.
+        let s = sequential(&[f64::NAN, 5.0], &[true, true], 20, |_, a: &[bool]| {
+            assert!(!a[0]);
+            vec![f64::NAN, 0.0]
+        });
+        assert_eq!(s.computed, vec![0, 20]);
+        assert!(s.column(0).is_empty());
     }
 
     #[test]

@@ -11,6 +11,7 @@ use std::sync::Mutex;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
+use super::bootstrap::Sampled;
 use crate::errmodel::{Ar1, ErrorModel, Residuals};
 use crate::error::{Error, Result};
 use crate::journal::{debug_hash, exact, Exact};
@@ -37,22 +38,24 @@ pub fn model_key<T: std::fmt::Debug + ?Sized>(fitted: &T) -> String {
 }
 
 impl Hooks<'_> {
-    /// [`super::bootstrap::sequential`] of replicates `one(b)` drawn from random stream
-    /// `stream` under the fits whose [`model_key`] is `key`: each replicate read from the
-    /// journal when it is there, else computed and journaled (flushed) as it finishes; the
-    /// phase `name` counts them. `Err` when the observer asks to stop (the replicates
+    /// [`super::bootstrap::sequential`] of replicates `one(b, active)` drawn from random
+    /// stream `stream` under the fits whose [`model_key`] is `key`: each replicate read from
+    /// the journal when it is there, else computed and journaled (flushed) as it finishes;
+    /// the phase `name` counts them. `Err` when the observer asks to stop (the replicates
     /// finished so far are journaled) or a journal write fails.
+    #[allow(clippy::too_many_arguments)]
     pub fn sequential<F>(
         &self,
         name: &str,
         stream: u64,
         key: &str,
         observed: &[f64],
+        droppable: &[bool],
         max: usize,
         one: F,
-    ) -> Result<(Vec<Vec<f64>>, bool)>
+    ) -> Result<Sampled>
     where
-        F: Fn(usize) -> Vec<f64> + Sync,
+        F: Fn(usize, &[bool]) -> Vec<f64> + Sync,
     {
         let prefix = format!("rep/{stream}/{key}/");
         self.phase(name, max);
@@ -66,7 +69,7 @@ impl Hooks<'_> {
         let stop = || {
             self.observer.cancelled() || failure.lock().unwrap_or_else(|e| e.into_inner()).is_some()
         };
-        let out = super::bootstrap::sequential(observed, max, |b| {
+        let out = super::bootstrap::sequential(observed, droppable, max, |b, active| {
             let k = format!("{prefix}{b}");
             if let Some(r) = self.journal.and_then(|j| j.get::<Exact>(&k)) {
                 return r.0;
@@ -75,7 +78,7 @@ impl Hooks<'_> {
                 // Not computed: the run stops and this is never used.
                 return vec![f64::NAN; observed.len() + 1];
             }
-            let r = one(b);
+            let r = one(b, active);
             if let Some(j) = self.journal {
                 if let Err(e) = j.put(&k, &Exact(r.clone())) {
                     failure
@@ -376,7 +379,7 @@ mod tests {
     use std::sync::atomic::{AtomicUsize, Ordering};
 
     /// Replicate statistics of a toy bootstrap: a pure function of b, NaN now and then.
-    fn toy(b: usize) -> Vec<f64> {
+    fn toy(b: usize, _: &[bool]) -> Vec<f64> {
         let x = ((b * 7919) % 113) as f64 / 113.0;
         vec![x, if b % 9 == 4 { f64::NAN } else { 1.0 - x }, 0.0]
     }
@@ -386,7 +389,7 @@ mod tests {
         let d = tempfile::TempDir::new().unwrap();
         let id = serde_json::json!({"command": "test"});
         let observed = [0.99, 0.995];
-        let plain = super::super::bootstrap::sequential(&observed, 60, toy);
+        let plain = super::super::bootstrap::sequential(&observed, &[false; 2], 60, toy);
         // Stopped after 15 new replicates (some more finish in flight and are kept).
         let kept = {
             let j = Journal::open(d.path(), &id).unwrap();
@@ -396,7 +399,7 @@ mod tests {
                 journal: Some(&j),
             };
             let e = hooks
-                .sequential("toy", 1, "k", &observed, 60, toy)
+                .sequential("toy", 1, "k", &observed, &[false; 2], 60, toy)
                 .unwrap_err();
             assert!(matches!(e, Error::Interrupted(_)), "{e}");
             j.written() as usize
@@ -411,27 +414,29 @@ mod tests {
             journal: Some(&j),
         };
         let resumed = hooks
-            .sequential("toy", 1, "k", &observed, 60, |b| {
+            .sequential("toy", 1, "k", &observed, &[false; 2], 60, |b, a| {
                 calls.fetch_add(1, Ordering::SeqCst);
-                toy(b)
+                toy(b, a)
             })
             .unwrap();
         assert_eq!(calls.load(Ordering::SeqCst), 60 - kept);
-        let bits = |r: &(Vec<Vec<f64>>, bool)| {
+        let bits = |r: &Sampled| {
             (
-                r.0.iter()
+                r.reps
+                    .iter()
                     .map(|v| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>())
                     .collect::<Vec<_>>(),
-                r.1,
+                r.computed.clone(),
+                r.stopped_early,
             )
         };
         assert_eq!(bits(&resumed), bits(&plain));
         // Replicates under another fit (another key) are not reused.
         let calls = AtomicUsize::new(0);
         hooks
-            .sequential("toy", 1, "other", &observed, 60, |b| {
+            .sequential("toy", 1, "other", &observed, &[false; 2], 60, |b, a| {
                 calls.fetch_add(1, Ordering::SeqCst);
-                toy(b)
+                toy(b, a)
             })
             .unwrap();
         assert_eq!(calls.load(Ordering::SeqCst), 60);

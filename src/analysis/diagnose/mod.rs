@@ -12,7 +12,8 @@
 //!    curves, and one per curve).
 //! 3. **Null distributions** by a parametric bootstrap under the fitted base model and its
 //!    error model ([`bootstrap`]); every replicate is refitted by every model from warm starts
-//!    plus random starts.
+//!    plus random starts (an extension clearly not significant, with 10 null ratios at or
+//!    above its own, is no longer refitted when no specimen effects are fitted).
 //! 4. **Decision** ([`decide`]): Holm over the extension tests and the base goodness of fit at
 //!    level α; attribution by AIC among the rejected extensions, with the bootstrap's spread
 //!    deciding what cannot be told apart; the chosen extension must pass its own
@@ -564,6 +565,10 @@ pub struct Candidate {
     /// p ≤ α. Far above a χ² quantile (3.84 for one added constant at 5 %), it says the null
     /// refits disagree and only a large effect can show.
     pub lr_critical: Option<f64>,
+    /// Null replicates behind `p_value` and `lr_critical` (`None` for the base): fewer than
+    /// the bootstrap's when the test was decided not significant early and dropped from the
+    /// later replicates (only without specimen effects; see [`bootstrap::sequential`]).
+    pub null_replicates: Option<usize>,
     /// Rejected the base model at level α (Holm).
     pub significant: bool,
     /// BIC − BIC(base) with the effective number of observations of the base's error model
@@ -735,6 +740,7 @@ fn candidate(spec: &Spec, curves: &[Curve], fit: Option<&MlFit>, failed: usize) 
         p_value: None,
         p_holm: None,
         lr_critical: None,
+        null_replicates: None,
         significant: false,
         delta_bic: f64::NAN,
         loo_rmse: f64::NAN,
@@ -777,6 +783,7 @@ fn candidate(spec: &Spec, curves: &[Curve], fit: Option<&MlFit>, failed: usize) 
 
 /// What one null replicate gives: the likelihood ratio of every extension and the base
 /// goodness-of-fit statistic (NaN where a refit failed), and whether the base refit failed.
+/// An extension whose test is no longer `active` is not refitted (NaN).
 #[allow(clippy::too_many_arguments)]
 fn null_replicate(
     specs: &[Spec],
@@ -787,6 +794,7 @@ fn null_replicate(
     ml: &MlOptions,
     dc: &DiagnoseConfig,
     b: usize,
+    active: &[bool],
 ) -> Vec<f64> {
     let base = fits[0].as_ref().expect("base fitted");
     let mut rng = bootstrap::replicate_rng(dc.seed, NULL_STREAM, b);
@@ -828,6 +836,11 @@ fn null_replicate(
     let base_names = specs[0].names();
     let mut rep_fits: Vec<Option<MlFit>> = vec![Some(b0)];
     for (k, spec) in specs[1..].iter().enumerate() {
+        if !active[k] {
+            // Decided: not significant whatever the remaining replicates say.
+            rep_fits.push(None);
+            continue;
+        }
         let b0 = rep_fits[0].as_ref().expect("base refitted");
         // From the replicate's base optimum with the extension switched off (so that a nested
         // extension never fits worse than the base), and from the extension's data optimum.
@@ -889,41 +902,48 @@ fn gof_bootstrap(
     let observed: Vec<f64> = gs.iter().map(|g| g.statistic).collect();
     let key = hooks::model_key(&(&spec.name, fit, basins));
     let phase = "cause's goodness-of-fit bootstrap";
-    let (reps, _) = hooks.sequential(phase, GOF_STREAM, &key, &observed, dc.bootstrap, |b| {
-        let mut rng = bootstrap::replicate_rng(dc.seed, GOF_STREAM, b);
-        let data = bootstrap::replicate_hier(curves, spec.model.as_ref(), fit, settings, &mut rng);
-        let mut st = basins.to_vec();
-        for _ in 0..dc.replicate_starts {
-            st.push(spec.random_start(&mut rng));
-        }
-        let fresh = fit
-            .specimen
-            .as_ref()
-            .map(|sp| EffectStart::fresh(sp.kinds.clone(), sp.scatter.clone(), curves.len()));
-        let (f, _) = fit_best(spec, &data, &st, basins.len(), fresh.as_ref(), settings, ml);
-        gof::SHAPES
-            .iter()
-            .map(|sh| {
-                f.as_ref().map_or(f64::NAN, |f| {
-                    gof::statistic(
-                        &data,
-                        f.residuals.as_ref().expect("fitted"),
-                        &f.noise,
-                        ml.lifetime_sd_floor,
-                        *sh,
-                    )
-                    .statistic
+    let none = vec![false; observed.len()];
+    let sampled = hooks.sequential(
+        phase,
+        GOF_STREAM,
+        &key,
+        &observed,
+        &none,
+        dc.bootstrap,
+        |b, _| {
+            let mut rng = bootstrap::replicate_rng(dc.seed, GOF_STREAM, b);
+            let data =
+                bootstrap::replicate_hier(curves, spec.model.as_ref(), fit, settings, &mut rng);
+            let mut st = basins.to_vec();
+            for _ in 0..dc.replicate_starts {
+                st.push(spec.random_start(&mut rng));
+            }
+            let fresh = fit
+                .specimen
+                .as_ref()
+                .map(|sp| EffectStart::fresh(sp.kinds.clone(), sp.scatter.clone(), curves.len()));
+            let (f, _) = fit_best(spec, &data, &st, basins.len(), fresh.as_ref(), settings, ml);
+            gof::SHAPES
+                .iter()
+                .map(|sh| {
+                    f.as_ref().map_or(f64::NAN, |f| {
+                        gof::statistic(
+                            &data,
+                            f.residuals.as_ref().expect("fitted"),
+                            &f.noise,
+                            ml.lifetime_sd_floor,
+                            *sh,
+                        )
+                        .statistic
+                    })
                 })
-            })
-            .collect()
-    })?;
+                .collect()
+        },
+    )?;
     let p: Vec<f64> = gs
         .iter()
         .enumerate()
-        .map(|(k, g)| {
-            let sample: Vec<f64> = reps.iter().map(|r| r[k]).collect();
-            bootstrap::p_value(g.statistic, &sample)
-        })
+        .map(|(k, g)| bootstrap::p_value(g.statistic, &sampled.column(k)))
         .collect();
     let (_, adj) = decide::holm(&p, dc.alpha);
     Ok(gs
@@ -934,7 +954,7 @@ fn gof_bootstrap(
             gof: g,
             p_value: p[k],
             p_holm: Some(adj[k]),
-            replicates: reps.len(),
+            replicates: sampled.computed[k],
         })
         .collect())
 }
@@ -1145,17 +1165,26 @@ pub fn diagnose_observed(
     let mut observed = lr_obs.clone();
     observed.extend(gof_obs.iter().map(|g| g.statistic));
     let key = hooks::model_key(&(&fits, &basins));
-    let (reps, stopped_early) = hooks.sequential(
+    // An extension decided not significant (STOP_EXCEEDANCES null ratios at or above its
+    // own) is not refitted in later replicates. Only without specimen effects: with them,
+    // every extension's refit takes part in the replicate's cross-start, so dropping one
+    // would change the others' null distributions.
+    let droppable: Vec<bool> = (0..n_ext + ng)
+        .map(|k| k < n_ext && !ml.specimen.any())
+        .collect();
+    let sampled = hooks.sequential(
         "null bootstrap",
         NULL_STREAM,
         &key,
         &observed,
+        &droppable,
         dc.bootstrap,
-        |b| null_replicate(specs, &fits, &basins, curves, &warm, &ml, dc, b),
+        |b, active| null_replicate(specs, &fits, &basins, curves, &warm, &ml, dc, b, active),
     )?;
     phase.null_bootstrap = t0.elapsed().as_secs_f64() - phase.fits;
+    let reps = &sampled.reps;
     let failed_base_refits = reps.iter().filter(|r| r[n_ext + ng] > 0.0).count();
-    let col = |k: usize| -> Vec<f64> { reps.iter().map(|r| r[k]).collect() };
+    let col = |k: usize| -> Vec<f64> { sampled.column(k) };
     let p_ext: Vec<f64> = (0..n_ext)
         .map(|k| bootstrap::p_value(lr_obs[k], &col(k)))
         .collect();
@@ -1244,6 +1273,7 @@ pub fn diagnose_observed(
             c.p_value = Some(p_ext[k]);
             c.p_holm = Some(sel.adjusted[k]);
             c.lr_critical = bootstrap::critical_value(&col(k), dc.alpha);
+            c.null_replicates = Some(sampled.computed[k]);
             c.significant = sel.rejected[k];
             c.delta_bic = -lr_obs[k] + (c.k as f64 - cands_k0(specs)) * n_eff.ln();
         } else {
@@ -1279,7 +1309,7 @@ pub fn diagnose_observed(
             gof: o,
             p_value: p_gof[g],
             p_holm: Some(sel.base_gof_adjusted[g]),
-            replicates: reps.len(),
+            replicates: sampled.computed[n_ext + g],
         })
         .collect();
     let decision = decision_words(&cands, &sel, &base_gof, &cause_gof, verdict, dc);
@@ -1287,7 +1317,8 @@ pub fn diagnose_observed(
         .map(|k| {
             (
                 specs[k + 1].name.clone(),
-                reps.iter()
+                reps[..sampled.computed[k]]
+                    .iter()
                     .filter(|r| r[k].is_nan() && r[n_ext + ng] == 0.0)
                     .count(),
             )
@@ -1311,7 +1342,7 @@ pub fn diagnose_observed(
         bootstrap: BootstrapInfo {
             replicates: reps.len(),
             max: dc.bootstrap,
-            stopped_early,
+            stopped_early: sampled.stopped_early,
             failed_base_refits,
             failed_extension_refits,
         },

@@ -237,11 +237,12 @@ pub fn report_md(name: &str, setup: &DiagnoseSetup, d: &Diagnosis) -> String {
          distributions come from {} parametric bootstrap \
          replicates under the fitted base model, every replicate refitted by every model (warm starts \
          from the fitted optimum and up to {} distinct optima found on the data, plus {} random \
-         start(s)). Holm's procedure keeps the chance of any false alarm at α = {}. A \
+         start(s)){}. Holm's procedure keeps the chance of any false alarm at α = {}. A \
          significant extension is the cause only if it passes its own goodness-of-fit tests ({}).\n",
         d.bootstrap.max,
         d.settings.replicate_basins,
         d.settings.replicate_starts,
+        dropped_md(d),
         d.alpha,
         match d.verdict {
             Verdict::Extension | Verdict::Unexplained if !d.cause_gof.is_empty() => format!(
@@ -256,6 +257,29 @@ pub fn report_md(name: &str, setup: &DiagnoseSetup, d: &Diagnosis) -> String {
         }
     );
     s
+}
+
+/// The Method paragraph's clause on extensions decided early and not refitted after that
+/// (empty when none was).
+fn dropped_md(d: &Diagnosis) -> String {
+    let dropped: Vec<String> = d
+        .candidates
+        .iter()
+        .filter_map(|c| {
+            c.null_replicates
+                .filter(|&l| l < d.bootstrap.replicates)
+                .map(|l| format!("{} after {l}", c.name))
+        })
+        .collect();
+    if dropped.is_empty() {
+        return String::new();
+    }
+    format!(
+        "; an extension with {} null ratios at or above its own was decided not significant \
+         (Besag and Clifford's sequential test) and not refitted after that ({} replicates)",
+        crate::diagnose::bootstrap::STOP_EXCEEDANCES,
+        dropped.join(", ")
+    )
 }
 
 /// The report's section on the scatter between specimens: what the base fit estimated (and
