@@ -7,8 +7,8 @@
 #
 #   scripts/bench_battery.sh [SETS] [OUT]      (default: 200 sets per world, results/battery)
 #
-# Each battery writes confusion.csv, power.csv, summary.json (false-alarm rate, power,
-# scatter coverage) into OUT/<world>-<seed>/, then a battery of null sets alone with specimen
+# Each battery writes confusion.csv, power.csv, summary.md and summary.json (false-alarm
+# rate, power, scatter coverage) into OUT/<world>-<seed>/, then a battery of null sets alone with specimen
 # scatter (OUT/specimens-none-98001/: the false-alarm rate on SETS null sets). Takes hours on
 # 2 cores (measured: 20–100 s per set).
 set -euo pipefail

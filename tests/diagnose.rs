@@ -72,6 +72,18 @@ fn battery_of_8_generated_sets() {
         .sum();
     assert_eq!(total, 8);
     assert!(dir.path().join("power.png").exists());
+    // summary.json holds the same rates; identical specimens carry no scatter to cover.
+    let sj = json(&dir.path().join("summary.json"));
+    assert_eq!(sj["null_sets"], 2);
+    assert_eq!(
+        sj["false_alarms"].as_u64().unwrap() as usize,
+        r.false_alarms
+    );
+    assert_eq!(sj["errors"], 0);
+    for c in sj["scatter"].as_array().unwrap() {
+        assert_eq!(c["true_sets"], 0, "{c}");
+        assert_eq!(c["absent_sets"], 0, "{c}");
+    }
     // Resuming a finished battery recomputes nothing and gives the same results.
     let again = run_battery(
         dir.path(),

@@ -429,6 +429,61 @@ pub struct Rates {
     pub outside_extension: usize,
     /// Sets that failed to generate or diagnose.
     pub errors: usize,
+    /// Specimens-world sets, per kind of specimen scatter (`rate`, `ductility`): see
+    /// [`ScatterCoverage`].
+    pub scatter: Vec<ScatterCoverage>,
+}
+
+/// How the base fit's 95 % interval of one kind of specimen scatter did against the truth
+/// over a battery's diagnosed sets.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ScatterCoverage {
+    /// `rate` or `ductility`.
+    pub kind: String,
+    /// Sets whose specimens carry this scatter (true sd > 0).
+    pub true_sets: usize,
+    /// Of those, sets whose interval contains the true sd. A kind the fit dropped at zero
+    /// scatter has no interval and counts as not covered.
+    pub covered: usize,
+    /// Sets whose specimens do not carry it (true sd 0) but whose interval excludes zero: a
+    /// scatter found that is not there.
+    pub spurious: usize,
+    /// Sets whose specimens do not carry it.
+    pub absent_sets: usize,
+}
+
+/// [`ScatterCoverage`] per kind over the diagnosed specimens-world sets of `ok`.
+fn scatter_coverage(ok: &[&SetResult]) -> Vec<ScatterCoverage> {
+    ["rate", "ductility"]
+        .iter()
+        .enumerate()
+        .map(|(k, kind)| {
+            let mut c = ScatterCoverage {
+                kind: kind.to_string(),
+                true_sets: 0,
+                covered: 0,
+                spurious: 0,
+                absent_sets: 0,
+            };
+            for r in ok {
+                let (Some(&t), Some(&lo), Some(&hi)) = (
+                    r.scatter_true.get(k),
+                    r.scatter_lo95.get(k),
+                    r.scatter_hi95.get(k),
+                ) else {
+                    continue;
+                };
+                if t > 0.0 {
+                    c.true_sets += 1;
+                    c.covered += usize::from(lo <= t && t <= hi);
+                } else {
+                    c.absent_sets += 1;
+                    c.spurious += usize::from(lo > 0.0);
+                }
+            }
+            c
+        })
+        .collect()
 }
 
 /// Compute the [`Rates`] of a set of results.
@@ -477,6 +532,7 @@ pub fn rates(results: &[SetResult]) -> Rates {
             .filter(|r| r.verdict == Some(Verdict::Extension))
             .count(),
         errors: results.len() - ok.len(),
+        scatter: scatter_coverage(&ok),
     }
 }
 
@@ -707,6 +763,20 @@ pub fn write_reports(dir: &Path, results: &[SetResult], first_seed: u64) -> Resu
         100.0 * r.outside_extension as f64 / r.outside_sets.max(1) as f64
     );
     md += &format!("- Sets that failed to generate or diagnose: {}\n", r.errors);
+    for c in r.scatter.iter().filter(|c| c.true_sets + c.absent_sets > 0) {
+        let (lo, hi) = wilson(c.covered, c.true_sets);
+        md += &format!(
+            "- Specimen scatter of the {}: its 95 % interval covers the true sd in {} of {} sets that carry it = {:.1} % (Wilson 95 % {:.1}–{:.1} %); excludes zero in {} of {} sets that do not\n",
+            c.kind,
+            c.covered,
+            c.true_sets,
+            100.0 * c.covered as f64 / c.true_sets.max(1) as f64,
+            100.0 * lo,
+            100.0 * hi,
+            c.spurious,
+            c.absent_sets
+        );
+    }
     for (title, det) in [
         ("all sets", false),
         ("detectable effect sets (and all no-effect sets)", true),
@@ -745,6 +815,10 @@ pub fn write_reports(dir: &Path, results: &[SetResult], first_seed: u64) -> Resu
         );
     }
     write_text(&dir.join("summary.md"), &md)?;
+    write_text(
+        &dir.join("summary.json"),
+        &(serde_json::to_string_pretty(&r).expect("plain values") + "\n"),
+    )?;
     // Power plot: named-correctly rate against log10 λ (bin centres), one series per effect.
     let series: Vec<crate::report::plot::Series> = crate::model::ext::CATALOGUE
         .iter()
@@ -799,6 +873,45 @@ mod tests {
         assert!(back.scatter_lo95[1].is_nan() && back.scatter_hi95[0] == 0.3);
         // Written again, it is the same line.
         assert_eq!(serde_json::to_string(&back).unwrap(), line);
+    }
+
+    /// Coverage counts as a table: covered inside the interval (ends included), a dropped
+    /// kind (no interval) not covered, a scatter that is not there found only when the
+    /// interval excludes zero; sets of the identical world and failed sets left out.
+    #[test]
+    fn scatter_coverage_counts_as_a_table() {
+        let set = |t: [f64; 2], lo: [f64; 2], hi: [f64; 2]| {
+            let mut r = run_one_skeleton();
+            r.error = None;
+            r.scatter_true = t.to_vec();
+            r.scatter_lo95 = lo.to_vec();
+            r.scatter_hi95 = hi.to_vec();
+            r
+        };
+        let nan = f64::NAN;
+        let mut identical = set([0.2, 0.0], [0.1, 0.0], [0.3, 0.0]);
+        identical.scatter_true.clear();
+        let mut failed = set([0.2, 0.08], [0.1, 0.0], [0.3, 0.2]);
+        failed.error = Some("x".into());
+        let results = vec![
+            set([0.2, 0.08], [0.1, 0.05], [0.3, 0.2]), // both covered
+            set([0.2, 0.08], [0.2, 0.09], [0.3, 0.2]), // rate at the lower end; ductility not
+            set([0.2, 0.08], [0.1, nan], [0.19, nan]), // rate above; ductility dropped
+            set([0.1, 0.0], [0.05, 0.0], [0.2, 0.01]), // no ductility scatter, none found
+            set([0.1, 0.0], [0.05, 0.02], [0.2, 0.1]), // no ductility scatter, one found
+            set([0.1, 0.0], [0.05, nan], [0.2, nan]),  // no ductility scatter, kind dropped
+            identical,
+            failed,
+        ];
+        let r = rates(&results);
+        let c = |k: &str| r.scatter.iter().find(|c| c.kind == k).unwrap().clone();
+        let rate = c("rate");
+        assert_eq!((rate.true_sets, rate.covered), (6, 5));
+        assert_eq!((rate.absent_sets, rate.spurious), (0, 0));
+        let d = c("ductility");
+        assert_eq!((d.true_sets, d.covered), (3, 1));
+        assert_eq!((d.absent_sets, d.spurious), (3, 1));
+        assert_eq!(r.errors, 1);
     }
 
     fn run_one_skeleton() -> SetResult {
