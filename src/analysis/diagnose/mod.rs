@@ -837,13 +837,14 @@ fn null_replicate(
     let mut rep_fits: Vec<Option<MlFit>> = vec![Some(b0)];
     for (k, spec) in specs[1..].iter().enumerate() {
         if !active[k] {
-            // Decided: not significant whatever the remaining replicates say.
+            // Decided not significant (Besag–Clifford): not refitted any more.
             rep_fits.push(None);
             continue;
         }
         let b0 = rep_fits[0].as_ref().expect("base refitted");
         // From the replicate's base optimum with the extension switched off (so that a nested
-        // extension never fits worse than the base), and from the extension's data optimum.
+        // extension starts at the base's likelihood; a hierarchical refit can still end below
+        // it, measured in docs/DIAGNOSE.md), and from the extension's data optimum.
         let mut st = vec![spec.start_from_base(&base_names, &b0.params)];
         st.extend(basins[k + 1].iter().take(1).cloned());
         let warm = st.len();
