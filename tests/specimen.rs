@@ -407,3 +407,104 @@ fn an_effect_under_specimen_scatter_is_named() {
     assert!(r.lambda >= 100.0, "oracle λ {}", r.lambda);
     assert_eq!(r.outcome(), "extension:loading_strain");
 }
+
+/// A nested extension refitted from the base model's hierarchical optimum (its added
+/// constants switched off, the base's specimen effects and scatter) never ends with a lower
+/// likelihood than the base: its likelihood ratio is ≥ 0. Before the fit ranked its points by
+/// the likelihood at the ML scatter (issue 20), the ratio was below zero in most refits (the
+/// likelihood was taken at REML's scatter, which grows with the number of constants), by
+/// 1.4–3.1 for `loading_strain`, whose switched-off value then left a loading strain of
+/// 1.5e-5. Fresh null sets of the specimens world (seeds 99001–99006, not used while
+/// developing); the constant-free `constant_load` is not nested and is left out.
+#[test]
+fn a_nested_extension_refitted_from_the_base_optimum_never_ends_below_it() {
+    use creepfit::likelihood::{ml_fit_from, with_specimens, EffectStart};
+    let dir = tempfile::TempDir::new().unwrap();
+    let (mut checked, mut failed) = (0, 0);
+    for seed in 99001..99007u64 {
+        let name = format!("set-{seed}");
+        let set = creepfit::synth::generate_in(
+            &name,
+            "none",
+            None,
+            seed,
+            creepfit::synth::World::Specimens,
+        )
+        .unwrap();
+        let folder = dir.path().join(&name);
+        creepfit::synth::write_set(&set, &folder).unwrap();
+        let cfg = creepfit::config::RunConfig::load(&folder.join("config.toml")).unwrap();
+        let data = cfg.load_data().unwrap();
+        let curves: Vec<Curve> = data
+            .curves
+            .iter()
+            .map(|c| creepfit::data::binned(c, cfg.diagnose.max_points))
+            .collect();
+        let setup = cfg.diagnose_setup().unwrap();
+        let ml = MlOptions {
+            specimen: SpecimenOptions::BOTH,
+            ..MlOptions::default()
+        };
+        let base = &setup.variants[0];
+        let (m, s) = (base.model.as_ref(), &base.space);
+        let plain = ml_fit(
+            m,
+            &curves,
+            s,
+            &set.truth.constants,
+            &setup.settings,
+            &MlOptions::default(),
+        );
+        let b = with_specimens(plain, m, &curves, s, &setup.settings, &ml);
+        let Some(effects) = b.specimen.as_ref().map(EffectStart::from) else {
+            continue; // no scatter found: nothing hierarchical to check
+        };
+        let base_names: Vec<&str> = m.constants().iter().map(|c| c.name).collect();
+        let direct = MlOptions {
+            white_first: false,
+            ..ml
+        };
+        for v in setup.variants[1..].iter().filter(|v| !v.extra.is_empty()) {
+            let start: Vec<f64> = v
+                .model
+                .constants()
+                .iter()
+                .enumerate()
+                .map(
+                    |(j, c)| match base_names.iter().position(|n| *n == c.name) {
+                        Some(i) => b.params[i],
+                        None => {
+                            creepfit::model::ext::off_value(c.name, v.space.lb[j], v.space.ub[j])
+                                .unwrap_or_else(|| v.space.from_unit_one(j, 0.5))
+                        }
+                    },
+                )
+                .collect();
+            let f = ml_fit_from(
+                v.model.as_ref(),
+                &curves,
+                &v.space,
+                &start,
+                Some(&effects),
+                &setup.settings,
+                &direct,
+            );
+            if !f.ok() {
+                // Measured once (set 99003, stress_ductility): the derivatives at the start
+                // could not be simulated (step underflow at 116 MPa) though its residuals
+                // could; a failed refit is counted against rejection in the bootstrap.
+                eprintln!("set-{seed} {:<20} failed: {:?}", v.name, f.failure);
+                failed += 1;
+                continue;
+            }
+            let lr = b.neg2ll - f.neg2ll;
+            eprintln!("set-{seed} {:<20} LR {lr:+.4}", v.name);
+            assert!(lr >= -1e-3, "set-{seed} {}: LR {lr} below zero", v.name);
+            checked += 1;
+        }
+    }
+    assert!(
+        checked >= 15 && failed <= 2,
+        "{checked} refits checked, {failed} failed"
+    );
+}

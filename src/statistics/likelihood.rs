@@ -31,10 +31,13 @@
 //! 1/n), it costs no extra simulation (G_i comes from the Jacobian the fit computes anyway:
 //! ∂r/∂η_i = x_rate·∂r/∂x_rate on curve i's rows), and it keeps the fit one Levenberg–Marquardt
 //! problem in (θ, η) with the penalty residuals η_i/τ — the penalised least squares of
-//! Lindstrom & Bates. Tested against a brute-force integral over η. The scatter τ is profiled
-//! like the reading error: at every accepted point it is set to the exact minimiser of the
-//! Laplace terms at the current η̂ and G. τ = 0 (no scatter) is the model without effects,
-//! fitted first; the better of the two is kept, so τ̂ = 0 is a possible estimate.
+//! Lindstrom & Bates. Tested against a brute-force integral over η. The scatter τ is
+//! re-estimated between rounds of that least squares by maximum likelihood on the linear
+//! mixed model of the current linearisation (Lindstrom & Bates' LME step); the −2 ln L a fit
+//! reports is the Laplace value at the τ that minimises it there, while the scatter it
+//! reports is the restricted-likelihood (REML) estimate, unbiased for a handful of specimens
+//! (the fit's report says why the two differ). τ = 0 (no scatter) is the model without
+//! effects, fitted first; the better of the two is kept, so τ̂ = 0 is a possible estimate.
 
 use std::sync::Mutex;
 
@@ -732,7 +735,8 @@ pub struct MlFit {
     /// The error model at the fit.
     pub noise: ErrorModel,
     /// −2 ln L at the fit (NaN if the fit failed); with specimen effects the Laplace
-    /// approximation of the marginal likelihood.
+    /// approximation of the marginal likelihood, minimised over the scatter (maximum
+    /// likelihood; [`SpecimenFit::scatter`] is the REML estimate).
     pub neg2ll: f64,
     /// Raw residuals at the fit (with specimen effects: at each specimen's own constants).
     pub residuals: Option<Residuals>,
@@ -867,8 +871,14 @@ pub fn ml_fit_from(
     settings: &FitSettings,
     opts: &MlOptions,
 ) -> MlFit {
+    // A warm start with specimen effects may be evaluable only with its specimens' factors
+    // (the population's constants at a stress where a median specimen does not rupture in
+    // the horizon while every tested one does): it is checked with them further down.
+    let warm_effects = opts.specimen.any()
+        && effects.is_some_and(|e| e.effects.iter().flatten().any(|v| *v != 0.0));
     let res = match residuals_at(model, curves, start, settings) {
-        Ok(r) => r,
+        Ok(r) => Some(r),
+        Err(_) if warm_effects => None,
         Err(e) => return MlFit::failed(start, e.0, 0, 1),
     };
     let inner = || CreepProblem {
@@ -893,10 +903,19 @@ pub fn ml_fit_from(
     } else {
         (None, vec![])
     };
+    let res = match (res, &specimen_layout.0) {
+        (Some(r), _) => Some(r),
+        (None, Some(_)) => None,
+        (None, None) => match residuals_at(model, curves, start, settings) {
+            Ok(r) => Some(r),
+            Err(e) => return MlFit::failed(start, e.0, 0, 1),
+        },
+    };
     let (u1, it1, ev1) = if opts.white_first && specimen_layout.0.is_none() {
+        let res = res.as_ref().expect("evaluated without effects");
         let white = LikelihoodProblem::white(
             inner(),
-            ErrorModel::estimate_white(&res, opts.lifetime_sd_floor),
+            ErrorModel::estimate_white(res, opts.lifetime_sd_floor),
             opts.lifetime_sd_floor,
         );
         let lm1 = minimize(&white, &u0, &lo, &hi, &settings.lm);
@@ -917,13 +936,15 @@ pub fn ml_fit_from(
     space.from_unit(&u1, &mut x1);
     let res1 = if opts.white_first && specimen_layout.0.is_none() {
         match residuals_at(model, curves, &x1, settings) {
-            Ok(r) => r,
+            Ok(r) => Some(r),
             Err(e) => return MlFit::failed(start, e.0, it1, ev1),
         }
     } else {
         res
     };
-    let noise1 = ErrorModel::estimate(&res1, opts.lifetime_sd_floor);
+    let noise1 = res1
+        .as_ref()
+        .map(|r| ErrorModel::estimate(r, opts.lifetime_sd_floor));
     if let (Some(layout), dropped) = specimen_layout {
         let n = layout.n_curves;
         // New specimens (no effects given, or all zero) get a white round first.
@@ -971,12 +992,56 @@ pub fn ml_fit_from(
             }
             (eta, tau)
         };
+        let noise1 = match noise1 {
+            Some(n) => n,
+            None => {
+                let obj =
+                    raw_objective(model, curves, settings).with_factors(Some(layout.factors(&eta)));
+                let mut r = vec![0.0; obj.n_residuals()];
+                if let Err(e) = obj.residuals(&x1, &mut r) {
+                    return MlFit::failed(start, e.0, it1, ev1 + 1);
+                }
+                ErrorModel::estimate(&split_residuals(curves, &r), opts.lifetime_sd_floor)
+            }
+        };
+        // A warm start is an optimum already found (the base's, with an extension switched
+        // off): its own report is a candidate, so that a refit never ends worse than where
+        // it began. The alternation does not minimise the Laplace −2 ln L exactly (its
+        // log-determinants are held within a round), and a nested extension refitted from
+        // the base optimum was measured to end up to 3 units above it.
+        let at_start = (!fresh)
+            .then(|| {
+                let mut u = space.to_unit(&x1);
+                u.extend_from_slice(&eta);
+                finish_hier(model, curves, space, &u, &layout, &scatter, settings, opts)
+            })
+            .flatten();
         let mut fit = match hier_fit(
             model, curves, space, &x1, &eta, scatter, layout, settings, opts, &noise1, fresh,
         ) {
             Ok(f) => f,
-            Err(f) => return MlFit::failed(start, f.0, f.1 + it1, f.2 + ev1),
+            // The search met a point it could not simulate: a warm start keeps its own
+            // report (`stalled`: no step beyond it was found), a fresh one fails.
+            Err(f) => match at_start {
+                Some(s) => {
+                    return MlFit {
+                        termination: Termination::Stalled,
+                        iterations: f.1 + it1,
+                        evaluations: f.2 + ev1,
+                        ..s
+                    }
+                }
+                None => return MlFit::failed(start, f.0, f.1 + it1, f.2 + ev1),
+            },
         };
+        if let Some(s) = at_start.filter(|s| s.neg2ll < fit.neg2ll) {
+            fit = MlFit {
+                termination: fit.termination,
+                iterations: fit.iterations,
+                evaluations: fit.evaluations,
+                ..s
+            };
+        }
         fit.iterations += it1;
         fit.evaluations += ev1;
         if let Some(sp) = fit.specimen.as_mut() {
@@ -984,6 +1049,7 @@ pub fn ml_fit_from(
         }
         return fit;
     }
+    let noise1 = noise1.expect("evaluated without effects");
     let problem = LikelihoodProblem::new(inner(), noise1, opts.lifetime_sd_floor);
     let mut lm = minimize(&problem, &u1, &lo, &hi, &settings.lm);
     lm.iterations += it1;
@@ -1067,8 +1133,8 @@ pub fn with_specimens(
 }
 
 /// The hierarchical LM from constants `theta` (physical) and effects `eta` (kind-major) with
-/// the scatter starting at `scatter` and profiled by restricted likelihood at every accepted
-/// point; then [`finish_hier`]. A failure gives (message, iterations, evaluations).
+/// the scatter starting at `scatter` and re-estimated by maximum likelihood after every
+/// round; then [`finish_hier`]. A failure gives (message, iterations, evaluations).
 #[allow(clippy::too_many_arguments)]
 fn hier_fit(
     model: &dyn Model,
@@ -1099,7 +1165,7 @@ fn hier_fit(
     let mut termination = Termination::ConvergedObjective;
     // Lindstrom & Bates' alternation: the constants and effects by penalised least squares
     // at a held scatter (the reading error profiled as always), then the scatter by
-    // restricted likelihood on the linear mixed model there; until the scatter settles.
+    // maximum likelihood on the linear mixed model there; until the scatter settles.
     // Updating the scatter at every LM step instead was measured to fall into 2-cycles (τ
     // 0.058 ↔ 0.167, the step and the estimate chasing each other) that ran to the
     // iteration limit in a third of the bootstrap's refits.
@@ -1161,8 +1227,10 @@ fn hier_fit(
             return Err(("the fitted point could not be evaluated".into(), its, evs));
         };
         let lmm = Lmm::from_jacobian(&jac, &rr, &layout.rows, nt, layout.kinds.len(), &x[nt..]);
-        let new = lmm.estimate(&tau, true);
-        let settled = !(lmm.neg2l(&new, true) < lmm.neg2l(&tau, true) - SCATTER_TOL)
+        // Maximum likelihood, not REML: the fit's −2 ln L compares models with different
+        // constants, and REML's scatter grows with their number ([`finish_hier`]).
+        let new = lmm.estimate(&tau, false);
+        let settled = !(lmm.neg2l(&new, false) < lmm.neg2l(&tau, false) - SCATTER_TOL)
             || new
                 .iter()
                 .zip(&tau)
@@ -1187,10 +1255,20 @@ fn hier_fit(
 }
 
 /// The hierarchical fit's report at parameters `x` (free constants in the unit box, then the
-/// effects): the error model re-estimated there, the scatter at its restricted-likelihood
-/// estimate, −2 ln L by the Laplace approximation, the effects and their sds. A kind whose
-/// scatter is at [`SCATTER_FLOOR`] is dropped (its effects set to zero: they are zero to
-/// within τ² there), and with none left the report is the plain fit's at these constants.
+/// effects): the error model re-estimated there, −2 ln L by the Laplace approximation at the
+/// maximum-likelihood scatter, the scatter reported at its restricted-likelihood (REML)
+/// estimate, the effects and their sds. A kind whose REML scatter is at [`SCATTER_FLOOR`] is
+/// dropped (its effects set to zero: they are zero to within τ² there), and with none left
+/// the report is the plain fit's at these constants.
+///
+/// Why two estimates: REML's scatter is the unbiased one for a handful of specimens (what
+/// reports and intervals show), but its criterion depends on how many constants the model
+/// has, so a likelihood taken at REML's scatter penalises a model for every constant it adds
+/// (measured: nested extensions refitted from the base optimum ended 1.5–3 units of −2 ln L
+/// above it on null sets of 4–6 specimens, a null distribution of likelihood ratios below
+/// zero). The likelihood that ranks fits and gives the ratios is maximised over the scatter
+/// as over the constants, as likelihood-ratio tests between models with different constants
+/// require.
 #[allow(clippy::too_many_arguments)]
 fn finish_hier(
     model: &dyn Model,
@@ -1209,7 +1287,8 @@ fn finish_hier(
     // The scatter at its estimate at x, under the error model re-estimated at x.
     let (rr, jac, noise) = whitened_at(model, curves, space, x, layout, tau, settings, opts)?;
     let lmm = Lmm::from_jacobian(&jac, &rr, &layout.rows, nt, layout.kinds.len(), &x[nt..]);
-    let tau = lmm.estimate(tau, true);
+    let tau_ml = lmm.estimate(tau, false);
+    let tau = lmm.estimate(&tau_ml, true);
     let keep: Vec<usize> = (0..tau.len())
         .filter(|&k| tau[k] > 1.01 * SCATTER_FLOOR)
         .collect();
@@ -1231,7 +1310,7 @@ fn finish_hier(
         let f = plain_report(model, curves, params, settings, opts, &lm);
         return f.ok().then_some(f);
     }
-    let (layout, x, tau, rr, jac, noise, lmm) = if keep.len() < tau.len() {
+    let (layout, x, tau, tau_ml, rr, jac, noise) = if keep.len() < tau.len() {
         let l = EffectLayout {
             kinds: keep.iter().map(|&k| layout.kinds[k]).collect(),
             ..layout.clone()
@@ -1243,12 +1322,12 @@ fn finish_hier(
         let t: Vec<f64> = keep.iter().map(|&k| tau[k]).collect();
         let (rr, jac, noise) = whitened_at(model, curves, space, &xr, &l, &t, settings, opts)?;
         let lmm = Lmm::from_jacobian(&jac, &rr, &l.rows, nt, l.kinds.len(), &xr[nt..]);
-        let t = lmm.estimate(&t, true);
-        (l, xr, t, rr, jac, noise, lmm)
+        let t_ml = lmm.estimate(&t, false);
+        let t = lmm.estimate(&t_ml, true);
+        (l, xr, t, t_ml, rr, jac, noise)
     } else {
-        (layout.clone(), x.to_vec(), tau, rr, jac, noise, lmm)
+        (layout.clone(), x.to_vec(), tau, tau_ml, rr, jac, noise)
     };
-    let _ = lmm;
     let eta = &x[nt..];
     let fixed = LikelihoodProblem::fixed(
         CreepProblem {
@@ -1258,9 +1337,15 @@ fn finish_hier(
         },
         noise.clone(),
     )
-    .with_effects(layout.clone(), tau.clone(), true);
+    .with_effects(layout.clone(), tau_ml.clone(), true);
     let g = exact_blocks(&fixed, &layout, &x, &rr, &jac);
-    let terms = laplace_terms(eta, &g, &tau);
+    // The likelihood's scatter: the minimiser of the Laplace −2 ln L at the fit (its data
+    // term does not depend on τ). Not the linear mixed model's ML estimate, which assumes the
+    // constants move with it: a constant collinear with the effects (a ductility that
+    // varies with stress beside specimens' ductility) would take their spread there, and
+    // the likelihood at the constants as they are would fall.
+    let tau_ml = crate::specimen::minimise_scatter(&tau_ml, |t| laplace_terms(eta, &g, t));
+    let terms = laplace_terms(eta, &g, &tau_ml);
     let factors = layout.factors(eta);
     let obj = raw_objective(model, curves, settings).with_factors(Some(factors));
     let mut r = vec![0.0; obj.n_residuals()];
@@ -1271,9 +1356,14 @@ fn finish_hier(
     let mut effects = vec![vec![0.0; n]; k];
     let mut effects_sd = vec![vec![0.0; n]; k];
     for i in 0..n {
-        // Posterior covariance (G_i + D⁻¹)⁻¹.
+        // Posterior covariance (G_i + D⁻¹)⁻¹, D at the likelihood's scatter.
         let h = DMatrix::from_fn(k, k, |a, b| {
-            g[i][a][b] + if a == b { 1.0 / (tau[a] * tau[a]) } else { 0.0 }
+            g[i][a][b]
+                + if a == b {
+                    1.0 / (tau_ml[a] * tau_ml[a])
+                } else {
+                    0.0
+                }
         });
         let cov = h.try_inverse().unwrap_or_else(|| DMatrix::zeros(k, k));
         for a in 0..k {

@@ -267,6 +267,25 @@ where
     }
 }
 
+/// `first` with the statistics marked `redo` taken from `second` (the same replicates run
+/// again for those statistics): their columns and computed counts are `second`'s; rows
+/// `second` did not reach are NaN there and not part of the test.
+pub fn merged(first: Sampled, second: &Sampled, redo: &[bool]) -> Sampled {
+    let mut out = first;
+    let n = out.reps.first().map_or(0, |r| r.len());
+    while out.reps.len() < second.reps.len() {
+        out.reps.push(vec![f64::NAN; n]);
+    }
+    for k in (0..redo.len()).filter(|&k| redo[k]) {
+        for (b, row) in out.reps.iter_mut().enumerate() {
+            row[k] = second.reps.get(b).map_or(f64::NAN, |r| r[k]);
+        }
+        out.computed[k] = second.computed[k];
+    }
+    out.stopped_early = out.stopped_early && second.stopped_early;
+    out
+}
+
 /// The 95 % quantile of |a_b − c_b| over replicates where both are finite (NaN if none).
 pub fn spread95(a: &[f64], c: &[f64]) -> f64 {
     let mut d: Vec<f64> = a
@@ -407,6 +426,28 @@ mod tests {
         });
         assert_eq!(s.computed, vec![0, 20]);
         assert!(s.column(0).is_empty());
+    }
+
+    #[test]
+    fn merged_takes_the_redone_columns_and_their_counts() {
+        let first = Sampled {
+            reps: vec![vec![1.0, 2.0, 3.0]; 4],
+            computed: vec![4, 4, 2],
+            stopped_early: false,
+        };
+        let second = Sampled {
+            reps: vec![vec![f64::NAN, 20.0, f64::NAN]; 3],
+            computed: vec![0, 3, 0],
+            stopped_early: true,
+        };
+        let m = merged(first.clone(), &second, &[false, true, false]);
+        assert_eq!(m.column(0), first.column(0));
+        assert_eq!(m.column(2), first.column(2));
+        assert_eq!(m.column(1), vec![20.0; 3]);
+        assert_eq!(m.computed, vec![4, 3, 2]);
+        assert!(m.reps[3][1].is_nan());
+        assert_eq!(m.reps.len(), 4);
+        assert!(!m.stopped_early);
     }
 
     #[test]

@@ -109,6 +109,8 @@ pub struct ModelFits {
     pub failed: usize,
     /// Distinct optima (constants) found on the data.
     pub basins: Vec<Vec<f64>>,
+    /// Index of the fresh start whose fit was best (the null replicates repeat it).
+    pub recipe: Option<usize>,
 }
 
 /// The journal key of the fits on the data of model `i` (named `name`) from `starts`.
@@ -188,6 +190,9 @@ struct FitsRecord {
     best: Option<MlFitRecord>,
     failed: usize,
     basins: Vec<Exact>,
+    /// Absent in journals written before it existed.
+    #[serde(default)]
+    recipe: Option<usize>,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -310,6 +315,7 @@ impl From<&ModelFits> for FitsRecord {
             }),
             failed: m.failed,
             basins: exacts(&m.basins),
+            recipe: m.recipe,
         }
     }
 }
@@ -367,6 +373,7 @@ impl From<FitsRecord> for ModelFits {
             }),
             failed: r.failed,
             basins: plain(r.basins),
+            recipe: r.recipe,
         }
     }
 }
@@ -489,6 +496,7 @@ mod tests {
             best: Some(fit),
             failed: 2,
             basins: vec![vec![0.5, 1.0 / 7.0]],
+            recipe: Some(3),
         };
         let d = tempfile::TempDir::new().unwrap();
         let id = serde_json::json!({"command": "test"});
@@ -515,6 +523,7 @@ mod tests {
             best: None,
             failed: 5,
             basins: vec![],
+            recipe: None,
         };
         h.fits_finished("fits/1/x/0", &none).unwrap();
         assert_eq!(

@@ -235,14 +235,16 @@ pub fn report_md(name: &str, setup: &DiagnoseSetup, d: &Diagnosis) -> String {
          against the base model by its likelihood ratio, and the base model's fit by two statistics for \
          a misfit shape (common to the curves, and per curve) beyond the error model; the null \
          distributions come from {} parametric bootstrap \
-         replicates under the fitted base model, every replicate refitted by every model (warm starts \
-         from the fitted optimum and up to {} distinct optima found on the data, plus {} random \
-         start(s)){}. Holm's procedure keeps the chance of any false alarm at α = {}. A \
+         replicates under the fitted base model, every replicate refitted by every model (the base \
+         from up to {} distinct optima found on the data; each extension from the replicate's base \
+         optimum with the extension switched off, and slightly on where the likelihood is flat there, \
+         and from its own optimum on the data; plus {} random start(s)){}{}. Holm's procedure keeps the chance of any false alarm at α = {}. A \
          significant extension is the cause only if it passes its own goodness-of-fit tests ({}).\n",
         d.bootstrap.max,
         d.settings.replicate_basins,
         d.settings.replicate_starts,
         dropped_md(d),
+        again_md(d),
         d.alpha,
         match d.verdict {
             Verdict::Extension | Verdict::Unexplained if !d.cause_gof.is_empty() => format!(
@@ -257,6 +259,26 @@ pub fn report_md(name: &str, setup: &DiagnoseSetup, d: &Diagnosis) -> String {
         }
     );
     s
+}
+
+/// The Method paragraph's clause on the tests bootstrapped again with the start that found the
+/// data's best fit (empty when none was).
+fn again_md(d: &Diagnosis) -> String {
+    let again: Vec<&str> = d
+        .candidates
+        .iter()
+        .filter(|c| c.null_again)
+        .map(|c| c.name.as_str())
+        .collect();
+    if again.is_empty() {
+        return String::new();
+    }
+    format!(
+        "; the tests that rejected were bootstrapped again on the same replicates with the fresh \
+         start that found the extension's best fit on the data added to every refit, and their \
+         p-values are the second run's ({})",
+        again.join(", ")
+    )
 }
 
 /// The Method paragraph's clause on extensions decided early and not refitted after that

@@ -65,10 +65,27 @@ pub fn off_value(name: &str, lb: f64, ub: f64) -> Option<f64> {
     (name == "phi0").then(|| 0.0f64.clamp(lb, ub))
 }
 
+/// Starts slightly on ([`super::probe_starts`]): φ1 = 1, 2, 4 with φ0 = 0.05·5^φ1, a 5 %
+/// faster creep at 20 % strain each, from a softening over the whole curve to a late one.
+pub fn probe_starts() -> Vec<Vec<(&'static str, f64)>> {
+    [1.0f64, 2.0, 4.0]
+        .iter()
+        .map(|&p1| vec![("phi0", 0.05 * 5f64.powf(p1)), ("phi1", p1)])
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::dual::Dual;
+
+    #[test]
+    fn probe_starts_soften_by_five_percent_at_twenty_percent_strain() {
+        for p in probe_starts() {
+            let (phi0, phi1) = (p[0].1, p[1].1);
+            assert!((rate_factor(phi0, phi1, 0.2) - 1.05).abs() < 1e-12, "{p:?}");
+        }
+    }
 
     #[test]
     fn rate_factor_against_hand_computation() {
