@@ -746,8 +746,10 @@ pub struct Diagnosis {
 pub struct PhaseTimes {
     /// Multistart fits of every model on the data.
     pub fits: f64,
-    /// Null bootstrap.
+    /// Null bootstrap, its second run included.
     pub null_bootstrap: f64,
+    /// The null bootstrap's second run (the rejecting tests again with their data start).
+    pub null_again: f64,
     /// Goodness-of-fit bootstrap of the chosen extension.
     pub cause_bootstrap: f64,
     /// Leave-one-stress-out refits.
@@ -843,22 +845,20 @@ fn candidate(spec: &Spec, curves: &[Curve], fit: Option<&MlFit>, failed: usize) 
 }
 
 /// What one null replicate gives: the likelihood ratio of every extension and the base
-/// goodness-of-fit statistic (NaN where a refit failed), and whether the base refit failed.
-/// An extension whose test is no longer `active` is not refitted (NaN). `again`: the
-/// extensions' refits also start from their [`Recipe`].
+/// goodness-of-fit statistic (NaN where a refit failed), whether the base refit failed, and
+/// (when it did not) the base refit's −2 ln L and constants, for [`null_again`]. An extension
+/// whose test is no longer `active` is not refitted (NaN).
 #[allow(clippy::too_many_arguments)]
 fn null_replicate(
     specs: &[Spec],
     fits: &[Option<MlFit>],
     basins: &[Vec<Vec<f64>>],
-    recipes: &[Option<Recipe>],
     curves: &[Curve],
     settings: &FitSettings,
     ml: &MlOptions,
     dc: &DiagnoseConfig,
     b: usize,
     active: &[bool],
-    again: bool,
 ) -> Vec<f64> {
     let base = fits[0].as_ref().expect("base fitted");
     let mut rng = bootstrap::replicate_rng(dc.seed, NULL_STREAM, b);
@@ -912,18 +912,9 @@ fn null_replicate(
         // data's fits use the same probes), and from the extension's data optimum.
         let from_base = spec.start_from_base(&base_names, &b0.params);
         let mut st = spec.probe_from(&from_base);
-        st.insert(0, from_base.clone());
+        st.insert(0, from_base);
         st.extend(basins[k + 1].iter().take(1).cloned());
         let warm = st.len();
-        // Run again for a significant test: the fresh start that found the data's best
-        // basin, rebuilt here.
-        match &recipes[k + 1] {
-            Some(Recipe::Grid(g)) if again => {
-                st.extend(spec.grid_from(&from_base).get(*g).cloned())
-            }
-            Some(Recipe::Fixed(x)) if again => st.push(x.clone()),
-            _ => {}
-        }
         st.extend(ext_random[k].iter().cloned());
         let from = b0.specimen.as_ref().map(EffectStart::from);
         let (fk, _) = fit_best(spec, &data, &st, warm, from.as_ref(), settings, ml);
@@ -947,6 +938,66 @@ fn null_replicate(
             *shape,
         )
         .statistic;
+    }
+    out[n_ext + ng] = 0.0;
+    out.push(b0.neg2ll);
+    out.extend_from_slice(&b0.params);
+    out
+}
+
+/// A replicate's likelihood ratio with one start more: the larger of the first run's (`first`,
+/// NaN if that refit failed) and the new start's (`None` if its fit failed).
+fn again_ratio(first: f64, new: Option<f64>) -> f64 {
+    match new {
+        Some(v) if !(first >= v) => v,
+        _ => first,
+    }
+}
+
+/// Null replicate `b` again for the extensions marked `again`: the same replicate data, the
+/// extension fitted from its [`Recipe`] (a fresh start), and its likelihood ratio the larger
+/// of `first`'s (that replicate's row from [`null_replicate`]) and the new fit's against the
+/// base refit recorded there. The other statistics are NaN; a failed base refit stays failed.
+#[allow(clippy::too_many_arguments)]
+fn null_again(
+    specs: &[Spec],
+    base: &MlFit,
+    recipes: &[Option<Recipe>],
+    first: &[f64],
+    curves: &[Curve],
+    settings: &FitSettings,
+    ml: &MlOptions,
+    dc: &DiagnoseConfig,
+    b: usize,
+    again: &[bool],
+) -> Vec<f64> {
+    let n_ext = specs.len() - 1;
+    let ng = gof::SHAPES.len();
+    let mut out = vec![f64::NAN; n_ext + ng + 1];
+    out[n_ext + ng] = 1.0;
+    if first.len() <= n_ext + ng + 1 || first[n_ext + ng] > 0.0 {
+        return out; // the base refit failed there
+    }
+    let (b0_ll, b0_params) = (first[n_ext + ng + 1], &first[n_ext + ng + 2..]);
+    let mut rng = bootstrap::replicate_rng(dc.seed, NULL_STREAM, b);
+    let data = bootstrap::replicate_hier(curves, specs[0].model.as_ref(), base, settings, &mut rng);
+    let base_names = specs[0].names();
+    for k in (0..n_ext).filter(|&k| again[k]) {
+        let spec = &specs[k + 1];
+        let start = match &recipes[k + 1] {
+            Some(Recipe::Grid(g)) => spec
+                .grid_from(&spec.start_from_base(&base_names, b0_params))
+                .get(*g)
+                .cloned(),
+            Some(Recipe::Fixed(x)) => Some(x.clone()),
+            _ => None,
+        };
+        let Some(start) = start else {
+            out[k] = first[k];
+            continue;
+        };
+        let (f, _) = fit_best(spec, &data, &[start], 0, None, settings, ml);
+        out[k] = again_ratio(first[k], f.filter(|f| f.ok()).map(|f| b0_ll - f.neg2ll));
     }
     out[n_ext + ng] = 0.0;
     out
@@ -1271,11 +1322,6 @@ pub fn diagnose_observed(
     let droppable: Vec<bool> = (0..n_ext + ng)
         .map(|k| k < n_ext && !ml.specimen.any())
         .collect();
-    let refit = |b: usize, active: &[bool], again: bool| {
-        null_replicate(
-            specs, &fits, &basins, &recipes, curves, &warm, &ml, dc, b, active, again,
-        )
-    };
     let sampled = hooks.sequential(
         "null bootstrap",
         NULL_STREAM,
@@ -1283,19 +1329,17 @@ pub fn diagnose_observed(
         &observed,
         &droppable,
         dc.bootstrap,
-        |b, active| refit(b, active, false),
+        |b, active| null_replicate(specs, &fits, &basins, curves, &warm, &ml, dc, b, active),
     )?;
     // The tests that reject there (Holm, the whole family), bootstrapped again on the same
     // replicates with the fresh start that found the data's best fit ([`Recipe`]) added to
-    // their refits. An extension's refit can only end better with a start more, so its
-    // p-value can only grow, and Holm's procedure rejects no test more when p-values grow: a
-    // test not rejected with the replicates' own starts would not be rejected with that
-    // start either (up to the replicate's cross-start, which may refit the base from a
-    // better extension fit). So only the rejecting ones are run again: every test so costs
-    // 3–4 times as much (measured: 160–210 s against 40–70 s on three null sets with
-    // specimen scatter). Without it, the data's ratio was above every replicate's for want
-    // of that start. In the second run the tests not run again are not refitted, so the
-    // cross-start sees only the ones that are.
+    // their refits ([`null_again`]: a replicate's ratio becomes the larger of the two fits').
+    // A ratio can only grow so, a p-value only grow, and Holm's procedure rejects no test
+    // more when p-values grow: a test not rejected with the replicates' own starts would not
+    // be rejected with that start added either. So only the rejecting ones are run again:
+    // running every replicate's refits with that start cost 3–4 times as much (measured:
+    // 160–210 s against 40–70 s on three null sets with specimen scatter). Without it, the
+    // data's ratio was above every replicate's for want of that start.
     let first_p: Vec<f64> = observed
         .iter()
         .enumerate()
@@ -1309,15 +1353,16 @@ pub fn diagnose_observed(
                 && matches!(recipes[k + 1], Some(Recipe::Grid(_) | Recipe::Fixed(_)))
         })
         .collect();
+    let t_again = std::time::Instant::now();
     let sampled = if again.iter().any(|a| *a) {
         let observed_again: Vec<f64> = observed
             .iter()
             .zip(&again)
             .map(|(o, a)| if *a { *o } else { f64::NAN })
             .collect();
-        // Tests not run again start decided (NaN observed); the others drop as above.
-        let droppable_again: Vec<bool> =
-            (0..n_ext + ng).map(|k| !again[k] || droppable[k]).collect();
+        // Tests not run again start decided (NaN observed); the others are refitted each on
+        // its own here (no cross-start joins them), so each drops once decided.
+        let droppable_again = vec![true; n_ext + ng];
         let second = hooks.sequential(
             "null bootstrap, significant tests again",
             NULL_STREAM,
@@ -1325,13 +1370,28 @@ pub fn diagnose_observed(
             &observed_again,
             &droppable_again,
             dc.bootstrap,
-            |b, active| refit(b, active, true),
+            |b, active| {
+                let redo: Vec<bool> = (0..n_ext + ng).map(|k| again[k] && active[k]).collect();
+                null_again(
+                    specs,
+                    fits[0].as_ref().expect("base fitted"),
+                    &recipes,
+                    sampled.reps.get(b).map_or(&[][..], |r| r.as_slice()),
+                    curves,
+                    &warm,
+                    &ml,
+                    dc,
+                    b,
+                    &redo,
+                )
+            },
         )?;
         bootstrap::merged(sampled, &second, &again)
     } else {
         sampled
     };
     phase.null_bootstrap = t0.elapsed().as_secs_f64() - phase.fits;
+    phase.null_again = t_again.elapsed().as_secs_f64();
     let reps = &sampled.reps;
     let failed_base_refits = reps.iter().filter(|r| r[n_ext + ng] > 0.0).count();
     let col = |k: usize| -> Vec<f64> { sampled.column(k) };
@@ -1661,6 +1721,21 @@ mod tests {
             worst_mean > 1e-4,
             "the plain mean would be biased: {worst_mean}"
         );
+    }
+
+    #[test]
+    fn a_start_more_keeps_the_better_ratio_and_a_failure_never_counts() {
+        let nan = f64::NAN;
+        for (first, new, want) in [
+            (1.0, Some(2.0), 2.0),
+            (3.0, Some(2.0), 3.0),
+            (1.0, None, 1.0),
+            (nan, Some(2.0), 2.0),
+            (-0.5, Some(-1.0), -0.5),
+        ] {
+            assert_eq!(again_ratio(first, new), want, "{first} {new:?}");
+        }
+        assert!(again_ratio(nan, None).is_nan());
     }
 
     #[test]
