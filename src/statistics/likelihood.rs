@@ -948,8 +948,7 @@ pub fn ml_fit_from(
     if let (Some(layout), dropped) = specimen_layout {
         let n = layout.n_curves;
         // New specimens (no effects given, or all zero) get a white round first.
-        let fresh = opts.white_first
-            || effects.is_none_or(|e| e.effects.iter().flatten().all(|v| *v == 0.0));
+        let fresh = opts.white_first || !warm_effects;
         let (eta, scatter): (Vec<f64>, Vec<f64>) = {
             let mut eta = Vec::with_capacity(layout.n_effects());
             let mut tau = Vec::with_capacity(layout.kinds.len());
