@@ -490,3 +490,92 @@ fn a_heavily_damped_step_is_not_taken_for_convergence() {
         rep.iterations
     );
 }
+
+/// Rosenbrock's residuals and a constant one, with their scale σ profiled as a likelihood
+/// profiles its reading error: r = g(x)/σ, σ re-estimated as ‖g‖/√m at every accepted point.
+/// Then ‖r‖² = m there whatever x is, and the true objective is −2 ln L = m + m ln σ² (+ a
+/// constant): the part [`LeastSquaresProblem::objective_offset`] gives (`offset: true`).
+struct Profiled {
+    sigma: Mutex<f64>,
+    offset: bool,
+}
+
+impl Profiled {
+    fn g(x: &[f64]) -> [f64; 3] {
+        [10.0 * (x[1] - x[0] * x[0]), 1.0 - x[0], 0.1]
+    }
+}
+
+impl LeastSquaresProblem for Profiled {
+    fn n_params(&self) -> usize {
+        2
+    }
+    fn n_residuals(&self) -> usize {
+        3
+    }
+    fn residuals(&self, x: &[f64], r: &mut [f64]) -> Result<(), EvalFailure> {
+        let s = *self.sigma.lock().unwrap();
+        for (ri, gi) in r.iter_mut().zip(Self::g(x)) {
+            *ri = gi / s;
+        }
+        Ok(())
+    }
+    fn reweight(
+        &self,
+        _x: &[f64],
+        r: &mut [f64],
+        jac: Option<&mut nalgebra::DMatrix<f64>>,
+    ) -> bool {
+        let mut guard = self.sigma.lock().unwrap();
+        let old = *guard;
+        let ss: f64 = r.iter().map(|v| (v * old).powi(2)).sum();
+        let new = (ss / r.len() as f64).sqrt();
+        if new == old {
+            return false;
+        }
+        for v in r.iter_mut() {
+            *v *= old / new;
+        }
+        if let Some(j) = jac {
+            *j *= old / new;
+        }
+        *guard = new;
+        true
+    }
+    fn objective_offset(&self) -> f64 {
+        if self.offset {
+            3.0 * (*self.sigma.lock().unwrap()).powi(2).ln()
+        } else {
+            0.0
+        }
+    }
+}
+
+#[test]
+fn the_plateau_test_sees_a_profiled_likelihood_fall_where_the_residuals_do_not() {
+    let opts = LmOptions {
+        plateau: Some((6, 0.01)),
+        ..LmOptions::default()
+    };
+    let (lb, ub) = free(2);
+    let run = |offset| {
+        let p = Profiled {
+            sigma: Mutex::new(1.0),
+            offset,
+        };
+        minimize(&p, &[-1.2, 1.0], &lb, &ub, &opts)
+    };
+    let rep = run(true);
+    assert!(
+        (rep.x[0] - 1.0).abs() < 1e-4 && (rep.x[1] - 1.0).abs() < 1e-4,
+        "{:?} after {} iterations ({:?})",
+        rep.x,
+        rep.iterations,
+        rep.termination
+    );
+    // The control: a plateau test on ‖r‖² alone (held at 3 by the reweighting) stops the
+    // search on its seventh iteration, far from the minimum.
+    let blind = run(false);
+    assert_eq!(blind.termination, Termination::Plateau);
+    assert!((blind.x[0] - 1.0).abs() > 0.1, "{:?}", blind.x);
+}

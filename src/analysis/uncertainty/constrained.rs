@@ -396,6 +396,9 @@ impl<P: LeastSquaresProblem> LeastSquaresProblem for Scaled<'_, P> {
         self.scale(r, jac, self.c);
         changed
     }
+    fn objective_offset(&self) -> f64 {
+        self.c * self.c * self.inner.objective_offset()
+    }
 }
 
 /// [`minimize`] on `problem` scaled so that max JᵀJ_jj = 1 at the start (see [`Scaled`]).
@@ -585,6 +588,9 @@ impl LeastSquaresProblem for Penalised<'_, '_> {
         // The inner problem rewrites only its own rows (by curve offsets); the penalty row
         // does not depend on the error model.
         self.inner.reweight(x, r, jac)
+    }
+    fn objective_offset(&self) -> f64 {
+        self.inner.objective_offset()
     }
 }
 

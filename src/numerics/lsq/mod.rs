@@ -68,6 +68,14 @@ pub trait LeastSquaresProblem: Sync {
     fn reweight(&self, _x: &[f64], _r: &mut [f64], _jac: Option<&mut DMatrix<f64>>) -> bool {
         false
     }
+    /// The part of the problem's true objective that its residuals do not carry under the
+    /// current weights (a profiled likelihood: −2 ln L = ‖r‖² + the error model's
+    /// log-determinant), for the plateau test ([`LmOptions::plateau`]). Reweighting at the
+    /// maximum-likelihood weights holds ‖r‖² near the number of readings, so a test on ‖r‖²
+    /// alone would see a plateau where the likelihood still falls. Default 0.
+    fn objective_offset(&self) -> f64 {
+        0.0
+    }
     /// The damping's scale per parameter at the current point, given JᵀJ (`None`, the
     /// default: its diagonal, Marquardt's scaling). A problem whose parameters come in
     /// blocks that trade off against each other (random effects against the constants they
@@ -488,7 +496,7 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
             f = sumsq(&r);
         }
         if let Some((k, delta)) = opts.plateau {
-            history.push(f);
+            history.push(f + problem.objective_offset());
             if history.len() > k {
                 let w = &history[history.len() - k - 1..];
                 let (lo, hi) = w
