@@ -377,7 +377,8 @@ fn a_null_set_with_specimen_scatter_is_adequate() {
 /// FAILS today, kept as the open measurement (issue 20): seed 95102 (λ 1592, rate scatter
 /// 0.28) comes out `adequate` — loading_strain LR 850 but bootstrap p 0.168, because the
 /// null replicates, drawn with the base fit's AR(1) reading error (φ 1.00: the misfit taken
-/// up as correlated noise), give the extensions LRs of hundreds too. Run it with
+/// up as correlated noise), give the extensions LRs of hundreds too. Still `adequate` after
+/// the plateau test was fixed (2026-11-26, commit a2dcd77; 198 s). Run it with
 /// `cargo test --release --test specimen -- --ignored`.
 #[test]
 #[ignore = "fails: power under specimen scatter (issue 20, see the doc comment)"]
