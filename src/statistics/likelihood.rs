@@ -160,7 +160,8 @@ pub const SCATTER_TOL: f64 = 1e-3;
 /// A scatter estimate that changes by less than this (relative) has settled.
 pub const SCATTER_RTOL: f64 = 0.01;
 /// The plateau test of a hierarchical fit's LM ([`crate::lsq::LmOptions::plateau`]): −2 ln L
-/// within 0.01 over 10 iterations. The penalised problem has flat valleys (a specimen's
+/// (the residuals' sum of squares plus the error model's log-determinant,
+/// [`crate::lsq::LeastSquaresProblem::objective_offset`]) within 0.01 over 6 iterations. The penalised problem has flat valleys (a specimen's
 /// effect against the constants it scatters) along which the Gauss–Newton model keeps
 /// promising gains that the profiled error model's small moves never let the relative tests
 /// confirm: measured on generated specimen data, a third of the bootstrap's refits ran to
