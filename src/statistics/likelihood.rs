@@ -161,8 +161,9 @@ pub const SCATTER_TOL: f64 = 1e-3;
 pub const SCATTER_RTOL: f64 = 0.01;
 /// The plateau test of a hierarchical fit's LM ([`crate::lsq::LmOptions::plateau`]): −2 ln L
 /// (the residuals' sum of squares plus the error model's log-determinant,
-/// [`crate::lsq::LeastSquaresProblem::objective_offset`]) within 0.01 over 6 iterations. The penalised problem has flat valleys (a specimen's
-/// effect against the constants it scatters) along which the Gauss–Newton model keeps
+/// [`crate::lsq::LeastSquaresProblem::objective_offset`]) within 0.01 over 6 iterations.
+/// The penalised problem has flat valleys (a specimen's effect against the constants it
+/// scatters) along which the Gauss–Newton model keeps
 /// promising gains that the profiled error model's small moves never let the relative tests
 /// confirm: measured on generated specimen data, a third of the bootstrap's refits ran to
 /// the iteration limit with −2 ln L constant to 1e-5.
