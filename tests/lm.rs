@@ -2,7 +2,9 @@
 //! (Moré, Garbow & Hillstrom 1981), bounded and unbounded, and a check that no residual is
 //! ever evaluated outside the box.
 
-use creepfit::lsq::{minimize, EvalFailure, LeastSquaresProblem, LmOptions, Termination};
+use creepfit::lsq::{
+    minimize, small_gain_to_come, EvalFailure, LeastSquaresProblem, LmOptions, Termination,
+};
 use std::sync::Mutex;
 
 struct Fun<F: Fn(&[f64], &mut [f64]) + Sync> {
@@ -578,4 +580,81 @@ fn the_plateau_test_sees_a_profiled_likelihood_fall_where_the_residuals_do_not()
     let blind = run(false);
     assert_eq!(blind.termination, Termination::Plateau);
     assert!((blind.x[0] - 1.0).abs() > 0.1, "{:?}", blind.x);
+}
+
+/// r(x) = x − 1 with a Jacobian twice the true one: every step goes half way, so the
+/// iteration converges linearly (the objective falls by 4 per iteration) and its relative
+/// tests never pass; only the gradient test ends it, near 1e-12.
+struct HalfWay;
+
+impl LeastSquaresProblem for HalfWay {
+    fn n_params(&self) -> usize {
+        1
+    }
+    fn n_residuals(&self) -> usize {
+        1
+    }
+    fn residuals(&self, x: &[f64], r: &mut [f64]) -> Result<(), EvalFailure> {
+        r[0] = x[0] - 1.0;
+        Ok(())
+    }
+    fn jacobian(
+        &self,
+        _x: &[f64],
+        _r: &[f64],
+        jac: &mut nalgebra::DMatrix<f64>,
+    ) -> Option<Result<(), EvalFailure>> {
+        jac[(0, 0)] = 2.0;
+        Some(Ok(()))
+    }
+}
+
+#[test]
+fn the_gain_to_come_test_is_a_table() {
+    // (f at three iterations K apart, δ, stop?)
+    let table = [
+        ((1.0, 0.5, 0.25), 1e-3, false),     // q = 0.5, tail 0.25
+        ((1e-3, 5e-4, 2.5e-4), 1e-3, true),  // q = 0.5, tail 2.5e-4
+        ((1.0, 0.0, -0.95), 1e-3, false),    // q = 0.95: too slow to extrapolate
+        ((1.0, 1.0, 1.0), 1e-3, true),       // nothing fell over either window
+        ((1.0005, 1.0, 1.0), 1e-3, true),    // nothing fell, 5e-4 before
+        ((1.1, 1.0, 1.0), 1e-3, false),      // nothing fell now, 0.1 before
+        ((1.0, 1.0, 0.5), 1e-3, false),      // a fall after none: not converging
+        ((1.0, f64::NAN, 0.5), 1e-3, false), // not evaluable
+    ];
+    for ((a, b, c), delta, want) in table {
+        assert_eq!(
+            small_gain_to_come(a, b, c, delta),
+            want,
+            "({a}, {b}, {c}), δ {delta}"
+        );
+    }
+}
+
+#[test]
+fn the_gain_to_come_stop_ends_a_linear_crawl_within_its_tail() {
+    let (lb, ub) = free(1);
+    let full = minimize(&HalfWay, &[0.0], &lb, &ub, &LmOptions::default());
+    let delta = 1e-6;
+    let opts = LmOptions {
+        gain_to_come: Some((5, delta)),
+        ..LmOptions::default()
+    };
+    let cut = minimize(&HalfWay, &[0.0], &lb, &ub, &opts);
+    assert_eq!(cut.termination, Termination::SmallGainToCome);
+    assert!(cut.termination.converged());
+    // The objective's falls are exactly geometric here, so the tail is the gain still to
+    // come (the minimum is 0): the stop leaves at most δ of it, and not far less.
+    assert!(cut.objective <= delta, "{} left", cut.objective);
+    assert!(
+        cut.objective > delta / 1e3,
+        "{} left: stopped late",
+        cut.objective
+    );
+    assert!(
+        2 * cut.iterations < full.iterations,
+        "{} iterations against {}",
+        cut.iterations,
+        full.iterations
+    );
 }

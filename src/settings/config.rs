@@ -319,6 +319,7 @@ impl SolverConfig {
             geodesic: self.geodesic.then_some(self.geodesic_alpha),
             geodesic_h: self.geodesic_h,
             plateau: None,
+            gain_to_come: None,
         }
     }
     /// Integration options (the horizon `t_end` is set per curve by its user).

@@ -881,6 +881,22 @@ pub fn ml_fit_from(
     settings: &FitSettings,
     opts: &MlOptions,
 ) -> MlFit {
+    // The gain-to-come stop is for fits without specimen effects: a hierarchical fit's
+    // rounds end on their plateau test ([`PLATEAU`]), and with both, the rounds' paths moved
+    // the null refits' ends (Alloy 617 950 °C: `lr_critical` up to 4.4 away, p-values alike).
+    let plain;
+    let settings = if opts.specimen.any() && settings.lm.gain_to_come.is_some() {
+        plain = FitSettings {
+            lm: crate::lsq::LmOptions {
+                gain_to_come: None,
+                ..settings.lm
+            },
+            ..*settings
+        };
+        &plain
+    } else {
+        settings
+    };
     // A warm start with specimen effects may be evaluable only with its specimens' factors
     // (the population's constants at a stress where a median specimen does not rupture in
     // the horizon while every tested one does): it is checked with them further down.

@@ -172,6 +172,13 @@ pub struct LmOptions {
     /// flat valley while the likelihood no longer changes on the scale that matters
     /// (0.01 in −2 ln L is below any decision).
     pub plateau: Option<(usize, f64)>,
+    /// Stop when the gain still to come is small: (K, δ) compares the objective's falls over
+    /// the last two windows of K iterations, d₁ then d₂, and stops when the iteration
+    /// converges linearly (q = d₂/d₁ < 0.9) and the geometric tail d₂·q/(1 − q) of the falls
+    /// still to come is at most δ (absolute), or when nothing fell over the last window and
+    /// at most δ over the one before (`None`: never). For refits that crawl along a flat
+    /// valley, whose last iterations change the objective far below any decision.
+    pub gain_to_come: Option<(usize, f64)>,
 }
 
 impl Default for LmOptions {
@@ -187,6 +194,7 @@ impl Default for LmOptions {
             geodesic: None,
             geodesic_h: 0.1,
             plateau: None,
+            gain_to_come: None,
         }
     }
 }
@@ -205,6 +213,9 @@ pub enum Termination {
     Stalled,
     /// The objective stayed within [`LmOptions::plateau`]'s δ over its last K iterations.
     Plateau,
+    /// The falls of the objective shrink geometrically and their tail is below
+    /// [`LmOptions::gain_to_come`]'s δ.
+    SmallGainToCome,
     /// `max_iterations` reached.
     IterationLimit,
     /// The residuals (or the Jacobian) could not be evaluated at the current point.
@@ -220,6 +231,7 @@ impl Termination {
             Termination::ConvergedGradient => "converged_gradient",
             Termination::Stalled => "stalled",
             Termination::Plateau => "plateau",
+            Termination::SmallGainToCome => "small_gain_to_come",
             Termination::IterationLimit => "iteration_limit",
             Termination::SimulationFailure => "simulation_failure",
         }
@@ -232,6 +244,7 @@ impl Termination {
                 | Termination::ConvergedObjective
                 | Termination::ConvergedGradient
                 | Termination::Plateau
+                | Termination::SmallGainToCome
         )
     }
 }
@@ -416,6 +429,25 @@ fn gauss_newton_gain(
     }
 }
 
+/// The gain-to-come test of [`LmOptions::gain_to_come`] on the objective at three iterations
+/// K apart (`f0`, `f1`, `f2`): the falls d₁ = f0 − f1 and d₂ = f1 − f2 shrink by q = d₂/d₁ <
+/// 0.9 and their geometric tail d₂·q/(1 − q) is at most `delta`, or nothing fell over the
+/// last window (d₂ ≤ 0) and at most `delta` over the one before.
+pub fn small_gain_to_come(f0: f64, f1: f64, f2: f64, delta: f64) -> bool {
+    let (d1, d2) = (f0 - f1, f1 - f2);
+    if !(d1.is_finite() && d2.is_finite()) {
+        return false;
+    }
+    if d2 <= 0.0 {
+        return d1 <= delta;
+    }
+    if d1 <= 0.0 || d2 >= 0.9 * d1 {
+        return false;
+    }
+    let q = d2 / d1;
+    d2 * q / (1.0 - q) <= delta
+}
+
 /// Minimise ½‖r(x)‖² over the box [lb, ub] from `x0` (projected onto the box first).
 pub fn minimize<P: LeastSquaresProblem + ?Sized>(
     problem: &P,
@@ -489,14 +521,25 @@ pub fn minimize<P: LeastSquaresProblem + ?Sized>(
         lambda: last_lambda.get(),
     };
 
-    // The objective at the start of each iteration (for the plateau test).
+    // The true objective at the start of each iteration (plateau and gain-to-come tests).
     let mut history: Vec<f64> = Vec::new();
     for iter in 1..=opts.max_iterations {
         if !normal && problem.reweight(&x, &mut r, jac_fresh.then_some(&mut jac)) {
             f = sumsq(&r);
         }
-        if let Some((k, delta)) = opts.plateau {
+        if opts.plateau.is_some() || opts.gain_to_come.is_some() {
             history.push(f + problem.objective_offset());
+        }
+        if let Some((k, delta)) = opts.gain_to_come {
+            let i = history.len() - 1;
+            if k > 0
+                && i >= 2 * k
+                && small_gain_to_come(history[i - 2 * k], history[i - k], history[i], delta)
+            {
+                return done(x, f, r, iter, evaluations, Termination::SmallGainToCome);
+            }
+        }
+        if let Some((k, delta)) = opts.plateau {
             if history.len() > k {
                 let w = &history[history.len() - k - 1..];
                 let (lo, hi) = w
