@@ -209,6 +209,12 @@ pub struct Curve {
     pub min_rate_estimated: f64,
 }
 
+/// The campaign (laboratory, heat or batch of specimens) a specimen label names: the text
+/// before its first `-` (`INL2-a` → `INL2`), the whole label when it has none.
+pub fn campaign_of(specimen: &str) -> &str {
+    specimen.split('-').next().unwrap_or(specimen)
+}
+
 impl Curve {
     /// The minimum creep rate to compare predictions with: the measured one when the ruptures
     /// file gives it, else the estimate from the curve.
@@ -221,6 +227,11 @@ impl Curve {
     pub fn life_h(&self) -> f64 {
         self.rupture_time_h
             .unwrap_or_else(|| self.times_h.last().copied().unwrap_or(0.0))
+    }
+
+    /// The test campaign of its specimen label ([`campaign_of`]), if it has one.
+    pub fn campaign(&self) -> Option<&str> {
+        self.specimen.as_deref().map(campaign_of)
     }
 
     /// A short human label, e.g. `560 °C, 85 MPa` or `560 °C, 85 MPa, specimen S3`.

@@ -592,3 +592,78 @@ fn specimen_in_every_per_curve_output() {
         }
     }
 }
+
+/// `fit` of the Alloy 617 data with specimen effects: summary.json's mean ln factors per
+/// temperature and per campaign are the means of specimens.csv's factors over those groups,
+/// with their standard errors, and the printout gives them.
+#[test]
+fn specimen_factors_by_temperature_and_campaign() {
+    let dir = TempDir::new().unwrap();
+    let out = dir.path().join("fit");
+    let o = run(&[
+        "fit",
+        "configs/alloy617.toml",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stdout = String::from_utf8_lossy(&o.stdout).to_string();
+    assert!(stdout.contains("mean ln factor by temperature"), "{stdout}");
+    assert!(stdout.contains("mean ln factor by campaign"), "{stdout}");
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let (h, rows) = csv_text(&out.join("specimens.csv"));
+    let col = |name: &str| h.iter().position(|c| c == name).unwrap();
+    let (t, sp) = (col("temperature_C"), col("specimen"));
+    // Each group's mean and standard error of ln factor, recomputed from the file.
+    let check = |groups: &serde_json::Value, key: &dyn Fn(&Vec<String>) -> String| {
+        let groups = groups.as_array().unwrap();
+        let mut total = 0;
+        for g in groups {
+            let name = g["group"].as_str().unwrap();
+            let members: Vec<&Vec<String>> = rows.iter().filter(|r| key(r) == name).collect();
+            assert_eq!(
+                g["specimens"].as_u64().unwrap() as usize,
+                members.len(),
+                "{g}"
+            );
+            total += members.len();
+            for kind in ["rate", "ductility"] {
+                let v: Vec<f64> = members
+                    .iter()
+                    .map(|r| {
+                        r[col(&format!("{kind}_factor"))]
+                            .parse::<f64>()
+                            .unwrap()
+                            .ln()
+                    })
+                    .collect();
+                let n = v.len() as f64;
+                let m = v.iter().sum::<f64>() / n;
+                let se = (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0) / n).sqrt();
+                let got = g[format!("mean_ln_{kind}")].as_f64().unwrap();
+                assert!((got - m).abs() < 1e-9, "{name} {kind}: {got} against {m}");
+                let got = g[format!("se_ln_{kind}")].as_f64().unwrap();
+                assert!(
+                    (got - se).abs() < 1e-9,
+                    "{name} {kind}: se {got} against {se}"
+                );
+            }
+        }
+        assert_eq!(total, rows.len());
+        groups.len()
+    };
+    let sp_json = &s["specimens"];
+    assert_eq!(
+        check(&sp_json["by_temperature"], &|r| format!("{} °C", r[t])),
+        4
+    );
+    assert_eq!(
+        check(&sp_json["by_campaign"], &|r| r[sp]
+            .split('-')
+            .next()
+            .unwrap()
+            .to_string()),
+        2
+    );
+}

@@ -390,12 +390,10 @@ fn bad_conditions_are_one_line_errors() {
     }
 }
 
-/// Curves at three temperatures made by the model with Arrhenius A and Kc: leaving 575 °C
-/// out, the fit on 560 and 590 °C predicts its rupture times (to the integration accuracy;
-/// the constants are recovered) and the files say so.
-#[test]
-fn holdout_predicts_a_temperature_left_out() {
-    let tmp = TempDir::new().unwrap();
+/// Curves and rupture times at `tests` (°C, MPa, specimen label; no `specimen` column when
+/// every label is empty) made by the KHD model with Arrhenius A and Kc (30 points to
+/// rupture), written into `dir` with the hold-out configuration h.toml, whose path it returns.
+fn law_data(dir: &Path, tests: &[(f64, f64, &str)]) -> PathBuf {
     use LawKind::*;
     let truth = [1.2e-9, 0.12, 0.55, 6e4, 1.5e-5, 5.0, 350.0, 250.0];
     let model = with_laws(
@@ -408,18 +406,23 @@ fn holdout_predicts_a_temperature_left_out() {
         atol: 1e-15,
         ..OdeOptions::default()
     };
-    let mut curves = String::from("temperature_C,stress_MPa,time_h,strain_pct\n");
-    let mut ruptures = String::from("temperature_C,stress_MPa,rupture_time_h\n");
-    for (t, s) in [
-        (560.0, 85.0),
-        (560.0, 100.0),
-        (560.0, 110.0),
-        (575.0, 80.0),
-        (575.0, 95.0),
-        (590.0, 75.0),
-        (590.0, 90.0),
-        (590.0, 100.0),
-    ] {
+    let labelled = tests.iter().any(|t| !t.2.is_empty());
+    let col = |label: &str| {
+        if labelled {
+            format!(",{label}")
+        } else {
+            String::new()
+        }
+    };
+    let mut curves = format!(
+        "temperature_C,stress_MPa,time_h,strain_pct{}\n",
+        col("specimen")
+    );
+    let mut ruptures = format!(
+        "temperature_C,stress_MPa,rupture_time_h{}\n",
+        col("specimen")
+    );
+    for &(t, s, label) in tests {
         let load = Load::new(s, t, 1.0 / 3.0);
         let r = model.simulate(&truth, &load, &[], &mut [], &ode);
         let times: Vec<f64> = (0..30).map(|k| r.t_end * k as f64 / 30.0).collect();
@@ -427,13 +430,13 @@ fn holdout_predicts_a_temperature_left_out() {
         model.simulate(&truth, &load, &times, &mut e, &ode);
         assert!(estimate_min_rate(&times, &e, r.t_end) > 0.0);
         for (ti, ei) in times.iter().zip(&e) {
-            curves += &format!("{t},{s},{ti},{}\n", 100.0 * ei);
+            curves += &format!("{t},{s},{ti},{}{}\n", 100.0 * ei, col(label));
         }
-        ruptures += &format!("{t},{s},{}\n", r.t_end);
+        ruptures += &format!("{t},{s},{}{}\n", r.t_end, col(label));
     }
-    std::fs::write(tmp.path().join("c.csv"), curves).unwrap();
-    std::fs::write(tmp.path().join("r.csv"), ruptures).unwrap();
-    let cfg = tmp.path().join("h.toml");
+    std::fs::write(dir.join("c.csv"), curves).unwrap();
+    std::fs::write(dir.join("r.csv"), ruptures).unwrap();
+    let cfg = dir.join("h.toml");
     std::fs::write(
         &cfg,
         r#"name = "h"
@@ -457,6 +460,28 @@ tensile_strength = ["560:420", "575:400", "590:380"]
 "#,
     )
     .unwrap();
+    cfg
+}
+
+/// Curves at three temperatures made by the model with Arrhenius A and Kc: leaving 575 °C
+/// out, the fit on 560 and 590 °C predicts its rupture times (to the integration accuracy;
+/// the constants are recovered) and the files say so.
+#[test]
+fn holdout_predicts_a_temperature_left_out() {
+    let tmp = TempDir::new().unwrap();
+    let cfg = law_data(
+        tmp.path(),
+        &[
+            (560.0, 85.0, ""),
+            (560.0, 100.0, ""),
+            (560.0, 110.0, ""),
+            (575.0, 80.0, ""),
+            (575.0, 95.0, ""),
+            (590.0, 75.0, ""),
+            (590.0, 90.0, ""),
+            (590.0, 100.0, ""),
+        ],
+    );
     // Leave 575 °C out into `out` (with `extra` options): stdout and summary.json.
     let holdout_575 = |out: &std::path::Path, extra: &[&str]| {
         let mut args = vec!["holdout", cfg.to_str().unwrap(), "--temperature", "575"];
@@ -671,4 +696,80 @@ tensile_strength = ["560:420", "575:400", "590:380"]
     ]);
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && e.contains("two or more"), "{e}");
+}
+
+/// Two campaigns of the same material (the model's curves, specimens P-… and Q-…): leaving
+/// campaign Q out fits on P's tests alone and predicts exactly Q's, at every temperature
+/// they were run at (575 °C only Q tested: through the laws), to the integration accuracy.
+#[test]
+fn holdout_leaves_a_campaign_out() {
+    let tmp = TempDir::new().unwrap();
+    let cfg = law_data(
+        tmp.path(),
+        &[
+            (560.0, 85.0, "P-1"),
+            (560.0, 110.0, "P-2"),
+            (560.0, 100.0, "Q-a"),
+            (575.0, 95.0, "Q-b"),
+            (590.0, 75.0, "P-1"),
+            (590.0, 100.0, "P-2"),
+            (590.0, 90.0, "Q-a"),
+        ],
+    );
+    let out = tmp.path().join("hq");
+    let stdout = ok(&[
+        "holdout",
+        cfg.to_str().unwrap(),
+        "--campaign",
+        "Q",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(stdout.contains("held out campaign Q: 3 tests"), "{stdout}");
+    let h = csv(&out.join("holdout.csv"));
+    assert_eq!(h[0][..3], ["temperature_C", "stress_MPa", "rupture_time_h"]);
+    let specimen = h[0].iter().position(|c| c == "specimen").unwrap();
+    let held: Vec<(String, String, String)> = h[1..]
+        .iter()
+        .map(|r| (r[0].clone(), r[1].clone(), r[specimen].clone()))
+        .collect();
+    assert_eq!(
+        held,
+        [
+            ("560", "100", "Q-a"),
+            ("575", "95", "Q-b"),
+            ("590", "90", "Q-a")
+        ]
+        .map(|(a, b, c)| (a.to_string(), b.to_string(), c.to_string()))
+    );
+    for r in &h[1..] {
+        let err: f64 = r[5].parse().unwrap();
+        assert!(err.abs() < 1e-3, "held-out log10 error {err}: {r:?}");
+    }
+    let s = json(&out.join("summary.json"));
+    assert_eq!(s["held_out"]["kind"], "campaign");
+    assert_eq!(s["held_out"]["campaign"], "Q");
+    assert!(s["held_out_temperature_C"].is_null());
+    // Trained on P's four tests, at 560 and 590 °C; 575 °C lies between them.
+    assert_eq!(s["training_lifetime_err_pct"].as_array().unwrap().len(), 4);
+    assert_eq!(
+        s["training_temperatures_C"],
+        serde_json::json!([560.0, 590.0])
+    );
+    assert_eq!(s["temperature_extrapolation"], false);
+    assert_eq!(s["tests"], 3);
+    // A campaign the data lack is refused in one line naming the ones they have.
+    let o = creepfit(&[
+        "holdout",
+        cfg.to_str().unwrap(),
+        "--campaign",
+        "R",
+        "--out",
+        tmp.path().join("x").to_str().unwrap(),
+    ]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && e.contains("--campaign R") && e.contains("P, Q"),
+        "{e}"
+    );
 }

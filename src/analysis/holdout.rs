@@ -1,8 +1,9 @@
-//! Leave one temperature out: how well does a calibration predict a temperature it has not
-//! seen? `creepfit holdout CONFIG --temperature T` fits the configuration on every curve not
-//! at T (`fit`'s procedure from the configured start, the guess and `[sweep] starts`
+//! Leave one temperature or one campaign out: how well does a calibration predict a
+//! temperature, or a test campaign (another laboratory, heat or batch of specimens), it has
+//! not seen? `creepfit holdout CONFIG --temperature T` (or `--campaign NAME`, [`LeftOut`])
+//! fits the configuration on every curve not left out (`fit`'s procedure from the configured start, the guess and `[sweep] starts`
 //! Latin-hypercube starts: the held-out data choose nothing, not even the basin), predicts the rupture time and the curve of
-//! every test at T, and fits the classical baselines ([`crate::baseline`]: Larson–Miller,
+//! every test left out, and fits the classical baselines ([`crate::baseline`]: Larson–Miller,
 //! Orr–Sherby–Dorn, Manson–Haferd, Wilshire where tensile strengths are given) to the same
 //! training rupture times. All are scored by the mean |log10(t_predicted / t_measured)| over
 //! the held-out tests; the best baseline is "the one to beat".
@@ -24,9 +25,72 @@ use crate::model::objective::{mean_abs, CurvePrediction, Objective};
 use crate::model::Load;
 use crate::ode::Outcome;
 
+/// What a hold-out leaves out of the fit.
+#[derive(Debug, Clone, PartialEq)]
+pub enum LeftOut {
+    /// Every test at this temperature, °C.
+    Temperature(f64),
+    /// Every test of this campaign: specimens labelled `NAME` or `NAME-…` (the data's
+    /// `specimen` column, e.g. `INL2-a` is of campaign `INL2`).
+    Campaign(String),
+}
+
+impl LeftOut {
+    /// Whether curve `c` is left out.
+    pub fn contains(&self, c: &Curve) -> bool {
+        match self {
+            LeftOut::Temperature(t) => c.temperature_c == *t,
+            LeftOut::Campaign(name) => c.campaign() == Some(name.as_str()),
+        }
+    }
+    /// In text: "850 °C", "campaign KAERI2".
+    pub fn label(&self) -> String {
+        match self {
+            LeftOut::Temperature(t) => format!("{t} °C"),
+            LeftOut::Campaign(name) => format!("campaign {name}"),
+        }
+    }
+    /// The option that asked for it: "--temperature 850", "--campaign KAERI2".
+    pub fn option(&self) -> String {
+        match self {
+            LeftOut::Temperature(t) => format!("--temperature {t}"),
+            LeftOut::Campaign(name) => format!("--campaign {name}"),
+        }
+    }
+    /// The default output folder's name under `results/<name>/`: `holdout-850C`,
+    /// `holdout-campaign-KAERI2`.
+    pub fn folder(&self) -> String {
+        match self {
+            LeftOut::Temperature(t) => format!("holdout-{t}C"),
+            LeftOut::Campaign(name) => format!("holdout-campaign-{name}"),
+        }
+    }
+    /// The held-out temperature, if a temperature is what is left out.
+    pub fn temperature_c(&self) -> Option<f64> {
+        match self {
+            LeftOut::Temperature(t) => Some(*t),
+            LeftOut::Campaign(_) => None,
+        }
+    }
+}
+
+/// The campaigns of `data`'s specimen labels ([`crate::data::campaign_of`]), sorted, each once.
+pub fn campaigns(data: &Dataset) -> Vec<String> {
+    let mut v: Vec<String> = data
+        .curves
+        .iter()
+        .filter_map(|c| c.campaign().map(str::to_string))
+        .collect();
+    v.sort();
+    v.dedup();
+    v
+}
+
 /// One held-out test and its predictions.
 #[derive(Debug, Clone, PartialEq)]
 pub struct HeldOut {
+    /// Temperature, °C.
+    pub temperature_c: f64,
     /// Stress, MPa.
     pub stress_mpa: f64,
     /// Specimen label, if any.
@@ -212,8 +276,8 @@ pub fn verdict(model: (f64, usize), best: Option<(f64, usize)>, n_tests: usize) 
 
 /// What a hold-out run computed.
 pub struct Holdout {
-    /// The temperature left out, °C.
-    pub temperature_c: f64,
+    /// What was left out.
+    pub left_out: LeftOut,
     /// The fit on the other temperatures.
     pub fit: FitRun,
     /// The baseline on the same training data, or why there is none.
@@ -226,6 +290,8 @@ pub struct Holdout {
     pub curves: Vec<Curve>,
     /// The temperatures fitted on, °C, ascending.
     pub training_temperatures_c: Vec<f64>,
+    /// The training curves (the diagrams of the training fit draw them).
+    pub training: Vec<Curve>,
     /// Under `--intervals`: the maximum-likelihood refit of the training fit's constants the
     /// intervals (and `ml_rupture_time_h`) come from.
     pub intervals_refit: Option<crate::uncertainty::predict::Refit>,
@@ -297,20 +363,33 @@ impl Holdout {
             n(CurveOutcome::Failed),
         ]
     }
+    /// Whether a held-out test lies outside the training temperatures (an extrapolation of
+    /// the temperature laws).
+    pub fn temperature_extrapolation(&self) -> bool {
+        let (Some(lo), Some(hi)) = (
+            self.training_temperatures_c.first(),
+            self.training_temperatures_c.last(),
+        ) else {
+            return true;
+        };
+        self.curves
+            .iter()
+            .any(|c| c.temperature_c < *lo || c.temperature_c > *hi)
+    }
 }
 
-/// Fit `cfg` on the curves of `data` not at `temperature_c`, predict those at it; with
+/// Fit `cfg` on the curves of `data` not `left_out`, predict those left out; with
 /// `intervals`, also the 95 % intervals of each held-out rupture time from the training data.
 pub fn holdout(
     cfg: &RunConfig,
     data: &Dataset,
-    temperature_c: f64,
+    left_out: &LeftOut,
     intervals: bool,
 ) -> Result<Holdout> {
     holdout_observed(
         cfg,
         data,
-        temperature_c,
+        left_out,
         intervals,
         &crate::progress::Hooks::default(),
     )
@@ -322,32 +401,48 @@ pub fn holdout(
 pub fn holdout_observed(
     cfg: &RunConfig,
     data: &Dataset,
-    temperature_c: f64,
+    left_out: &LeftOut,
     intervals: bool,
     hooks: &crate::progress::Hooks,
 ) -> Result<Holdout> {
-    if !cfg.has_laws() {
+    let (test, train): (Vec<Curve>, Vec<Curve>) = data
+        .curves
+        .iter()
+        .cloned()
+        .partition(|c| left_out.contains(c));
+    let mut temps: Vec<f64> = train.iter().map(|c| c.temperature_c).collect();
+    temps.sort_by(f64::total_cmp);
+    temps.dedup();
+    let what = left_out.option();
+    if test.is_empty() {
+        return Err(Error::Invalid(match left_out {
+            LeftOut::Temperature(_) => format!("{what}: no curves at that temperature"),
+            LeftOut::Campaign(_) if campaigns(data).is_empty() => format!(
+                "{what}: the data have no specimen labels (a `specimen` column, e.g. INL2-a: campaign INL2) to tell campaigns by"
+            ),
+            LeftOut::Campaign(_) => format!(
+                "{what}: no curve's specimen is of that campaign (specimen labels NAME or NAME-…; the data's campaigns: {})",
+                campaigns(data).join(", ")
+            ),
+        }));
+    }
+    if train.is_empty() {
+        return Err(Error::Invalid(format!(
+            "{what}: every curve is left out; nothing to fit"
+        )));
+    }
+    // Tests at a temperature the training data lack are predicted through the temperature
+    // laws, which need them and two or more training temperatures.
+    let new_temperature = test.iter().any(|c| !temps.contains(&c.temperature_c));
+    if new_temperature && !cfg.has_laws() {
         return Err(Error::config(
             &cfg.path,
             "constants: a hold-out across temperatures needs temperature laws (law = \"arrhenius\" or \"linear\" on some constant)",
         ));
     }
-    let (test, train): (Vec<Curve>, Vec<Curve>) = data
-        .curves
-        .iter()
-        .cloned()
-        .partition(|c| c.temperature_c == temperature_c);
-    let mut temps: Vec<f64> = train.iter().map(|c| c.temperature_c).collect();
-    temps.sort_by(f64::total_cmp);
-    temps.dedup();
-    if test.is_empty() {
+    if new_temperature && temps.len() < 2 {
         return Err(Error::Invalid(format!(
-            "--temperature {temperature_c}: no curves at that temperature"
-        )));
-    }
-    if temps.len() < 2 {
-        return Err(Error::Invalid(format!(
-            "--temperature {temperature_c}: {} temperature(s) left to fit; the laws need two or more",
+            "{what}: {} temperature(s) left to fit; the laws need two or more",
             temps.len()
         )));
     }
@@ -380,19 +475,19 @@ pub fn holdout_observed(
         settings.objective(),
     )
     .evaluate(&best.params);
-    // One interval per distinct held-out stress (replicates share it).
-    let mut stresses: Vec<f64> = test
+    // One interval per distinct held-out load (replicates share it).
+    let mut loads_tc: Vec<(f64, f64)> = test
         .iter()
         .filter(|c| c.rupture_time_h.is_some())
-        .map(|c| c.stress_mpa)
+        .map(|c| (c.temperature_c, c.stress_mpa))
         .collect();
-    stresses.sort_by(f64::total_cmp);
-    stresses.dedup();
+    loads_tc.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    loads_tc.dedup();
     let mut intervals_refit = None;
-    let by_stress: Vec<Option<RuptureInterval>> = if intervals {
-        let loads: Vec<Load> = stresses
+    let by_load: Vec<Option<RuptureInterval>> = if intervals {
+        let loads: Vec<Load> = loads_tc
             .iter()
-            .map(|&s| Load::new(s, temperature_c, cfg.objective.omega_f))
+            .map(|&(t, s)| Load::new(s, t, cfg.objective.omega_f))
             .collect();
         let iv = crate::uncertainty::predict::intervals_at_observed(
             &cfg.likelihood_setup(&train_data),
@@ -417,7 +512,7 @@ pub fn holdout_observed(
             })
             .collect()
     } else {
-        vec![None; stresses.len()]
+        vec![None; loads_tc.len()]
     };
     let tests = test
         .iter()
@@ -427,6 +522,7 @@ pub fn holdout_observed(
             let ce = curve_error(c, p);
             let measured = c.rupture_time_h.unwrap_or(f64::NAN);
             HeldOut {
+                temperature_c: c.temperature_c,
                 stress_mpa: c.stress_mpa,
                 specimen: c.specimen.clone(),
                 rupture_time_h: c.rupture_time_h.unwrap_or(f64::NAN),
@@ -442,21 +538,22 @@ pub fn holdout_observed(
                 curve_points: ce.points,
                 curve_outcome: ce.outcome,
                 predicted_life_pct: 100.0 * p.rupture_time_h / measured,
-                interval: stresses
+                interval: loads_tc
                     .iter()
-                    .position(|&s| s == c.stress_mpa)
-                    .and_then(|k| by_stress[k]),
+                    .position(|&l| l == (c.temperature_c, c.stress_mpa))
+                    .and_then(|k| by_load[k]),
             }
         })
         .collect();
     Ok(Holdout {
-        temperature_c,
+        left_out: left_out.clone(),
         fit,
         lmp,
         baselines,
         tests,
         curves: test,
         training_temperatures_c: temps,
+        training: train_data.curves,
         intervals_refit,
     })
 }
@@ -464,13 +561,14 @@ pub fn holdout_observed(
 /// The printed table.
 pub fn table(h: &Holdout) -> String {
     let mut s = format!(
-        "held out {} °C: {} tests\n   MPa  specimen  |  t_r meas h  creepfit h     LMP h | log10 err creepfit    LMP | curve rms % e_f\n",
-        h.temperature_c,
+        "held out {}: {} tests\n  T(C)    MPa  specimen  |  t_r meas h  creepfit h     LMP h | log10 err creepfit    LMP | curve rms % e_f\n",
+        h.left_out.label(),
         h.tests.len()
     );
     for t in &h.tests {
         s.push_str(&format!(
-            "{:>6} {:>9} | {:>11.1} {:>11.1} {:>9.1} | {:>18.3} {:>6.3} | {:>8.2}{}\n",
+            "{:>6} {:>6} {:>9} | {:>11.1} {:>11.1} {:>9.1} | {:>18.3} {:>6.3} | {:>8.2}{}\n",
+            t.temperature_c,
             t.stress_mpa,
             t.specimen.as_deref().unwrap_or("-"),
             t.rupture_time_h,
@@ -501,7 +599,8 @@ pub fn table(h: &Holdout) -> String {
         for t in &h.tests {
             if let Some(i) = t.interval {
                 s.push_str(&format!(
-                    "{:>6} {:>9} | measured {:>11.1} | new test [{:.1}, {:.1}] {} | model {:.1} [{:.1}, {:.1}]\n",
+                    "{:>6} {:>6} {:>9} | measured {:>11.1} | new test [{:.1}, {:.1}] {} | model {:.1} [{:.1}, {:.1}]\n",
+                    t.temperature_c,
                     t.stress_mpa,
                     t.specimen.as_deref().unwrap_or("-"),
                     t.rupture_time_h,
@@ -615,13 +714,16 @@ pub fn baseline_columns() -> Vec<String> {
 /// [`CurveOutcome`] and the number of measured points `curve_rms_pct` is over.
 pub const CURVE_COLUMNS: [&str; 3] = ["predicted_life_pct", "curve_outcome", "curve_points"];
 
-/// The run identity of `holdout` of `cfg` (bound to its data) at `temperature_c` kept in its
-/// journal: the configuration's ([`crate::config::identity`]: every setting of the training
-/// fits, the data's hash, the crate version), the command and the held-out temperature.
-pub fn identity(cfg: &RunConfig, temperature_c: f64) -> serde_json::Value {
+/// The run identity of `holdout` of `cfg` (bound to its data) leaving out `left_out`, kept in
+/// its journal: the configuration's ([`crate::config::identity`]: every setting of the
+/// training fits, the data's hash, the crate version), the command and what is held out.
+pub fn identity(cfg: &RunConfig, left_out: &LeftOut) -> serde_json::Value {
     let mut id = crate::config::identity(cfg);
     id["command"] = "holdout".into();
-    id["held_out_temperature_C"] = temperature_c.into();
+    match left_out {
+        LeftOut::Temperature(t) => id["held_out_temperature_C"] = (*t).into(),
+        LeftOut::Campaign(name) => id["held_out_campaign"] = name.as_str().into(),
+    }
     id
 }
 
@@ -752,6 +854,37 @@ mod tests {
             serde_json::to_value(CurveOutcome::NoRupture).unwrap(),
             "no_rupture"
         );
+    }
+
+    /// Which curves a campaign or a temperature leaves out, as a table.
+    #[test]
+    fn left_out_tables() {
+        use crate::data::campaign_of;
+        assert_eq!(campaign_of("INL2-a"), "INL2");
+        assert_eq!(campaign_of("KAERI2"), "KAERI2");
+        assert_eq!(campaign_of("S-1-b"), "S");
+        assert_eq!(campaign_of(""), "");
+        let curve = |t: f64, specimen: Option<&str>| Curve {
+            temperature_c: t,
+            specimen: specimen.map(str::to_string),
+            ..measured_and_predicted(&[1.2e-9, 0.12, 0.55, 6e4, 1.5e-5, 5.0]).0
+        };
+        let inl2 = LeftOut::Campaign("INL2".into());
+        let t850 = LeftOut::Temperature(850.0);
+        for (c, by_campaign, by_temperature) in [
+            (curve(850.0, Some("INL2-a")), true, true),
+            (curve(950.0, Some("INL2")), true, false),
+            (curve(850.0, Some("INL22-a")), false, true),
+            (curve(850.0, Some("KAERI2-a")), false, true),
+            (curve(850.0, None), false, true),
+        ] {
+            assert_eq!(inl2.contains(&c), by_campaign, "{:?}", c.specimen);
+            assert_eq!(t850.contains(&c), by_temperature, "{:?}", c.specimen);
+        }
+        assert_eq!(inl2.folder(), "holdout-campaign-INL2");
+        assert_eq!(t850.folder(), "holdout-850C");
+        assert_eq!(t850.temperature_c(), Some(850.0));
+        assert_eq!(inl2.temperature_c(), None);
     }
 
     #[test]

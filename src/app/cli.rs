@@ -207,16 +207,21 @@ pub enum Command {
         #[arg(long, short)]
         quiet: bool,
     },
-    /// Leave one temperature out: fit on the others, predict the held-out tests' rupture
-    /// times and curves, and compare with the classical baselines (Larson–Miller,
+    /// Leave one temperature (or one campaign) out: fit on the others, predict the held-out
+    /// tests' rupture times and curves, and compare with the classical baselines (Larson–Miller,
     /// Orr–Sherby–Dorn, Manson–Haferd; Wilshire with [predict] tensile_strength) fitted to the
     /// same training rupture times; the best of them is named the one to beat.
+    #[command(group(clap::ArgGroup::new("left_out").required(true).args(["temperature", "campaign"])))]
     Holdout {
         /// Run configuration (TOML).
         config: PathBuf,
         /// The temperature to leave out, °C.
         #[arg(long)]
-        temperature: f64,
+        temperature: Option<f64>,
+        /// The campaign to leave out: every test whose specimen label is NAME or NAME-… (e.g.
+        /// INL2 for INL2-a, INL2-b), at whatever temperature.
+        #[arg(long, value_name = "NAME")]
+        campaign: Option<String>,
         /// Latin-hypercube starts of the fit besides the guess (default: [sweep] starts).
         #[arg(long)]
         starts: Option<usize>,
@@ -228,7 +233,7 @@ pub enum Command {
         /// count the measured lives inside (default: [predict] intervals).
         #[arg(long)]
         intervals: bool,
-        /// Output folder (default results/<name>/holdout-<T>C/).
+        /// Output folder (default results/<name>/holdout-<T>C/, or holdout-campaign-<NAME>/).
         #[arg(long)]
         out: Option<PathBuf>,
         /// No progress bars (drawn on stderr only when it is a terminal).
@@ -327,6 +332,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Holdout {
             config,
             temperature,
+            campaign,
             starts,
             seed,
             intervals,
@@ -340,7 +346,12 @@ pub fn run(cli: Cli) -> Result<()> {
                 predict_intervals: intervals.then_some(true),
                 ..long_run(out, quiet, stop_after)
             };
-            commands::holdout(&config, temperature, &cli)
+            let left_out = match (temperature, campaign) {
+                (Some(t), _) => crate::holdout::LeftOut::Temperature(t),
+                (None, Some(name)) => crate::holdout::LeftOut::Campaign(name),
+                (None, None) => unreachable!("clap requires --temperature or --campaign"),
+            };
+            commands::holdout(&config, &left_out, &cli)
         }
         Command::Sweep {
             config,

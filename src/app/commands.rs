@@ -155,12 +155,12 @@ pub fn predict(config: &Path, constants: &Path, cli: &Overrides) -> Result<()> {
     folder.finish(outcome)
 }
 
-/// `creepfit holdout`: fit without the tests at `temperature_c`, predict them, compare with
-/// the classical baselines.
-pub fn holdout(config: &Path, temperature_c: f64, cli: &Overrides) -> Result<()> {
+/// `creepfit holdout`: fit without the tests `left_out`, predict them, compare with the
+/// classical baselines.
+pub fn holdout(config: &Path, left_out: &crate::holdout::LeftOut, cli: &Overrides) -> Result<()> {
     let (cfg, data) = load(config, cli)?;
-    let out = cfg.out_dir(&format!("holdout-{temperature_c}C"));
-    let identity = crate::holdout::identity(&cfg, temperature_c);
+    let out = cfg.out_dir(&left_out.folder());
+    let identity = crate::holdout::identity(&cfg, left_out);
     journaled(
         &cfg,
         &data,
@@ -172,7 +172,7 @@ pub fn holdout(config: &Path, temperature_c: f64, cli: &Overrides) -> Result<()>
             let h = crate::holdout::holdout_observed(
                 &cfg,
                 &data,
-                temperature_c,
+                left_out,
                 cfg.predict.intervals,
                 hooks,
             );

@@ -440,6 +440,11 @@ pub struct FitSpecimens {
     /// without replicates): every rate scales with a specimen's rate factor, so under the
     /// model this is the rate scatter.
     pub replicate_sd_ln_life: Option<f64>,
+    /// The specimens' mean ln factors per temperature (empty without specimen effects or
+    /// with one temperature): a temperature dependence the laws miss shows here.
+    pub by_temperature: Vec<crate::likelihood::FactorGroup>,
+    /// The same per campaign ([`crate::data::campaign_of`]; empty unless two or more).
+    pub by_campaign: Vec<crate::likelihood::FactorGroup>,
 }
 
 /// Curves in replicate groups and the pooled within-group sd of their ln rupture times.
@@ -762,6 +767,8 @@ pub fn run_fit_observed(
             note,
             replicate_curves,
             replicate_sd_ln_life,
+            by_temperature: Vec::new(),
+            by_campaign: Vec::new(),
         };
         if kinds.any() {
             let opts = crate::likelihood::MlOptions {
@@ -790,6 +797,17 @@ pub fn run_fit_observed(
                     &opts,
                 );
                 sp.fit = h.specimen.clone();
+                if let Some(f) = &sp.fit {
+                    sp.by_temperature =
+                        f.by_group(curves, |c| Some(format!("{} °C", c.temperature_c)));
+                    if sp.by_temperature.len() < 2 {
+                        sp.by_temperature.clear();
+                    }
+                    sp.by_campaign = f.by_group(curves, |c| c.campaign().map(str::to_string));
+                    if sp.by_campaign.len() < 2 {
+                        sp.by_campaign.clear();
+                    }
+                }
                 if 2 * replicate_curves < curves.len() {
                     sp.note = Some(format!(
                         "{replicate_curves} of {} specimens are replicates (two or more at one temperature and stress); a specimen's factor also takes up what the constants miss from one stress to another, which only the replicates tell apart from scatter: read the scatter as an upper bound where the model misfits (the replicates' own spread of ln rupture time: {})",

@@ -737,6 +737,71 @@ pub struct SpecimenFit {
     pub dropped: Vec<EffectKind>,
 }
 
+/// The specimens' mean ln factor in one group of curves (a temperature, a campaign).
+/// Under the hierarchical model the factors scatter about 0 in every group; a group mean
+/// several standard errors from 0 is a dependence on what defines the group that the
+/// constants miss and the factors take up.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct FactorGroup {
+    /// The group's name ("850 °C", "KAERI2").
+    pub group: String,
+    /// Specimens (curves) in it.
+    pub specimens: usize,
+    /// Per kind, in the fit's order: the mean of the specimens' ln factors (conditional modes).
+    pub mean_ln: Vec<f64>,
+    /// Per kind: its standard error, the specimens' sample sd / √n (NaN for one specimen).
+    pub se: Vec<f64>,
+}
+
+impl SpecimenFit {
+    /// The specimens' mean ln factors per group of `curves` (the curves the fit was made on,
+    /// in its order), `key` naming a curve's group (`None`: in no group); groups in order of
+    /// first appearance.
+    pub fn by_group(
+        &self,
+        curves: &[Curve],
+        key: impl Fn(&Curve) -> Option<String>,
+    ) -> Vec<FactorGroup> {
+        let mut groups: Vec<(String, Vec<usize>)> = Vec::new();
+        for (i, c) in curves.iter().enumerate() {
+            let Some(k) = key(c) else { continue };
+            match groups.iter_mut().find(|g| g.0 == k) {
+                Some(g) => g.1.push(i),
+                None => groups.push((k, vec![i])),
+            }
+        }
+        groups
+            .into_iter()
+            .map(|(group, idx)| {
+                let n = idx.len() as f64;
+                let (mean_ln, se) = self
+                    .effects
+                    .iter()
+                    .map(|eta| {
+                        let m = idx.iter().map(|&i| eta[i]).sum::<f64>() / n;
+                        let var =
+                            idx.iter().map(|&i| (eta[i] - m).powi(2)).sum::<f64>() / (n - 1.0);
+                        (
+                            m,
+                            if idx.len() > 1 {
+                                (var / n).sqrt()
+                            } else {
+                                f64::NAN
+                            },
+                        )
+                    })
+                    .unzip();
+                FactorGroup {
+                    group,
+                    specimens: idx.len(),
+                    mean_ln,
+                    se,
+                }
+            })
+            .collect()
+    }
+}
+
 /// A maximum-likelihood fit: constants and error model.
 #[derive(Debug, Clone)]
 pub struct MlFit {
@@ -1692,6 +1757,64 @@ pub fn min_whitened_ss(
 
 #[cfg(test)]
 mod tests {
+    /// Group means and standard errors of known factors, as a table.
+    #[test]
+    fn factors_by_group() {
+        use super::{EffectKind, SpecimenFit};
+        let fit = SpecimenFit {
+            kinds: vec![EffectKind::Rate, EffectKind::Ductility],
+            scatter: vec![0.3, 0.2],
+            scatter_lo95: vec![0.1, 0.0],
+            scatter_hi95: vec![0.6, 0.5],
+            effects: vec![vec![0.1, 0.3, -0.2, 0.5], vec![0.0, 0.2, 0.1, -0.1]],
+            effects_sd: vec![vec![0.05; 4], vec![0.05; 4]],
+            neg2ll_effects: 0.0,
+            dropped: vec![],
+        };
+        let curve = |t: f64, sp: &str| crate::data::Curve {
+            temperature_c: t,
+            stress_mpa: 100.0,
+            specimen: Some(sp.to_string()),
+            times_h: vec![0.0, 1.0],
+            strains: vec![0.0, 0.01],
+            rupture_time_h: Some(1.0),
+            rupture_strain: 0.01,
+            min_rate_measured: None,
+            min_rate_estimated: 0.01,
+        };
+        let curves = [
+            curve(850.0, "A-1"),
+            curve(900.0, "B-1"),
+            curve(850.0, "B-2"),
+            curve(850.0, "A-2"),
+        ];
+        let by_t = fit.by_group(&curves, |c| Some(format!("{} °C", c.temperature_c)));
+        assert_eq!(by_t.len(), 2);
+        assert_eq!((by_t[0].group.as_str(), by_t[0].specimens), ("850 °C", 3));
+        // Rate at 850 °C: 0.1, −0.2, 0.5: mean 0.4/3, sd² = Σ(x − m)²/2.
+        let m = 0.4 / 3.0;
+        let sd2 = [0.1, -0.2, 0.5]
+            .iter()
+            .map(|x: &f64| (x - m).powi(2))
+            .sum::<f64>()
+            / 2.0;
+        assert!((by_t[0].mean_ln[0] - m).abs() < 1e-15);
+        assert!((by_t[0].se[0] - (sd2 / 3.0).sqrt()).abs() < 1e-15);
+        assert!((by_t[0].mean_ln[1] - 0.0).abs() < 1e-15);
+        assert_eq!((by_t[1].group.as_str(), by_t[1].specimens), ("900 °C", 1));
+        assert_eq!(by_t[1].mean_ln, [0.3, 0.2]);
+        assert!(by_t[1].se.iter().all(|v| v.is_nan()));
+        let by_c = fit.by_group(&curves, |c| c.campaign().map(str::to_string));
+        assert_eq!(
+            by_c.iter()
+                .map(|g| (g.group.as_str(), g.specimens))
+                .collect::<Vec<_>>(),
+            [("A", 2), ("B", 2)]
+        );
+        assert!((by_c[0].mean_ln[0] - 0.3).abs() < 1e-15);
+        assert!((by_c[1].mean_ln[1] - 0.15).abs() < 1e-15);
+    }
+
     use super::*;
     use crate::errmodel::Ar1;
 

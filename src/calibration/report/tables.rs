@@ -704,7 +704,29 @@ pub fn specimens_json(sp: &crate::fit::FitSpecimens) -> Value {
         "replicate_curves": sp.replicate_curves,
         "replicate_sd_ln_rupture_time": sp.replicate_sd_ln_life.map(jnum),
         "note": sp.note,
+        "by_temperature": factor_groups_json(sp, &sp.by_temperature),
+        "by_campaign": factor_groups_json(sp, &sp.by_campaign),
     })
+}
+
+/// `specimens.by_temperature` / `by_campaign`: per group its name, specimens, and per kind
+/// the mean ln factor and its standard error.
+fn factor_groups_json(
+    sp: &crate::fit::FitSpecimens,
+    groups: &[crate::likelihood::FactorGroup],
+) -> Value {
+    let kinds = sp.fit.as_ref().map(|f| f.kinds.clone()).unwrap_or_default();
+    groups
+        .iter()
+        .map(|g| {
+            let mut o = json!({"group": g.group, "specimens": g.specimens});
+            for (j, k) in kinds.iter().enumerate() {
+                o[format!("mean_ln_{}", k.name())] = jnum(g.mean_ln[j]);
+                o[format!("se_ln_{}", k.name())] = jnum(g.se[j]);
+            }
+            o
+        })
+        .collect()
 }
 
 /// `specimens.csv`: each curve's specimen factors (the conditional mode e^η of the factor

@@ -194,6 +194,37 @@ fn print_specimens(sp: &crate::fit::FitSpecimens) {
         for k in &f.dropped {
             println!("specimens: no {k:?} scatter supported by the data (estimated at zero)");
         }
+        for (what, groups) in [
+            ("temperature", &sp.by_temperature),
+            ("campaign", &sp.by_campaign),
+        ] {
+            if groups.is_empty() {
+                continue;
+            }
+            let per_kind: Vec<String> = f
+                .kinds
+                .iter()
+                .enumerate()
+                .map(|(j, k)| {
+                    let g: Vec<String> = groups
+                        .iter()
+                        .map(|g| {
+                            let se = if g.se[j].is_finite() {
+                                format!(" ± {:.2}", g.se[j])
+                            } else {
+                                String::new()
+                            };
+                            format!("{} {:+.2}{se} ({})", g.group, g.mean_ln[j], g.specimens)
+                        })
+                        .collect();
+                    format!("{} {}", k.name(), g.join(", "))
+                })
+                .collect();
+            println!(
+                "specimens: mean ln factor by {what} (± standard error; specimens): {}; the factors scatter about 0 in every group by assumption: a mean several standard errors from 0 is a {what} dependence the constants miss and the factors take up",
+                per_kind.join("; ")
+            );
+        }
     }
     if let Some(n) = &sp.note {
         println!("specimens: {n}");

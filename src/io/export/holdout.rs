@@ -11,7 +11,7 @@ use crate::config::RunConfig;
 use crate::data::Dataset;
 use crate::error::Result;
 use crate::holdout::{
-    baseline_columns, table, Holdout, RuptureInterval, CURVE_COLUMNS, INTERVAL_COLUMNS,
+    baseline_columns, table, Holdout, LeftOut, RuptureInterval, CURVE_COLUMNS, INTERVAL_COLUMNS,
 };
 use crate::model::objective::mean_abs;
 use crate::predict::diagrams::Diagrams;
@@ -32,7 +32,7 @@ pub fn write(cfg: &RunConfig, data: &Dataset, h: &Holdout, out: &Path) -> Result
         .iter()
         .map(|t| {
             let mut r = vec![
-                num(h.temperature_c),
+                num(t.temperature_c),
                 num(t.stress_mpa),
                 num(t.rupture_time_h),
                 num(t.model_rupture_time_h),
@@ -119,7 +119,11 @@ pub fn write(cfg: &RunConfig, data: &Dataset, h: &Holdout, out: &Path) -> Result
     });
     let [complete, early, no_rupture, failed] = h.curve_outcomes();
     let summary = json!({
-        "held_out_temperature_C": h.temperature_c,
+        "held_out_temperature_C": h.left_out.temperature_c(),
+        "held_out": match &h.left_out {
+            LeftOut::Temperature(t) => json!({"kind": "temperature", "temperature_C": t}),
+            LeftOut::Campaign(name) => json!({"kind": "campaign", "campaign": name}),
+        },
         "model": h.fit.model.name(),
         "objective_kind": cfg.objective.kind,
         "T_ref_C": cfg.t_ref,
@@ -156,8 +160,7 @@ pub fn write(cfg: &RunConfig, data: &Dataset, h: &Holdout, out: &Path) -> Result
             "failed": failed,
         },
         "training_temperatures_C": h.training_temperatures_c,
-        "temperature_extrapolation": !(h.training_temperatures_c.first().is_some_and(|t| *t <= h.temperature_c)
-            && h.training_temperatures_c.last().is_some_and(|t| h.temperature_c <= *t)),
+        "temperature_extrapolation": h.temperature_extrapolation(),
     });
     write_text(
         &out.join("summary.json"),
@@ -180,8 +183,9 @@ pub fn write(cfg: &RunConfig, data: &Dataset, h: &Holdout, out: &Path) -> Result
     if let Err(e) = plot_creep_curves(
         &out.join("curves.png"),
         &format!(
-            "{} — {} °C held out: measured (points), predicted (lines)",
-            cfg.name, h.temperature_c
+            "{} — {} held out: measured (points), predicted (lines)",
+            cfg.name,
+            h.left_out.label()
         ),
         &plots,
     ) {
@@ -249,8 +253,9 @@ pub fn write(cfg: &RunConfig, data: &Dataset, h: &Holdout, out: &Path) -> Result
     if let Err(e) = plot_xy(
         &out.join("parity.png"),
         &format!(
-            "{} — rupture times at {} °C, held out",
-            cfg.name, h.temperature_c
+            "{} — rupture times of {}, held out",
+            cfg.name,
+            h.left_out.label()
         ),
         XyAxes {
             x_label: "measured rupture time (h)",
@@ -262,15 +267,26 @@ pub fn write(cfg: &RunConfig, data: &Dataset, h: &Holdout, out: &Path) -> Result
     ) {
         failures.push(e.to_string());
     }
+    // A held-out temperature's tests are drawn as open circles beside the training ones; a
+    // held-out campaign shares its temperatures with the training data, and the diagrams
+    // show the training tests alone (parity.png and curves.png show the held-out ones).
+    let training = Dataset {
+        curves: h.training.clone(),
+        warnings: Vec::new(),
+        dropped: Vec::new(),
+    };
     failures.extend(
         Diagrams {
             cfg,
-            data,
+            data: match h.left_out {
+                LeftOut::Temperature(_) => data,
+                LeftOut::Campaign(_) => &training,
+            },
             model: h.fit.model.as_ref(),
             params: &best.params,
             lmp: h.lmp.as_ref().ok(),
             asked: &[],
-            held_out_c: Some(h.temperature_c),
+            held_out_c: h.left_out.temperature_c(),
         }
         .write(out),
     );
