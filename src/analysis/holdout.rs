@@ -1,9 +1,10 @@
 //! Leave one temperature or one campaign out: how well does a calibration predict a
 //! temperature, or a test campaign (another laboratory, heat or batch of specimens), it has
 //! not seen? `creepfit holdout CONFIG --temperature T` (or `--campaign NAME`, [`LeftOut`])
-//! fits the configuration on every curve not left out (`fit`'s procedure from the configured start, the guess and `[sweep] starts`
-//! Latin-hypercube starts: the held-out data choose nothing, not even the basin), predicts the rupture time and the curve of
-//! every test left out, and fits the classical baselines ([`crate::baseline`]: Larson–Miller,
+//! fits the configuration on every curve not left out (`fit`'s procedure from the configured
+//! start, the guess and `[sweep] starts` Latin-hypercube starts: the held-out data choose
+//! nothing, not even the basin), predicts the rupture time and the curve of every test left
+//! out, and fits the classical baselines ([`crate::baseline`]: Larson–Miller,
 //! Orr–Sherby–Dorn, Manson–Haferd, Wilshire where tensile strengths are given) to the same
 //! training rupture times. All are scored by the mean |log10(t_predicted / t_measured)| over
 //! the held-out tests; the best baseline is "the one to beat".
@@ -278,7 +279,7 @@ pub fn verdict(model: (f64, usize), best: Option<(f64, usize)>, n_tests: usize) 
 pub struct Holdout {
     /// What was left out.
     pub left_out: LeftOut,
-    /// The fit on the other temperatures.
+    /// The fit on the curves not left out.
     pub fit: FitRun,
     /// The baseline on the same training data, or why there is none.
     pub lmp: std::result::Result<LarsonMiller, String>,
