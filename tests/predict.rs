@@ -339,6 +339,43 @@ fn predict_intervals_add_their_columns() {
         }
     }
     assert!(f(&rows[1], 2) > f(&rows[2], 2) && f(&rows[1], 11) > f(&rows[2], 11));
+    // Without specimen effects the refit's likelihood is the configuration's: no note.
+    let summary = |dir: &Path| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
+    };
+    assert_eq!(summary(&out)["refit"]["without_specimen_effects"], false);
+    assert!(
+        !stdout.contains("likelihood of identical specimens"),
+        "{stdout}"
+    );
+    // With specimen effects asked for, the refit (every profile's likelihood, that of
+    // identical specimens) leaves them out, and the printout and the summary say so.
+    let cfg = tmp.path().join("sp.toml");
+    std::fs::write(
+        &cfg,
+        std::fs::read_to_string("configs/560C.toml")
+            .unwrap()
+            .replace("../data/", &format!("{}/data/", root().display()))
+            .replace("[objective]", "[objective]\nspecimen_effects = [\"rate\"]"),
+    )
+    .unwrap();
+    let out_sp = tmp.path().join("out_sp");
+    let stdout = ok(&[
+        "predict",
+        cfg.to_str().unwrap(),
+        "--constants",
+        c.to_str().unwrap(),
+        "--at",
+        "560:70",
+        "--intervals",
+        "--out",
+        out_sp.to_str().unwrap(),
+    ]);
+    assert!(
+        stdout.contains("likelihood of identical specimens"),
+        "{stdout}"
+    );
+    assert_eq!(summary(&out_sp)["refit"]["without_specimen_effects"], true);
     // band.csv: the 95 % confidence band of each predicted curve at 9 times before rupture,
     // in the order asked, each band around its strain; band.png drawn.
     let band = csv(&out.join("band.csv"));

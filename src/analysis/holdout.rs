@@ -624,6 +624,12 @@ pub fn table(h: &Holdout) -> String {
                 r.given_neg2ll,
                 r.delta_neg2ll()
             ));
+            if r.without_specimen_effects {
+                s.push_str(&format!(
+                    "note: {}\n",
+                    crate::uncertainty::predict::WITHOUT_SPECIMEN_EFFECTS
+                ));
+            }
         }
     }
     if let Err(e) = &h.lmp {

@@ -404,6 +404,12 @@ pub fn table(run: &PredictRun, names: &[&str]) -> String {
             r.given_neg2ll,
             r.delta_neg2ll()
         ));
+        if r.without_specimen_effects {
+            s.push_str(&format!(
+                "  note: {}\n",
+                crate::uncertainty::predict::WITHOUT_SPECIMEN_EFFECTS
+            ));
+        }
         for (n, (g, v)) in names.iter().zip(r.given.iter().zip(&r.params)) {
             s.push_str(&format!(
                 "  {n:>8}: given {g:.6e}, refit {v:.6e} ({:+.2} %)\n",
@@ -681,6 +687,7 @@ pub fn summary_json(cfg: &RunConfig, data: &Dataset, model: &dyn Model, run: &Pr
             "neg2ll": jnum(r.neg2ll),
             "given_neg2ll": jnum(r.given_neg2ll),
             "delta_neg2ll": jnum(r.delta_neg2ll()),
+            "without_specimen_effects": r.without_specimen_effects,
             "constants": all_names.iter().zip(r.given.iter().zip(&r.params)).map(|(n, (g, v))| json!({
                 "name": n,
                 "given": g,

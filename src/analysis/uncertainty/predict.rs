@@ -431,7 +431,14 @@ pub struct Refit {
     /// where the given constants cannot be evaluated).
     pub neg2ll: f64,
     pub given_neg2ll: f64,
+    /// Whether the configuration carries specimen effects that this refit's likelihood (that
+    /// of identical specimens, as every profile's) leaves out: the given constants are then a
+    /// hierarchical fit's population constants, and the refit another calibration.
+    pub without_specimen_effects: bool,
 }
+
+/// What a refit's report says when [`Refit::without_specimen_effects`]: why the refit moved.
+pub const WITHOUT_SPECIMEN_EFFECTS: &str = "the refit and every confidence interval use the likelihood of identical specimens, without the configuration's specimen effects (the scatter between specimens enters only the new-test interval): given the population constants of a fit with specimen effects, the refit is a different calibration (docs/UNCERTAINTY.md)";
 
 impl Refit {
     /// −2 ln L at the given constants minus at the refit (≥ 0 up to the optimiser's
@@ -498,6 +505,7 @@ pub fn intervals_at_observed(
         params: reference.params.clone(),
         neg2ll: reference.neg2ll,
         given_neg2ll: super::report::neg2ll_at(&ctx, params).unwrap_or(f64::NAN),
+        without_specimen_effects: setup.ml.specimen.any(),
     };
     let pc = &setup.profile;
     let th = if pc.calibrate > 0 {
