@@ -289,10 +289,9 @@ pub struct Holdout {
     pub tests: Vec<HeldOut>,
     /// The held-out curves.
     pub curves: Vec<Curve>,
-    /// The temperatures fitted on, °C, ascending.
-    pub training_temperatures_c: Vec<f64>,
-    /// The training curves (the diagrams of the training fit draw them).
-    pub training: Vec<Curve>,
+    /// The training data (the curves not left out; the diagrams of the training fit draw
+    /// them).
+    pub training: Dataset,
     /// Under `--intervals`: the maximum-likelihood refit of the training fit's constants the
     /// intervals (and `ml_rupture_time_h`) come from.
     pub intervals_refit: Option<crate::uncertainty::predict::Refit>,
@@ -364,13 +363,23 @@ impl Holdout {
             n(CurveOutcome::Failed),
         ]
     }
+    /// The temperatures fitted on, °C, ascending.
+    pub fn training_temperatures_c(&self) -> Vec<f64> {
+        let mut temps: Vec<f64> = self
+            .training
+            .curves
+            .iter()
+            .map(|c| c.temperature_c)
+            .collect();
+        temps.sort_by(f64::total_cmp);
+        temps.dedup();
+        temps
+    }
     /// Whether a held-out test lies outside the training temperatures (an extrapolation of
     /// the temperature laws).
     pub fn temperature_extrapolation(&self) -> bool {
-        let (Some(lo), Some(hi)) = (
-            self.training_temperatures_c.first(),
-            self.training_temperatures_c.last(),
-        ) else {
+        let temps = self.training_temperatures_c();
+        let (Some(lo), Some(hi)) = (temps.first(), temps.last()) else {
             return true;
         };
         self.curves
@@ -553,8 +562,7 @@ pub fn holdout_observed(
         baselines,
         tests,
         curves: test,
-        training_temperatures_c: temps,
-        training: train_data.curves,
+        training: train_data,
         intervals_refit,
     })
 }

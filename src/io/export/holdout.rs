@@ -160,7 +160,7 @@ pub fn write(cfg: &RunConfig, data: &Dataset, h: &Holdout, out: &Path) -> Result
             "no_rupture": no_rupture,
             "failed": failed,
         },
-        "training_temperatures_C": h.training_temperatures_c,
+        "training_temperatures_C": h.training_temperatures_c(),
         "temperature_extrapolation": h.temperature_extrapolation(),
     });
     write_text(
@@ -271,17 +271,12 @@ pub fn write(cfg: &RunConfig, data: &Dataset, h: &Holdout, out: &Path) -> Result
     // A held-out temperature's tests are drawn as open circles beside the training ones; a
     // held-out campaign shares its temperatures with the training data, and the diagrams
     // show the training tests alone (parity.png and curves.png show the held-out ones).
-    let training = Dataset {
-        curves: h.training.clone(),
-        warnings: Vec::new(),
-        dropped: Vec::new(),
-    };
     failures.extend(
         Diagrams {
             cfg,
             data: match h.left_out {
                 LeftOut::Temperature(_) => data,
-                LeftOut::Campaign(_) => &training,
+                LeftOut::Campaign(_) => &h.training,
             },
             model: h.fit.model.as_ref(),
             params: &best.params,
