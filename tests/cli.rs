@@ -665,5 +665,52 @@ fn specimen_factors_by_temperature_and_campaign() {
             .unwrap()
             .to_string()),
         2
-    );
+    ); // The factors' slope on ln stress within temperatures, recomputed from the file: each
+       // temperature's ln stresses and ln factors centred on their means, then Σxy / Σx².
+    assert!(stdout.contains("factor against ln stress"), "{stdout}");
+    let st = col("stress_MPa");
+    for kind in ["rate", "ductility"] {
+        let (mut sxx, mut sxy) = (0.0, 0.0);
+        let mut temps: Vec<&str> = rows.iter().map(|r| r[t].as_str()).collect();
+        temps.sort_unstable();
+        temps.dedup();
+        for temp in &temps {
+            let pts: Vec<(f64, f64)> = rows
+                .iter()
+                .filter(|r| r[t] == *temp)
+                .map(|r| {
+                    (
+                        r[st].parse::<f64>().unwrap().ln(),
+                        r[col(&format!("{kind}_factor"))]
+                            .parse::<f64>()
+                            .unwrap()
+                            .ln(),
+                    )
+                })
+                .collect();
+            let n = pts.len() as f64;
+            let mx = pts.iter().map(|p| p.0).sum::<f64>() / n;
+            let my = pts.iter().map(|p| p.1).sum::<f64>() / n;
+            sxx += pts.iter().map(|p| (p.0 - mx).powi(2)).sum::<f64>();
+            sxy += pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum::<f64>();
+        }
+        let trend = &sp_json["stress_trend"][kind];
+        let got = trend["slope_per_ln_stress"].as_f64().unwrap();
+        assert!(
+            (got - sxy / sxx).abs() < 1e-9,
+            "{kind}: {got} against {}",
+            sxy / sxx
+        );
+        assert_eq!(
+            trend["df"].as_u64().unwrap() as usize,
+            rows.len() - temps.len() - 1
+        );
+        let p = trend["p_value"].as_f64().unwrap();
+        assert!(p > 0.0 && p < 1.0, "{kind}: p {p}");
+        assert_eq!(
+            trend["follows_stress"].as_bool().unwrap(),
+            p < 0.01,
+            "{kind}"
+        );
+    }
 }

@@ -445,6 +445,9 @@ pub struct FitSpecimens {
     pub by_temperature: Vec<crate::likelihood::FactorGroup>,
     /// The same per campaign ([`crate::data::campaign_of`]; empty unless two or more).
     pub by_campaign: Vec<crate::likelihood::FactorGroup>,
+    /// Per kind, how the factors follow stress within temperatures (empty without specimen
+    /// effects): a stress dependence the constants miss shows here.
+    pub stress_trend: Vec<crate::likelihood::StressTrend>,
 }
 
 /// Curves in replicate groups and the pooled within-group sd of their ln rupture times.
@@ -769,6 +772,7 @@ pub fn run_fit_observed(
             replicate_sd_ln_life,
             by_temperature: Vec::new(),
             by_campaign: Vec::new(),
+            stress_trend: Vec::new(),
         };
         if kinds.any() {
             let opts = crate::likelihood::MlOptions {
@@ -807,6 +811,7 @@ pub fn run_fit_observed(
                     if sp.by_campaign.len() < 2 {
                         sp.by_campaign.clear();
                     }
+                    sp.stress_trend = f.stress_trend(curves);
                 }
                 if 2 * replicate_curves < curves.len() {
                     sp.note = Some(format!(

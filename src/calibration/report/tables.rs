@@ -668,6 +668,15 @@ pub fn lognormal_cv_pct(s: f64) -> f64 {
     100.0 * (s * s).exp_m1().sqrt()
 }
 
+/// A p-value for a printed line: three decimals, or two significant digits below 0.001.
+pub fn p_text(p: f64) -> String {
+    if p.is_finite() && p < 1e-3 {
+        format!("{p:.1e}")
+    } else {
+        format!("{p:.3}")
+    }
+}
+
 /// The kinds of specimen effect, in the order of `specimens.csv` and `summary.json`.
 const EFFECT_KINDS: [(crate::likelihood::EffectKind, &str); 2] = [
     (crate::likelihood::EffectKind::Rate, "rate"),
@@ -706,6 +715,22 @@ pub fn specimens_json(sp: &crate::fit::FitSpecimens) -> Value {
         "note": sp.note,
         "by_temperature": factor_groups_json(sp, &sp.by_temperature),
         "by_campaign": factor_groups_json(sp, &sp.by_campaign),
+        "stress_trend": sp
+            .stress_trend
+            .iter()
+            .map(|t| (
+                t.kind.name().to_string(),
+                json!({
+                    "slope_per_ln_stress": jnum(t.slope),
+                    "se": jnum(t.se),
+                    "df": t.df,
+                    "p_value": jnum(t.p_value),
+                    "follows_stress": t.follows_stress(),
+                    "specimens": t.specimens,
+                    "temperatures": t.temperatures,
+                })
+            ))
+            .collect::<serde_json::Map<String, Value>>(),
     })
 }
 

@@ -226,6 +226,28 @@ fn print_specimens(sp: &crate::fit::FitSpecimens) {
             );
         }
     }
+    for t in &sp.stress_trend {
+        if !t.slope.is_finite() {
+            continue;
+        }
+        let flag = if t.follows_stress() {
+            format!(
+                ": the {} factors follow stress, a stress dependence the constants miss and the factors take up",
+                t.kind.name()
+            )
+        } else {
+            String::new()
+        };
+        println!(
+            "specimens: ln {} factor against ln stress within temperatures: slope {:+.2} ± {:.2} (t-test p {}, {} degrees of freedom; called at p < {}){flag}",
+            t.kind.name(),
+            t.slope,
+            t.se,
+            tables::p_text(t.p_value),
+            t.df,
+            crate::likelihood::STRESS_TREND_ALPHA
+        );
+    }
     if let Some(n) = &sp.note {
         println!("specimens: {n}");
     }
