@@ -180,6 +180,38 @@ fn same_verdict_on_every_tenth_point(temps: &[u32]) {
             if t == 850 {
                 // 850 °C has replicates: the report gives the scatter and each specimen's factor.
                 assert!(md.contains("between specimens"));
+                assert!(md.contains("factors against ln stress"), "{md}");
+                // The base's stress trend of each kind: the slope of its factors (as in
+                // diagnosis.json) on ln stress, one temperature here, recomputed.
+                let base = &d["base"];
+                let x: Vec<f64> = base["curves"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .map(|c| c["stress_mpa"].as_f64().unwrap().ln())
+                    .collect();
+                let trends = base["specimen_stress_trend"].as_array().unwrap();
+                let effects = base["specimen"]["effects"].as_array().unwrap();
+                assert_eq!(trends.len(), effects.len());
+                for (tr, eta) in trends.iter().zip(effects) {
+                    let y: Vec<f64> = eta
+                        .as_array()
+                        .unwrap()
+                        .iter()
+                        .map(|v| v.as_f64().unwrap())
+                        .collect();
+                    let n = x.len() as f64;
+                    let (mx, my) = (x.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
+                    let sxy: f64 = x.iter().zip(&y).map(|(a, b)| (a - mx) * (b - my)).sum();
+                    let sxx: f64 = x.iter().map(|a| (a - mx).powi(2)).sum();
+                    let got = tr["slope"].as_f64().unwrap();
+                    assert!(
+                        (got - sxy / sxx).abs() < 1e-9,
+                        "{got} against {}",
+                        sxy / sxx
+                    );
+                    assert_eq!(tr["df"].as_u64().unwrap() as usize, x.len() - 2);
+                }
             }
         }
         assert_eq!(verdicts[0], verdicts[1], "{t} °C: all points vs every 10th");

@@ -368,17 +368,33 @@ fn a_null_set_with_specimen_scatter_is_adequate() {
     // report.md gives the scatter between specimens and each specimen's factor.
     let cfg =
         creepfit::config::RunConfig::load(&dir.path().join("sets/set-95001/config.toml")).unwrap();
-    let md = creepfit::diagnose::report::report_md(
-        &cfg.name,
-        &cfg.diagnose_setup().unwrap(),
-        &d.unwrap(),
-    );
+    let d = d.unwrap();
+    let md = creepfit::diagnose::report::report_md(&cfg.name, &cfg.diagnose_setup().unwrap(), &d);
     assert!(md.contains("## Specimens"), "{md}");
     assert!(
         md.contains("varies") && md.contains("between specimens"),
         "{md}"
     );
     assert!(md.contains("creep-rate factor"), "{md}");
+    // The base's factors against stress (one temperature): each kind's slope of the ln
+    // factors on ln σ recomputed from the fit's factors; the null set's do not follow stress.
+    assert!(md.contains("factors against ln stress"), "{md}");
+    let sp = d
+        .base
+        .specimen
+        .as_ref()
+        .expect("the base carries specimen effects");
+    assert_eq!(d.base.specimen_stress_trend.len(), sp.kinds.len());
+    let x: Vec<f64> = d.base.curves.iter().map(|c| c.stress_mpa.ln()).collect();
+    let n = x.len() as f64;
+    for (t, eta) in d.base.specimen_stress_trend.iter().zip(&sp.effects) {
+        let (mx, my) = (x.iter().sum::<f64>() / n, eta.iter().sum::<f64>() / n);
+        let sxy: f64 = x.iter().zip(eta).map(|(a, b)| (a - mx) * (b - my)).sum();
+        let sxx: f64 = x.iter().map(|a| (a - mx).powi(2)).sum();
+        assert!((t.slope - sxy / sxx).abs() < 1e-9, "{t:?}");
+        assert_eq!(t.df, x.len() - 2);
+        assert!(!t.follows_stress(), "{t:?}");
+    }
 }
 
 /// A catalogued effect (a loading strain) hidden under specimen scatter, clearly

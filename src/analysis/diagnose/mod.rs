@@ -663,6 +663,10 @@ pub struct Candidate {
     /// The specimen effects (scatter between specimens and each specimen's factors), when
     /// the fit carries any.
     pub specimen: Option<crate::likelihood::SpecimenFit>,
+    /// Per kind of specimen effect, how the factors follow stress within temperatures
+    /// ([`crate::likelihood::StressTrend`]; empty without effects): information beside the
+    /// tests, not part of the decision.
+    pub specimen_stress_trend: Vec<crate::likelihood::StressTrend>,
     /// Per-curve explanation.
     pub curves: Vec<CurveSignature>,
 }
@@ -825,6 +829,7 @@ fn candidate(spec: &Spec, curves: &[Curve], fit: Option<&MlFit>, failed: usize) 
         lifetime_errs_pct: vec![],
         noise: None,
         specimen: None,
+        specimen_stress_trend: vec![],
         curves: vec![],
     };
     if let Some(f) = fit {
@@ -849,6 +854,11 @@ fn candidate(spec: &Spec, curves: &[Curve], fit: Option<&MlFit>, failed: usize) 
         }
         c.noise = Some(noise_summary(f));
         c.specimen = f.specimen.clone();
+        c.specimen_stress_trend = f
+            .specimen
+            .as_ref()
+            .map(|s| s.stress_trend(curves))
+            .unwrap_or_default();
         c.curves = signatures(curves, f);
     }
     c

@@ -339,6 +339,27 @@ fn specimens_md(d: &Diagnosis, setup: &DiagnoseSetup) -> String {
             sp.scatter_hi95[j]
         );
     }
+    for t in d
+        .base
+        .specimen_stress_trend
+        .iter()
+        .filter(|t| t.slope.is_finite())
+    {
+        s += &format!(
+            "- The ln {} factors against ln stress within temperatures: slope {:+.2} ± {:.2} (t-test p {}, {} degrees of freedom; called at p < {}){}.\n",
+            t.kind.name(),
+            t.slope,
+            t.se,
+            crate::report::tables::p_text(t.p_value),
+            t.df,
+            crate::likelihood::STRESS_TREND_ALPHA,
+            if t.follows_stress() {
+                ": **they follow stress**, a stress dependence the base's constants miss and its factors take up, which the tests above cannot see (for the ductility: what `stress_ductility` would carry, ν ≈ −slope)"
+            } else {
+                ""
+            }
+        );
+    }
     s += "\nEach specimen's factor (its value over the population's; the null bootstrap draws new specimens from this scatter):\n\n| stress MPa | specimen |";
     for k in &sp.kinds {
         s += match k {
