@@ -1879,6 +1879,22 @@ pub fn min_whitened_ss(
 
 #[cfg(test)]
 mod tests {
+    /// A ruptured two-point curve at `t` °C and `s` MPa: what the factor summaries read of a
+    /// curve (its temperature, stress and specimen).
+    fn two_point_curve(t: f64, s: f64, specimen: Option<&str>) -> crate::data::Curve {
+        crate::data::Curve {
+            temperature_c: t,
+            stress_mpa: s,
+            specimen: specimen.map(str::to_string),
+            times_h: vec![0.0, 1.0],
+            strains: vec![0.0, 0.01],
+            rupture_time_h: Some(1.0),
+            rupture_strain: 0.01,
+            min_rate_measured: None,
+            min_rate_estimated: 0.01,
+        }
+    }
+
     /// Group means and standard errors of known factors, as a table.
     #[test]
     fn within_group_slope_is_the_dummy_variable_regression() {
@@ -1921,17 +1937,7 @@ mod tests {
     #[test]
     fn stress_trend_reads_the_factors_against_ln_stress_per_temperature() {
         use super::{EffectKind, SpecimenFit};
-        let curve = |t: f64, s: f64| crate::data::Curve {
-            temperature_c: t,
-            stress_mpa: s,
-            specimen: None,
-            times_h: vec![0.0, 1.0],
-            strains: vec![0.0, 0.01],
-            rupture_time_h: Some(1.0),
-            rupture_strain: 0.01,
-            min_rate_measured: None,
-            min_rate_estimated: 0.01,
-        };
+        let curve = |t: f64, s: f64| two_point_curve(t, s, None);
         let curves = [
             curve(850.0, 40.0),
             curve(900.0, 25.0),
@@ -2004,17 +2010,7 @@ mod tests {
             neg2ll_effects: 0.0,
             dropped: vec![],
         };
-        let curve = |t: f64, sp: &str| crate::data::Curve {
-            temperature_c: t,
-            stress_mpa: 100.0,
-            specimen: Some(sp.to_string()),
-            times_h: vec![0.0, 1.0],
-            strains: vec![0.0, 0.01],
-            rupture_time_h: Some(1.0),
-            rupture_strain: 0.01,
-            min_rate_measured: None,
-            min_rate_estimated: 0.01,
-        };
+        let curve = |t: f64, sp: &str| two_point_curve(t, 100.0, Some(sp));
         let curves = [
             curve(850.0, "A-1"),
             curve(900.0, "B-1"),
