@@ -845,6 +845,7 @@ pub fn run_fit_observed(
             // The same guarantee with specimen effects: the nested model's hierarchical fit,
             // then the extended model's from it (constants and effects), the better kept; the
             // nested optimum itself is a point of the extended model too.
+            let mut from_nested = false;
             if let (Some(nested), Some(x)) = (&nested, &nested_optimum) {
                 let hn = crate::likelihood::ml_fit_from(
                     model.as_ref(),
@@ -872,6 +873,7 @@ pub fn run_fit_observed(
                     for c in [full, hn] {
                         if c.ok() && c.specimen.is_some() && (!h.ok() || c.neg2ll < h.neg2ll) {
                             h = c;
+                            from_nested = true;
                         }
                     }
                 }
@@ -907,8 +909,15 @@ pub fn run_fit_observed(
                     ));
                 }
                 let (iters, evals) = (chosen.lm.iterations, chosen.lm.evaluations);
-                let start = chosen.start.clone();
-                let label = format!("{}+specimens", chosen.start_label);
+                // The start the hierarchical fit came from: the chosen fit's, or the nested
+                // model's optimum when that path won.
+                let (start, label) = match (&nested_optimum, from_nested) {
+                    (Some(x), true) => (x.clone(), format!("{NESTED_START}+specimens")),
+                    _ => (
+                        chosen.start.clone(),
+                        format!("{}+specimens", chosen.start_label),
+                    ),
+                };
                 chosen = from_ml(
                     h,
                     model.as_ref(),
