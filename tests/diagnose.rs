@@ -204,7 +204,7 @@ fn same_verdict_on_every_tenth_point(temps: &[u32]) {
                     let (mx, my) = (x.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
                     let sxy: f64 = x.iter().zip(&y).map(|(a, b)| (a - mx) * (b - my)).sum();
                     let sxx: f64 = x.iter().map(|a| (a - mx).powi(2)).sum();
-                    let got = tr["slope"].as_f64().unwrap();
+                    let got = tr["slope_per_ln_stress"].as_f64().unwrap();
                     assert!(
                         (got - sxy / sxx).abs() < 1e-9,
                         "{got} against {}",

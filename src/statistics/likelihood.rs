@@ -814,7 +814,8 @@ pub struct StressTrend {
     /// The kind of factor.
     pub kind: EffectKind,
     /// d(ln factor)/d(ln σ) within a temperature (dimensionless; NaN without two stresses at
-    /// one temperature).
+    /// one temperature). Named as in `fit`'s `summary.json`.
+    #[serde(rename = "slope_per_ln_stress")]
     pub slope: f64,
     /// Its standard error (NaN without a residual degree of freedom).
     pub se: f64,
