@@ -1,14 +1,16 @@
 //! Measured coverage of the intervals of `creepfit profile` on synthetic data sets with known
 //! truth (README, "How sure"): `cargo run --release --example coverage -- OUT FIRST_SEED N
-//! [--calibrate B] [--bootstrap B] [--starts N] [--threads T]`. Resumes an interrupted run in
-//! OUT; writes OUT/coverage.md (the table) and OUT/coverage.json.
+//! [--calibrate B] [--bootstrap B] [--starts N] [--threads T] [--world specimens]`. Resumes an
+//! interrupted run in OUT; writes OUT/coverage.md (the table) and OUT/coverage.json. With
+//! `--world specimens` the sets carry specimen scatter and replicates
+//! ([`creepfit::synth::World::Specimens`]) and every fit integrates the specimens' factors out.
 use std::path::PathBuf;
 
 use creepfit::uncertainty::coverage::{run_coverage, table, table_md, CoverageSettings};
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let usage = "usage: coverage OUT FIRST_SEED N [--calibrate B] [--bootstrap B] [--starts N] [--threads T]";
+    let usage = "usage: coverage OUT FIRST_SEED N [--calibrate B] [--bootstrap B] [--starts N] [--threads T] [--world specimens]";
     if args.len() < 3 {
         eprintln!("{usage}");
         std::process::exit(2);
@@ -20,6 +22,18 @@ fn main() {
     let mut threads = None;
     let mut i = 3;
     while i + 1 < args.len() {
+        if args[i] == "--world" {
+            s.world = match args[i + 1].as_str() {
+                "specimens" => creepfit::synth::World::Specimens,
+                "identical" => creepfit::synth::World::Identical,
+                _ => {
+                    eprintln!("{usage}");
+                    std::process::exit(2);
+                }
+            };
+            i += 2;
+            continue;
+        }
         let v: usize = args[i + 1].parse().expect("a number");
         match args[i].as_str() {
             "--calibrate" => s.calibrate = v,

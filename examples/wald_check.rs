@@ -45,7 +45,7 @@ fn main() {
         for &j in &held {
             space.hold(j, reference.params[j]);
         }
-        let i = information(&ctx, &space, &reference.params, &reference.noise).unwrap();
+        let i = information(&ctx, &space, &reference.params, &reference.noise, None).unwrap();
         let c = covariance(&i);
         let u = space.to_unit(&reference.params);
         let (g, grad) = q.value_and_gradient(&ctx, &space, &u).unwrap();

@@ -339,17 +339,20 @@ fn predict_intervals_add_their_columns() {
         }
     }
     assert!(f(&rows[1], 2) > f(&rows[2], 2) && f(&rows[1], 11) > f(&rows[2], 11));
-    // Without specimen effects the refit's likelihood is the configuration's: no note.
+    // Without specimen effects the refit's likelihood is that of identical specimens: no
+    // effects named, no note.
     let summary = |dir: &Path| -> serde_json::Value {
         serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
     };
-    assert_eq!(summary(&out)["refit"]["without_specimen_effects"], false);
-    assert!(
-        !stdout.contains("likelihood of identical specimens"),
-        "{stdout}"
+    assert_eq!(
+        summary(&out)["refit"]["specimen_effects"],
+        serde_json::json!([])
     );
-    // With specimen effects asked for, the refit (every profile's likelihood, that of
-    // identical specimens) leaves them out, and the printout and the summary say so.
+    assert!(!stdout.contains("hierarchical likelihood"), "{stdout}");
+    // With specimen effects asked for, the refit and every interval's fit are hierarchical
+    // (the rate factors integrated out): the printout and the summary say so, and the refit's
+    // −2 ln L is the hierarchical one, never above that of identical specimens on the same
+    // data (the model without effects is its limit of zero scatter).
     let cfg = tmp.path().join("sp.toml");
     std::fs::write(
         &cfg,
@@ -372,10 +375,21 @@ fn predict_intervals_add_their_columns() {
         out_sp.to_str().unwrap(),
     ]);
     assert!(
-        stdout.contains("likelihood of identical specimens"),
+        stdout.contains("integrates the specimens' rate factors out"),
         "{stdout}"
     );
-    assert_eq!(summary(&out_sp)["refit"]["without_specimen_effects"], true);
+    assert_eq!(
+        summary(&out_sp)["refit"]["specimen_effects"],
+        serde_json::json!(["rate"])
+    );
+    let (plain, hier) = (
+        summary(&out)["refit"]["neg2ll"].as_f64().unwrap(),
+        summary(&out_sp)["refit"]["neg2ll"].as_f64().unwrap(),
+    );
+    assert!(
+        hier <= plain + 1e-6,
+        "hierarchical {hier} vs identical specimens {plain}"
+    );
     // band.csv: the 95 % confidence band of each predicted curve at 9 times before rupture,
     // in the order asked, each band around its strain; band.png drawn.
     let band = csv(&out.join("band.csv"));

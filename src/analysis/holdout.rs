@@ -632,10 +632,11 @@ pub fn table(h: &Holdout) -> String {
                 r.given_neg2ll,
                 r.delta_neg2ll()
             ));
-            if r.without_specimen_effects {
+            if !r.specimen_effects.is_empty() {
+                let kinds: Vec<&str> = r.specimen_effects.iter().map(|k| k.name()).collect();
                 s.push_str(&format!(
-                    "note: {}\n",
-                    crate::uncertainty::predict::WITHOUT_SPECIMEN_EFFECTS
+                    "note: every fit here integrates the specimens' {} factors out (the hierarchical likelihood); the constants are the population's\n",
+                    kinds.join(" and ")
                 ));
             }
         }

@@ -1031,12 +1031,246 @@ impl EffectStart {
     }
 }
 
+impl EffectStart {
+    /// These effects, which belong to population constants `from` (model order), re-expressed
+    /// for constants `to`: every specimen keeps its own constants (the rate constant
+    /// A·e^η, the inverse ductility C/e^ζ of `from`). A warm start that moves a constant an
+    /// effect acts through (a profile holding A away from the optimum) then starts with every
+    /// specimen's curve as it was, instead of every specimen moved by the step.
+    pub fn moved(&self, model: &dyn Model, from: &[f64], to: &[f64]) -> EffectStart {
+        let mut out = self.clone();
+        for (k, kind) in self.kinds.iter().enumerate() {
+            let Some(j) = model.constants().iter().position(|c| c.role == kind.role()) else {
+                continue;
+            };
+            let (a, b) = (from.get(j).copied(), to.get(j).copied());
+            if let (Some(a), Some(b)) = (a, b) {
+                let shift = kind.sign() * (a / b).ln();
+                if shift.is_finite() {
+                    for v in out.effects[k].iter_mut() {
+                        *v += shift;
+                    }
+                }
+            }
+        }
+        out
+    }
+}
+
 impl From<&SpecimenFit> for EffectStart {
     fn from(f: &SpecimenFit) -> Self {
         EffectStart {
             kinds: f.kinds.clone(),
             effects: f.effects.clone(),
             scatter: f.scatter.clone(),
+        }
+    }
+}
+
+/// One residual appended to a fit's problem, a function of the constants alone: how a profile
+/// holds a prediction near a target (the penalty row (g − c)/τ) in a fit with specimen
+/// effects, whose problem is built inside [`ml_fit_row`].
+pub trait ExtraRow: Sync {
+    /// The residual and its gradient over the free constants' unit coordinates of `space` at
+    /// their unit point `u`; `None` where it cannot be evaluated.
+    fn row(&self, space: &ParamSpace, u: &[f64]) -> Option<(f64, Vec<f64>)>;
+}
+
+/// `inner` with the row of `row` appended (its Jacobian zero in the specimen effects'
+/// columns, which follow the `nt` constants), every residual multiplied by `c`.
+///
+/// Why the factor: [`minimize`]'s first damping is λ₀·max JᵀJ_jj times each JᵀJ_jj, so it
+/// grows with the square of the Jacobian's scale; whitened likelihood residuals have JᵀJ
+/// diagonals of 1e7–1e9, and a held fit started next to its optimum then takes steps of
+/// ~1e-11 of the box and stops on its plateau test or step tolerance where it began
+/// (measured: a held minimum rate and rupture strain that did not move). With c such that
+/// max JᵀJ_jj = 1 at the start the damping is the intended λ₀·JᵀJ_jj; the minimiser of
+/// ‖c·r‖² is that of ‖r‖².
+struct WithRow<'a, P: LeastSquaresProblem> {
+    inner: &'a P,
+    row: Option<&'a dyn ExtraRow>,
+    space: &'a ParamSpace,
+    nt: usize,
+    c: f64,
+}
+
+impl<P: LeastSquaresProblem> WithRow<'_, P> {
+    /// The row's residual and gradient at `u` (`None` without a row).
+    fn eval(&self, u: &[f64]) -> Result<Option<(f64, Vec<f64>)>, EvalFailure> {
+        let Some(row) = self.row else {
+            return Ok(None);
+        };
+        row.row(self.space, &u[..self.nt])
+            .filter(|(v, g)| v.is_finite() && g.iter().all(|d| d.is_finite()))
+            .map(Some)
+            .ok_or_else(|| EvalFailure("the held quantity could not be evaluated".into()))
+    }
+}
+
+impl<P: LeastSquaresProblem> LeastSquaresProblem for WithRow<'_, P> {
+    fn n_params(&self) -> usize {
+        self.inner.n_params()
+    }
+    fn n_residuals(&self) -> usize {
+        self.inner.n_residuals() + usize::from(self.row.is_some())
+    }
+    fn residuals(&self, u: &[f64], r: &mut [f64]) -> Result<(), EvalFailure> {
+        let m = self.inner.n_residuals();
+        self.inner.residuals(u, &mut r[..m])?;
+        if let Some((v, _)) = self.eval(u)? {
+            r[m] = v;
+        }
+        for v in r.iter_mut() {
+            *v *= self.c;
+        }
+        Ok(())
+    }
+    fn jacobian(
+        &self,
+        u: &[f64],
+        _r: &[f64],
+        jac: &mut DMatrix<f64>,
+    ) -> Option<Result<(), EvalFailure>> {
+        let mut r = vec![0.0; self.n_residuals()];
+        self.residuals_and_jacobian(u, &mut r, jac)
+    }
+    fn residuals_and_jacobian(
+        &self,
+        u: &[f64],
+        r: &mut [f64],
+        jac: &mut DMatrix<f64>,
+    ) -> Option<Result<(), EvalFailure>> {
+        let (m, n) = (self.inner.n_residuals(), self.n_params());
+        let mut ji = DMatrix::<f64>::zeros(m, n);
+        if let Err(e) = self.inner.residuals_and_jacobian(u, &mut r[..m], &mut ji)? {
+            return Some(Err(e));
+        }
+        let row = match self.eval(u) {
+            Ok(x) => x,
+            Err(e) => return Some(Err(e)),
+        };
+        jac.view_mut((0, 0), (m, n)).copy_from(&ji);
+        if let Some((v, grad)) = row {
+            for k in 0..n {
+                jac[(m, k)] = if k < grad.len() { grad[k] } else { 0.0 };
+            }
+            r[m] = v;
+        }
+        for v in r.iter_mut() {
+            *v *= self.c;
+        }
+        *jac *= self.c;
+        Some(Ok(()))
+    }
+    fn reweight(&self, x: &[f64], r: &mut [f64], mut jac: Option<&mut DMatrix<f64>>) -> bool {
+        // The inner problem rewrites only its own rows; the row does not depend on the
+        // error model. It works on the unscaled residuals.
+        let inv = 1.0 / self.c;
+        for v in r.iter_mut() {
+            *v *= inv;
+        }
+        if let Some(j) = jac.as_deref_mut() {
+            *j *= inv;
+        }
+        let changed = self.inner.reweight(x, r, jac.as_deref_mut());
+        for v in r.iter_mut() {
+            *v *= self.c;
+        }
+        if let Some(j) = jac {
+            *j *= self.c;
+        }
+        changed
+    }
+    fn objective_offset(&self) -> f64 {
+        self.c * self.c * self.inner.objective_offset()
+    }
+    fn damping_scale(&self, jtj: &DMatrix<f64>) -> Option<Vec<f64>> {
+        self.inner.damping_scale(jtj)
+    }
+}
+
+/// The unit-box columns (among `space`'s free constants) of the model-order constants
+/// `pinned` that are free in `space`.
+fn pinned_columns(space: &ParamSpace, pinned: &[usize]) -> Vec<usize> {
+    pinned
+        .iter()
+        .filter(|&&j| j < space.len() && space.free[j])
+        .map(|&j| space.free[..j].iter().filter(|f| **f).count())
+        .collect()
+}
+
+/// How [`ml_fit_row`] holds a fit: constants pinned by the box, a row appended, and whether
+/// every problem is scaled (a profile's fits, which start next to their optimum: with
+/// whitened residuals' JᵀJ diagonals of 1e7–1e9 the first damping would otherwise keep them
+/// where they began).
+#[derive(Clone, Copy, Default)]
+pub struct Held<'a> {
+    /// Model-order constants (free in the fit's space) held at their start values by the box.
+    pub pinned: &'a [usize],
+    /// A row appended to every least-squares problem.
+    pub row: Option<&'a dyn ExtraRow>,
+    /// Scale every problem so that max JᵀJ_jj = 1 at its start (tolerances in −2 ln L units
+    /// are scaled with it).
+    pub scaled: bool,
+}
+
+impl Held<'_> {
+    /// A fit like any other: nothing held, nothing scaled.
+    pub const NONE: Held<'static> = Held {
+        pinned: &[],
+        row: None,
+        scaled: false,
+    };
+}
+
+/// [`minimize`] on `problem`, with `held.row` appended when given and scaled if
+/// `held.scaled` (else exactly [`minimize`] on `problem`).
+#[allow(clippy::too_many_arguments)]
+fn minimize_with<P: LeastSquaresProblem>(
+    problem: &P,
+    held: &Held,
+    space: &ParamSpace,
+    x0: &[f64],
+    lo: &[f64],
+    hi: &[f64],
+    lm: &crate::lsq::LmOptions,
+) -> crate::lsq::LmReport {
+    if held.row.is_none() && !held.scaled {
+        return minimize(problem, x0, lo, hi, lm);
+    }
+    {
+        {
+            let mut p = WithRow {
+                inner: problem,
+                row: held.row,
+                space,
+                nt: space.n_free(),
+                c: 1.0,
+            };
+            let (m, n) = (p.n_residuals(), p.n_params());
+            let mut r = vec![0.0; m];
+            let mut jac = DMatrix::<f64>::zeros(m, n);
+            if let Some(Ok(())) = p.residuals_and_jacobian(x0, &mut r, &mut jac) {
+                let diag_max = (0..n)
+                    .map(|j| jac.column(j).norm_squared())
+                    .fold(0.0, f64::max);
+                if held.scaled && diag_max.is_finite() && diag_max > 1.0 {
+                    p.c = 1.0 / diag_max.sqrt();
+                }
+            }
+            // Absolute tolerances on the objective scale with it.
+            let c2 = p.c * p.c;
+            let lm = crate::lsq::LmOptions {
+                plateau: lm.plateau.map(|(k, d)| (k, d * c2)),
+                gain_to_come: lm.gain_to_come.map(|(k, d)| (k, d * c2)),
+                ..*lm
+            };
+            let mut rep = minimize(&p, x0, lo, hi, &lm);
+            rep.objective /= c2;
+            for v in rep.residuals.iter_mut() {
+                *v /= p.c;
+            }
+            rep
         }
     }
 }
@@ -1069,6 +1303,38 @@ pub fn ml_fit_from(
     settings: &FitSettings,
     opts: &MlOptions,
 ) -> MlFit {
+    ml_fit_row(
+        model,
+        curves,
+        space,
+        start,
+        effects,
+        settings,
+        opts,
+        &Held::NONE,
+    )
+}
+
+/// [`ml_fit_from`] held as `held` says: the constants `pinned` (model order, free in `space`)
+/// held at their `start` values by the box (so that, unlike a constant held in `space`, the specimen effects
+/// acting through them stay in the fit: a profile of the rate constant with rate effects),
+/// and `row` appended to every least-squares problem of the fit (a profile's penalty holding
+/// a function of the constants near a target; [`ExtraRow`]), every problem scaled if asked
+/// ([`Held::scaled`]). The reported −2 ln L is the
+/// likelihood's alone, without the row; with a row a warm start's own report is not a
+/// candidate (it does not hold the target).
+#[allow(clippy::too_many_arguments)]
+pub fn ml_fit_row(
+    model: &dyn Model,
+    curves: &[Curve],
+    space: &ParamSpace,
+    start: &[f64],
+    effects: Option<&EffectStart>,
+    settings: &FitSettings,
+    opts: &MlOptions,
+    held: &Held,
+) -> MlFit {
+    let (pinned, row) = (held.pinned, held.row);
     // The gain-to-come stop is for fits without specimen effects: a hierarchical fit's
     // rounds end on their plateau test ([`PLATEAU`]), and with both, the rounds' paths moved
     // the null refits' ends (Alloy 617 950 °C: `lr_critical` up to 4.4 away, p-values alike).
@@ -1101,7 +1367,11 @@ pub fn ml_fit_from(
         jacobian: settings.jacobian,
     };
     let u0 = space.to_unit(start);
-    let (lo, hi) = (vec![0.0; u0.len()], vec![1.0; u0.len()]);
+    let pins = pinned_columns(space, pinned);
+    let (mut lo, mut hi) = (vec![0.0; u0.len()], vec![1.0; u0.len()]);
+    for &k in &pins {
+        (lo[k], hi[k]) = (u0[k], u0[k]);
+    }
     // Stage 1: white reading errors, no specimen effects. A smooth misfit (a loading strain
     // left out, a primary stage missed) is what an AR(1) model with φ near 1 explains as
     // noise; from such a start the profiled likelihood cannot see it, and the LM stops where
@@ -1132,7 +1402,7 @@ pub fn ml_fit_from(
             ErrorModel::estimate_white(res, opts.lifetime_sd_floor),
             opts.lifetime_sd_floor,
         );
-        let lm1 = minimize(&white, &u0, &lo, &hi, &settings.lm);
+        let lm1 = minimize_with(&white, held, space, &u0, &lo, &hi, &settings.lm);
         if lm1.termination == Termination::SimulationFailure {
             return MlFit::failed(
                 start,
@@ -1226,7 +1496,7 @@ pub fn ml_fit_from(
         // scatter at the floor) would otherwise come back with zero effects and a scatter
         // estimated at the start, whose Laplace terms cost likelihood that the start did not
         // pay (measured: a nested refit 0.87 below its start on a null set, 99005).
-        let at_start = (!fresh)
+        let at_start = (!fresh && row.is_none())
             .then(|| {
                 let given: Vec<usize> = (0..layout.kinds.len())
                     .filter(|&k| {
@@ -1261,6 +1531,7 @@ pub fn ml_fit_from(
             .flatten();
         let mut fit = match hier_fit(
             model, curves, space, &x1, &eta, scatter, layout, settings, opts, &noise1, fresh,
+            &pins, held,
         ) {
             Ok(f) => f,
             // The search met a point it could not simulate: a warm start keeps its own
@@ -1294,7 +1565,7 @@ pub fn ml_fit_from(
     }
     let noise1 = noise1.expect("evaluated without effects");
     let problem = LikelihoodProblem::new(inner(), noise1, opts.lifetime_sd_floor);
-    let mut lm = minimize(&problem, &u1, &lo, &hi, &settings.lm);
+    let mut lm = minimize_with(&problem, held, space, &u1, &lo, &hi, &settings.lm);
     lm.iterations += it1;
     lm.evaluations += ev1;
     if lm.termination == Termination::SimulationFailure {
@@ -1377,7 +1648,8 @@ pub fn with_specimens(
 
 /// The hierarchical LM from constants `theta` (physical) and effects `eta` (kind-major) with
 /// the scatter starting at `scatter` and re-estimated by maximum likelihood after every
-/// round; then [`finish_hier`]. A failure gives (message, iterations, evaluations).
+/// round; then [`finish_hier`]; the unit-box columns `pins` held by the box, and `held`'s row
+/// and scaling applied to every problem ([`ml_fit_row`]). A failure gives (message, iterations, evaluations).
 #[allow(clippy::too_many_arguments)]
 fn hier_fit(
     model: &dyn Model,
@@ -1391,6 +1663,8 @@ fn hier_fit(
     opts: &MlOptions,
     noise: &ErrorModel,
     white_round: bool,
+    pins: &[usize],
+    held: &Held,
 ) -> Result<MlFit, (String, usize, usize)> {
     let nt = layout.n_theta;
     let ne = layout.n_effects();
@@ -1401,6 +1675,9 @@ fn hier_fit(
         hi[j] = EFFECT_MAX;
     }
     let mut x = space.to_unit(theta);
+    for &k in pins {
+        (lo[k], hi[k]) = (x[k], x[k]);
+    }
     x.extend_from_slice(eta);
     let mut tau = scatter;
     let mut noise = noise.clone();
@@ -1433,7 +1710,7 @@ fn hier_fit(
                 ErrorModel::estimate_white(&split_residuals(curves, &r), opts.lifetime_sd_floor);
             let problem = LikelihoodProblem::white(inner(), white_noise, opts.lifetime_sd_floor)
                 .with_effects(layout.clone(), tau.clone(), true);
-            let lm = minimize(&problem, &x, &lo, &hi, &settings.lm);
+            let lm = minimize_with(&problem, held, space, &x, &lo, &hi, &settings.lm);
             its += lm.iterations;
             evs += lm.evaluations;
             if lm.termination == Termination::SimulationFailure {
@@ -1455,7 +1732,7 @@ fn hier_fit(
             plateau: Some(PLATEAU),
             ..settings.lm
         };
-        let lm = minimize(&problem, &x, &lo, &hi, &lm_opts);
+        let lm = minimize_with(&problem, held, space, &x, &lo, &hi, &lm_opts);
         its += lm.iterations;
         evs += lm.evaluations;
         if lm.termination == Termination::SimulationFailure {
@@ -1801,6 +2078,47 @@ fn exact_blocks(
             }
         })
         .collect()
+}
+
+/// The information of the free constants (unit box of `space`) at a hierarchical fit with the
+/// specimens' effects integrated out: with J the whitened Jacobian of the constants (θ) and
+/// effects (η), penalty rows η/τ included, the Schur complement
+/// I_θθ − I_θη I_ηη⁻¹ I_ηθ of JᵀJ (the Laplace marginal's curvature in θ once every effect
+/// has followed). `None` without effects, or where it cannot be evaluated. Without effects
+/// this is what a plain fit's JᵀJ is; with them the constants an effect can compensate (the
+/// rate constant against every specimen's rate factor) carry the scatter's uncertainty.
+pub fn marginal_information(
+    model: &dyn Model,
+    curves: &[Curve],
+    space: &ParamSpace,
+    fit: &MlFit,
+    settings: &FitSettings,
+    opts: &MlOptions,
+) -> Option<DMatrix<f64>> {
+    let sp = fit.specimen.as_ref()?;
+    let (layout, dropped) = EffectLayout::new(model, curves, space, &sp.kinds);
+    let layout = layout?;
+    if !dropped.is_empty() {
+        return None;
+    }
+    let mut x = space.to_unit(&fit.params);
+    let mut tau = Vec::with_capacity(layout.kinds.len());
+    for &(kind, _, _) in &layout.kinds {
+        let k = sp.kinds.iter().position(|q| *q == kind)?;
+        x.extend_from_slice(&sp.effects[k]);
+        tau.push(sp.scatter[k].max(SCATTER_FLOOR));
+    }
+    let (_, jac, _) = whitened_at(model, curves, space, &x, &layout, &tau, settings, opts)?;
+    let nt = layout.n_theta;
+    let jtj = crate::lsq::gram(&jac);
+    let n = jtj.nrows();
+    let a = jtj.view((0, 0), (nt, nt)).into_owned();
+    let b = jtj.view((0, nt), (nt, n - nt)).into_owned();
+    let d = jtj.view((nt, nt), (n - nt, n - nt)).into_owned();
+    let dinv = d.try_inverse()?;
+    let i = a - &b * dinv * b.transpose();
+    let i = (&i + i.transpose()) * 0.5;
+    i.iter().all(|v| v.is_finite()).then_some(i)
 }
 
 /// The whitened residuals and Jacobian of the hierarchical problem at `x` under the error

@@ -404,10 +404,11 @@ pub fn table(run: &PredictRun, names: &[&str]) -> String {
             r.given_neg2ll,
             r.delta_neg2ll()
         ));
-        if r.without_specimen_effects {
+        if !r.specimen_effects.is_empty() {
+            let kinds: Vec<&str> = r.specimen_effects.iter().map(|k| k.name()).collect();
             s.push_str(&format!(
-                "  note: {}\n",
-                crate::uncertainty::predict::WITHOUT_SPECIMEN_EFFECTS
+                "  note: every fit here integrates the specimens' {} factors out (the hierarchical likelihood); the constants are the population's\n",
+                kinds.join(" and ")
             ));
         }
         for (n, (g, v)) in names.iter().zip(r.given.iter().zip(&r.params)) {
@@ -687,7 +688,7 @@ pub fn summary_json(cfg: &RunConfig, data: &Dataset, model: &dyn Model, run: &Pr
             "neg2ll": jnum(r.neg2ll),
             "given_neg2ll": jnum(r.given_neg2ll),
             "delta_neg2ll": jnum(r.delta_neg2ll()),
-            "without_specimen_effects": r.without_specimen_effects,
+            "specimen_effects": r.specimen_effects,
             "constants": all_names.iter().zip(r.given.iter().zip(&r.params)).map(|(n, (g, v))| json!({
                 "name": n,
                 "given": g,

@@ -126,7 +126,13 @@ pub fn well_determined(
     let coords: Vec<Coord> = (0..n)
         .map(|j| Coord::of(names[j], sp.lb[j], sp.ub[j]))
         .collect();
-    let Some(info_u) = information(ctx, sp, &reference.params, &reference.noise) else {
+    let Some(info_u) = information(
+        ctx,
+        sp,
+        &reference.params,
+        &reference.noise,
+        reference.specimen.as_ref(),
+    ) else {
         return vec![];
     };
     // dz/du per constant: I_z = D⁻¹ I_u D⁻¹.

@@ -310,12 +310,18 @@ impl PointFit {
 }
 
 /// Fit with constant `j` held at physical `value`, from `start` (its j-th entry is replaced).
+/// With specimen effects the constant is held by the box instead of the space, so that the
+/// effects acting through it stay in the fit ([`crate::likelihood::ml_fit_row`]).
 pub fn held_fit(ctx: &Context, j: usize, value: f64, start: &[f64], warm: bool) -> PointFit {
-    let mut space = ctx.space.clone();
-    space.hold(j, value);
     let mut s = start.to_vec();
     s[j] = value;
-    let f = ctx.fit(&space, &s, warm);
+    let f = if ctx.hierarchical() {
+        ctx.fit_row(&ctx.space, &s, warm, &[j], None)
+    } else {
+        let mut space = ctx.space.clone();
+        space.hold(j, value);
+        ctx.fit(&space, &s, warm)
+    };
     PointFit {
         coord: ctx.space.to_unit_one(j, value),
         neg2ll: if f.ok() { f.neg2ll } else { f64::NAN },
@@ -594,7 +600,27 @@ impl LeastSquaresProblem for Penalised<'_, '_> {
     }
 }
 
-/// Fit with the quantity `q` held near `target` by the penalty of scale `tau`, from `start`.
+/// The penalty row (g − c)/τ of [`constrained_fit`] for a hierarchical fit
+/// ([`crate::likelihood::ExtraRow`]).
+struct HeldRow<'p, 'a> {
+    ctx: &'p Context<'a>,
+    q: &'p Quantity,
+    target: f64,
+    tau: f64,
+}
+
+impl crate::likelihood::ExtraRow for HeldRow<'_, '_> {
+    fn row(&self, space: &ParamSpace, u: &[f64]) -> Option<(f64, Vec<f64>)> {
+        let (g, grad) = self.q.value_and_gradient(self.ctx, space, u)?;
+        Some((
+            (g - self.target) / self.tau,
+            grad.into_iter().map(|d| d / self.tau).collect(),
+        ))
+    }
+}
+
+/// Fit with the quantity `q` held near `target` by the penalty of scale `tau`, from `start`
+/// (with specimen effects a hierarchical fit with the penalty's row appended).
 /// The returned point's `coord` is the exact g at the end (see the module docs).
 pub fn constrained_fit(
     ctx: &Context,
@@ -604,6 +630,30 @@ pub fn constrained_fit(
     start: &[f64],
     warm: bool,
 ) -> PointFit {
+    if ctx.hierarchical() {
+        let row = HeldRow {
+            ctx,
+            q,
+            target,
+            tau,
+        };
+        let f = ctx.fit_row(&ctx.space, start, warm, &[], Some(&row));
+        if !f.ok() {
+            let msg = f.failure.unwrap_or_else(|| "the fit failed".into());
+            return PointFit::failed(start, msg, f.iterations);
+        }
+        let Some(g) = q.value(ctx, &f.params) else {
+            return PointFit::failed(start, "the held quantity could not be evaluated".into(), 0);
+        };
+        return PointFit {
+            params: f.params,
+            neg2ll: f.neg2ll,
+            coord: g,
+            termination: f.termination,
+            iterations: f.iterations,
+            failure: None,
+        };
+    }
     let settings = if warm { &ctx.warm } else { &ctx.settings };
     let res = match residuals_at(ctx.model, ctx.curves, start, settings) {
         Ok(r) => r,

@@ -32,7 +32,7 @@ use crate::config::{ProfileConfig, RunConfig};
 use crate::error::{Error, Result};
 use crate::model::Load;
 use crate::ode::OdeOptions;
-use crate::synth::{generate, write_set};
+use crate::synth::{generate_in, write_set, World};
 
 /// Settings of a coverage run.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -45,6 +45,10 @@ pub struct CoverageSettings {
     pub bootstrap: usize,
     /// The untested stress as a fraction of the lowest tested one.
     pub stress_factor: f64,
+    /// The laboratory the sets come from (with [`World::Specimens`] the configurations fit
+    /// specimen effects, `auto`: every set has replicates).
+    #[serde(default)]
+    pub world: World,
 }
 
 impl Default for CoverageSettings {
@@ -54,6 +58,7 @@ impl Default for CoverageSettings {
             calibrate: 20,
             bootstrap: 0,
             stress_factor: 0.85,
+            world: World::Identical,
         }
     }
 }
@@ -195,7 +200,7 @@ pub fn run_set(dir: &Path, seed: u64, s: &CoverageSettings) -> SetCoverage {
 }
 
 fn measure(dir: &Path, seed: u64, s: &CoverageSettings, out: &mut SetCoverage) -> Result<()> {
-    let set = generate(&out.name, "none", seed)?;
+    let set = generate_in(&out.name, "none", None, seed, s.world)?;
     let folder = dir.join("sets").join(&out.name);
     write_set(&set, &folder)?;
     let t = &set.truth;
@@ -315,6 +320,19 @@ fn measure(dir: &Path, seed: u64, s: &CoverageSettings, out: &mut SetCoverage) -
             );
             let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x6e65_7774);
             let zt: f64 = StandardNormal.sample(&mut rng);
+            // In the specimens world a new test is a new specimen: its own rate and ductility
+            // factors drawn from the truth's scatter, its life simulated with them.
+            let new_specimen_h = t.specimens.as_ref().and_then(|sp| {
+                let (zr, zd): (f64, f64) = (
+                    StandardNormal.sample(&mut rng),
+                    StandardNormal.sample(&mut rng),
+                );
+                let mut p = t.constants.clone();
+                p[0] *= (sp.rate_sd * zr).exp();
+                p[5] /= (sp.ductility_sd * zd).exp();
+                let r = model.simulate(&p, &load, &[], &mut [], &tight);
+                r.ruptured().then_some(r.t_end)
+            });
             out.rupture = Some(RuptureCoverage {
                 stress_mpa: load.stress_mpa,
                 truth_h: truth_run.t_end,
@@ -326,7 +344,7 @@ fn measure(dir: &Path, seed: u64, s: &CoverageSettings, out: &mut SetCoverage) -
                 wald95: e(wald),
                 boot95: e(boot),
                 pred95: e(pred),
-                new_test_h: truth_run.t_end * (t.lifetime_sd * zt).exp(),
+                new_test_h: new_specimen_h.unwrap_or(truth_run.t_end) * (t.lifetime_sd * zt).exp(),
                 open: ic.lo_open || ic.hi_open,
             });
         }

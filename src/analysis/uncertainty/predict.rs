@@ -29,7 +29,7 @@ use serde::Serialize;
 use super::constrained::{Predicted, Quantity};
 use super::profile::{quantity_interval, QuantityInterval};
 use super::{normal_quantile, Context, Reference, Thresholds};
-use crate::diagnose::bootstrap::{replicate_data, replicate_rng};
+use crate::diagnose::bootstrap::replicate_rng;
 use crate::likelihood::EffectKind;
 use crate::model::Load;
 
@@ -156,6 +156,10 @@ pub fn new_specimen_scatter(
 ) -> Option<crate::likelihood::SpecimenFit> {
     if !ctx.ml.specimen.any() {
         return None;
+    }
+    // A hierarchical reference carries its own (every fit of the context is hierarchical).
+    if ctx.hierarchical() {
+        return reference.specimen.clone();
     }
     let opts = crate::likelihood::MlOptions {
         white_first: false,
@@ -333,12 +337,8 @@ pub fn bootstrap_predictions(
         .into_par_iter()
         .map(|k| {
             let mut rng = replicate_rng(seed, PREDICTION_STREAM, k);
-            let data = replicate_data(ctx.curves, &reference.eval, &reference.noise, &mut rng);
-            let c = Context {
-                curves: &data,
-                space: ctx.space.clone(),
-                ..*ctx
-            };
+            let data = super::replicate(ctx, reference, &mut rng);
+            let c = ctx.on(&data);
             let mut best: Option<crate::likelihood::MlFit> = None;
             for s in std::iter::once(&reference.params).chain(&reference.basins) {
                 let f = c.fit(&c.space, s, true);
@@ -431,14 +431,10 @@ pub struct Refit {
     /// where the given constants cannot be evaluated).
     pub neg2ll: f64,
     pub given_neg2ll: f64,
-    /// Whether the configuration carries specimen effects that this refit's likelihood (that
-    /// of identical specimens, as every profile's) leaves out: the given constants are then a
-    /// hierarchical fit's population constants, and the refit another calibration.
-    pub without_specimen_effects: bool,
+    /// The kinds of specimen effects the refit's likelihood (and every profile's) integrates
+    /// out (empty: identical specimens); its constants are then the population's.
+    pub specimen_effects: Vec<EffectKind>,
 }
-
-/// What a refit's report says when [`Refit::without_specimen_effects`]: why the refit moved.
-pub const WITHOUT_SPECIMEN_EFFECTS: &str = "the refit and every confidence interval use the likelihood of identical specimens, without the configuration's specimen effects (the scatter between specimens enters only the new-test interval): given the population constants of a fit with specimen effects, the refit is a different calibration (docs/UNCERTAINTY.md)";
 
 impl Refit {
     /// −2 ln L at the given constants minus at the refit (≥ 0 up to the optimiser's
@@ -505,7 +501,11 @@ pub fn intervals_at_observed(
         params: reference.params.clone(),
         neg2ll: reference.neg2ll,
         given_neg2ll: super::report::neg2ll_at(&ctx, params).unwrap_or(f64::NAN),
-        without_specimen_effects: setup.ml.specimen.any(),
+        specimen_effects: reference
+            .specimen
+            .as_ref()
+            .map(|s| s.kinds.clone())
+            .unwrap_or_default(),
     };
     let pc = &setup.profile;
     let th = if pc.calibrate > 0 {

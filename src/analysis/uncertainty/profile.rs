@@ -476,7 +476,13 @@ fn side_curve(u_hat: f64, side: &Side) -> Vec<(f64, f64)> {
 /// Wald standard errors of the constants in the unit box at the reference (1e6 where the
 /// information matrix could not be computed).
 pub fn wald_se(ctx: &Context, reference: &Reference) -> Vec<f64> {
-    match information(ctx, &ctx.space, &reference.params, &reference.noise) {
+    match information(
+        ctx,
+        &ctx.space,
+        &reference.params,
+        &reference.noise,
+        reference.specimen.as_ref(),
+    ) {
         Some(i) => {
             let c = covariance(&i);
             (0..c.nrows()).map(|k| c[(k, k)].max(0.0).sqrt()).collect()
@@ -751,7 +757,13 @@ pub fn quantity_se(ctx: &Context, reference: &Reference, q: &Quantity) -> (f64, 
     let Some((g, grad)) = q.value_and_gradient(ctx, &ctx.space, &u) else {
         return (f64::NAN, f64::NAN);
     };
-    let Some(info) = information(ctx, &ctx.space, &reference.params, &reference.noise) else {
+    let Some(info) = information(
+        ctx,
+        &ctx.space,
+        &reference.params,
+        &reference.noise,
+        reference.specimen.as_ref(),
+    ) else {
         return (g, f64::NAN);
     };
     let c = covariance(&info);

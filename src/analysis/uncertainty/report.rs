@@ -101,8 +101,14 @@ pub fn context<'a>(
 }
 
 /// −2 ln L at constants `x`, the error model estimated there (None where the model cannot
-/// be evaluated).
+/// be evaluated); with specimen effects the hierarchical fit's with every constant held at
+/// `x` (the specimens' effects and scatter fitted).
 pub fn neg2ll_at(ctx: &Context, x: &[f64]) -> Option<f64> {
+    if ctx.hierarchical() {
+        let all: Vec<usize> = (0..ctx.space.len()).collect();
+        let f = ctx.fit_row(&ctx.space, x, false, &all, None);
+        return f.ok().then_some(f.neg2ll);
+    }
     crate::likelihood::residuals_at(ctx.model, ctx.curves, x, &ctx.settings)
         .ok()
         .map(|r| crate::errmodel::ErrorModel::estimate(&r, ctx.ml.lifetime_sd_floor).neg2ll(&r))
@@ -592,6 +598,10 @@ pub fn summary(cfg: &RunConfig, run: &ProfileRun) -> serde_json::Value {
             "strain_sd_pct": r.noise.strain.iter().map(|p| jnum(100.0 * p.marginal_sd())).collect::<Vec<_>>(),
             "phi": r.noise.strain.iter().map(|p| jnum(p.phi)).collect::<Vec<_>>(),
             "lifetime_sd_pct": jnum(100.0 * r.noise.lifetime_sd),
+            "specimen_effects": r.specimen.as_ref().map(|sp| sp.kinds.iter().zip(&sp.scatter).map(|(k, t)| json!({
+                "kind": k,
+                "scatter": jnum(*t),
+            })).collect::<Vec<_>>()),
         },
         "thresholds": {
             "t68": jnum(run.thresholds.t68),
@@ -638,6 +648,22 @@ pub fn report_md(cfg: &RunConfig, run: &ProfileRun) -> String {
         run.reference.neg2ll,
         100.0 * run.reference.noise.lifetime_sd
     );
+    if let Some(sp) = &run.reference.specimen {
+        md += &format!(
+            "Specimen effects: every fit (the optimum, each profile point, each bootstrap replicate's) integrates each specimen's {} out (Laplace), the scatter between specimens re-estimated with it; at the optimum {}. The constants and predictions are the population's (a median specimen's); a new specimen's scatter is added only to the prediction interval of a new test.\n\n",
+            sp.kinds
+                .iter()
+                .map(|k| format!("{} factor", k.name()))
+                .collect::<Vec<_>>()
+                .join(" and "),
+            sp.kinds
+                .iter()
+                .zip(&sp.scatter)
+                .map(|(k, t)| format!("{} varies {:.1} % between specimens (sd of ln)", k.name(), 100.0 * t))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
     if let Some(given) = &run.given {
         md += &format!(
             "## The refit against the given constants\n\n−2 ln L at the given constants {}, at the refit {:.3}: difference {} (the given constants are that much less likely under the error model; the 95 % threshold of one constant is {:.3}).\n\n| constant | given | refit | difference | relative | given inside the refit's 95 % interval |\n|---|---|---|---|---|---|\n",

@@ -140,7 +140,7 @@ pub fn write(cfg: &RunConfig, data: &Dataset, h: &Holdout, out: &Path) -> Result
             "neg2ll": jnum(r.neg2ll),
             "training_fit_neg2ll": jnum(r.given_neg2ll),
             "delta_neg2ll": jnum(r.delta_neg2ll()),
-            "without_specimen_effects": r.without_specimen_effects,
+            "specimen_effects": r.specimen_effects,
             "constants": h.fit.model.constants().iter().zip(r.given.iter().zip(&r.params)).map(|(c, (g, v))| json!({
                 "name": c.name, "training_fit": g, "refit": v, "difference": v - g,
             })).collect::<Vec<_>>(),
