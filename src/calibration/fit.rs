@@ -833,42 +833,87 @@ pub fn run_fit_observed(
                 specimen: kinds,
             };
             let t1 = Instant::now();
-            let mut h = crate::likelihood::ml_fit_from(
-                model.as_ref(),
-                curves,
+            // Every hierarchical fit carried on from its end with every problem scaled
+            // (`likelihood::Held::scaled`), the better kept: the alternation's rounds stop on
+            // plateaus of an unscaled problem whose first damping is too strong to leave them
+            // (measured: Alloy 617, −2 ln L −21222.4 → −21716.2, Q_A 123 → 328 kJ/mol).
+            let polish = |space: &ParamSpace, f: crate::likelihood::MlFit| {
+                if !(f.ok() && f.specimen.is_some()) {
+                    return f;
+                }
+                let e = f
+                    .specimen
+                    .as_ref()
+                    .map(crate::likelihood::EffectStart::from);
+                let p = crate::likelihood::ml_fit_row(
+                    model.as_ref(),
+                    curves,
+                    space,
+                    &f.params,
+                    e.as_ref(),
+                    &settings,
+                    &opts,
+                    &crate::likelihood::Held {
+                        pinned: &[],
+                        row: None,
+                        scaled: true,
+                    },
+                );
+                if p.ok() && p.specimen.is_some() && p.neg2ll < f.neg2ll {
+                    crate::likelihood::MlFit {
+                        iterations: p.iterations + f.iterations,
+                        evaluations: p.evaluations + f.evaluations,
+                        ..p
+                    }
+                } else {
+                    f
+                }
+            };
+            let mut h = polish(
                 &space,
-                &chosen.params,
-                None,
-                &settings,
-                &opts,
+                crate::likelihood::ml_fit_from(
+                    model.as_ref(),
+                    curves,
+                    &space,
+                    &chosen.params,
+                    None,
+                    &settings,
+                    &opts,
+                ),
             );
             // The same guarantee with specimen effects: the nested model's hierarchical fit,
             // then the extended model's from it (constants and effects), the better kept; the
             // nested optimum itself is a point of the extended model too.
             let mut from_nested = false;
             if let (Some(nested), Some(x)) = (&nested, &nested_optimum) {
-                let hn = crate::likelihood::ml_fit_from(
-                    model.as_ref(),
-                    curves,
+                let hn = polish(
                     nested,
-                    x,
-                    None,
-                    &settings,
-                    &opts,
+                    crate::likelihood::ml_fit_from(
+                        model.as_ref(),
+                        curves,
+                        nested,
+                        x,
+                        None,
+                        &settings,
+                        &opts,
+                    ),
                 );
                 if hn.ok() && hn.specimen.is_some() {
                     let effects = hn
                         .specimen
                         .as_ref()
                         .map(crate::likelihood::EffectStart::from);
-                    let full = crate::likelihood::ml_fit_from(
-                        model.as_ref(),
-                        curves,
+                    let full = polish(
                         &space,
-                        &hn.params,
-                        effects.as_ref(),
-                        &settings,
-                        &opts,
+                        crate::likelihood::ml_fit_from(
+                            model.as_ref(),
+                            curves,
+                            &space,
+                            &hn.params,
+                            effects.as_ref(),
+                            &settings,
+                            &opts,
+                        ),
                     );
                     for c in [full, hn] {
                         if c.ok() && c.specimen.is_some() && (!h.ok() || c.neg2ll < h.neg2ll) {
