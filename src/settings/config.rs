@@ -1499,8 +1499,9 @@ impl RunConfig {
             settings: FitSettings::from_config(self),
             ml: crate::likelihood::MlOptions {
                 lifetime_sd_floor: self.profile.lifetime_sd_floor,
-                // Not read by the profile's fits: they are scaled AR(1) fits from their
-                // starts (`uncertainty::constrained::ml_fit_scaled`).
+                // Not read by the profile's fits: without specimen effects they are scaled
+                // AR(1) fits (`uncertainty::constrained::ml_fit_scaled`), with them each
+                // far start has its white stage and each warm one none (`Context::fit_row`).
                 white_first: false,
                 specimen: self.objective.specimen_effects.resolve(&data.curves).0,
             },

@@ -2080,28 +2080,28 @@ fn exact_blocks(
         .collect()
 }
 
-/// The information of the free constants (unit box of `space`) at a hierarchical fit with the
-/// specimens' effects integrated out: with J the whitened Jacobian of the constants (θ) and
-/// effects (η), penalty rows η/τ included, the Schur complement
-/// I_θθ − I_θη I_ηη⁻¹ I_ηθ of JᵀJ (the Laplace marginal's curvature in θ once every effect
-/// has followed). `None` without effects, or where it cannot be evaluated. Without effects
-/// this is what a plain fit's JᵀJ is; with them the constants an effect can compensate (the
-/// rate constant against every specimen's rate factor) carry the scatter's uncertainty.
+/// The information of the free constants (unit box of `space`) at constants `params` with the
+/// specimens' effects `sp` integrated out: with J the whitened Jacobian of the constants (θ)
+/// and effects (η), penalty rows η/τ included, the Schur complement I_θθ − I_θη I_ηη⁻¹ I_ηθ
+/// of JᵀJ (the Laplace marginal's curvature in θ once every effect has followed). `None`
+/// where a kind of `sp` cannot act in `space`, or it cannot be evaluated. The constants an
+/// effect can compensate (the rate constant against every specimen's rate factor) carry the
+/// scatter's uncertainty here, which a plain fit's JᵀJ leaves out.
 pub fn marginal_information(
     model: &dyn Model,
     curves: &[Curve],
     space: &ParamSpace,
-    fit: &MlFit,
+    params: &[f64],
+    sp: &SpecimenFit,
     settings: &FitSettings,
     opts: &MlOptions,
 ) -> Option<DMatrix<f64>> {
-    let sp = fit.specimen.as_ref()?;
     let (layout, dropped) = EffectLayout::new(model, curves, space, &sp.kinds);
     let layout = layout?;
     if !dropped.is_empty() {
         return None;
     }
-    let mut x = space.to_unit(&fit.params);
+    let mut x = space.to_unit(params);
     let mut tau = Vec::with_capacity(layout.kinds.len());
     for &(kind, _, _) in &layout.kinds {
         let k = sp.kinds.iter().position(|q| *q == kind)?;

@@ -388,23 +388,12 @@ pub fn information(
     specimen: Option<&SpecimenFit>,
 ) -> Option<DMatrix<f64>> {
     if let (true, Some(sp)) = (ctx.hierarchical(), specimen) {
-        let fit = MlFit {
-            params: params.to_vec(),
-            noise: noise.clone(),
-            neg2ll: f64::NAN,
-            residuals: None,
-            eval: None,
-            specimen: Some(sp.clone()),
-            termination: crate::lsq::Termination::ConvergedObjective,
-            iterations: 0,
-            evaluations: 0,
-            failure: None,
-        };
         return crate::likelihood::marginal_information(
             ctx.model,
             ctx.curves,
             space,
-            &fit,
+            params,
+            sp,
             &ctx.settings,
             &ctx.ml,
         );
