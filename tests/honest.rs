@@ -1223,30 +1223,35 @@ fn generated_sets_have_no_gross_outlier() {
     assert!(worst.0 < OUTLIER_Z / 5.0, "{worst:?}");
 }
 
-/// A best fit that has fitted nothing says so in summary.json and on stdout: on a generated
-/// 590 °C set with a hidden loading strain under specimen scatter (seed 95102) the fit from
-/// the (moved) initial guess stops after one iteration with `converged_gradient` while every
-/// predicted rupture time is 0.03–0.3 % of the measured; the seed's own 560 °C fit carries no
-/// caution.
+/// A best fit that has fitted nothing says so in summary.json and on stdout. First measured on
+/// a generated 590 °C set with a hidden loading strain under specimen scatter (seed 95102): the
+/// fit from the (moved) initial guess stopped after one iteration with `converged_gradient`
+/// while every predicted rupture time was 0.03–0.3 % of the measured. Since the integrator
+/// follows fast primary transients (2026-11-27) that guess is evaluable and its fit ends within
+/// a factor of 3, so the case is built here: the seed's 560 °C data from a configured start at
+/// the corner of its box (A, B at their upper bounds: lives 45–350× too short), one iteration
+/// allowed. The seed's own 560 °C fit carries no caution.
 #[test]
 fn a_fit_that_fitted_nothing_is_marked() {
     let dir = TempDir::new().unwrap();
-    let sets = dir.path().join("sets");
-    ok(&[
-        "synth",
-        sets.to_str().unwrap(),
-        "--world",
-        "specimens",
-        "--seed",
-        "95102",
-        "--sets",
-        "1",
-        "--scenario",
-        "loading_strain",
-    ]);
+    let cfg = config_560(
+        dir.path(),
+        "nofit.toml",
+        "\n[solver]\nmax_iterations = 1\n",
+        &[(
+            "B     = { lb = 0.1,   ub = 0.2,   start = 0.11 }",
+            "B     = { lb = 0.1,   ub = 0.2,   start = 0.2 }",
+        )],
+    );
     let out = dir.path().join("fit");
-    let cfg = sets.join("set-95102/config.toml");
-    let stdout = ok(&["fit", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    let stdout = ok(&[
+        "fit",
+        cfg.to_str().unwrap(),
+        "--start",
+        "config",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
     let s: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     let errs: Vec<f64> = s["lifetime_err_pct"]

@@ -305,3 +305,55 @@ fn dense_output_at_measurement_times_matches_stepping_to_them() {
         );
     }
 }
+
+/// A primary stage over in picoseconds is followed, not failed: the joint fit of Alloy 617 at
+/// 750 °C (its base optimum; 137 MPa) starts at a strain rate of 5.9e8 /h that hardening
+/// takes down within ~1e-12 h. The step floor used to be 16 ε × max(t, 1 h), so after the
+/// initial step's rejections the integrator stopped at t = 0 with `step_underflow` at rtol
+/// 1e-10 (and the dual runs at the fits' rtol 1e-8 did too for the extensions' four-state
+/// path: 13 of 20 null refits of `diagnose` failed there). The floor is now the resolution of
+/// t itself. Truths: the one-state reduction's rupture time, the closed forms of H(ε) and
+/// ω = Cε at outputs inside the transient.
+#[test]
+fn a_primary_stage_faster_than_one_hour_times_epsilon_is_integrated() {
+    let params = [2.169e-7, 0.2645, 0.8348, 61234.0, 1.91e-4, 1.154];
+    let load = Load {
+        stress_mpa: 137.0,
+        temperature_k: 750.0 + creepfit::model::ZERO_CELSIUS_K,
+        omega_f: 1.0 / 3.0,
+    };
+    let o = opts(1e-10);
+    let (r4, _) = run4(&params, &load, &[], &o);
+    let p1 = KhdReduced.prepare(&params, &load);
+    let r1 = integrate(&KhdReduced, &p1, &[], &o, |_, _, _| {});
+    assert_eq!(r4.outcome, Outcome::Ruptured, "{:?}", r4.stats);
+    assert_eq!(r1.outcome, Outcome::Ruptured, "{:?}", r1.stats);
+    assert!(
+        rel(r4.t_end, r1.t_end) < 1e-8,
+        "{} vs {}",
+        r4.t_end,
+        r1.t_end
+    );
+    let times = [1e-15, 1e-14, 1e-13, 1e-12, 1e-11, 1.0, 100.0];
+    let (_, states) = run4(&params, &load, &times, &o);
+    let [_, _, hstar, h, _, c] = params;
+    for (t, y) in times.iter().zip(&states) {
+        assert!(y[0] > 0.0, "strain at {t} h: {}", y[0]);
+        let h_exact = hstar * (1.0 - (-h * y[0] / (load.stress_mpa * hstar)).exp());
+        assert!(rel(y[1], h_exact) < 1e-7, "H({t} h) {} vs {h_exact}", y[1]);
+        assert!(
+            rel(y[3], c * y[0]) < 1e-12,
+            "omega({t} h) {} vs C eps",
+            y[3]
+        );
+    }
+    // At 1e-15 h the strain is the initial rate A sinh(Bσ) × t to within the 1 % by which
+    // hardening has slowed it there (ΔH·Bσ ≈ 0.01).
+    let rate0 = params[0] * (params[1] * load.stress_mpa).sinh();
+    assert!(rate0 > 5e8, "initial rate {rate0} /h");
+    assert!(
+        rel(states[0][0], rate0 * 1e-15) < 0.02,
+        "strain(1e-15 h) {}",
+        states[0][0]
+    );
+}

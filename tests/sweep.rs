@@ -634,26 +634,43 @@ fn the_stop_flag_is_reset_at_the_start_of_a_run() {
 }
 
 /// A start that cannot be evaluated is moved, not lost: Alloy 617 at 900 °C in its wide box,
-/// where the KHD guess's sensitivities underflow at 50 MPa. Before: `fit` exited 1 ("none of
-/// the 10 local fits reached an evaluable point") and a 20-start sweep lost 80 of its 210
-/// fits at their start; now every fit starts at an evaluable point and both are marked.
+/// started where no curve ruptures within the horizon (A and B at their lower bounds: a
+/// strain rate of 5e-16 /h). Measured first with the KHD guess there, whose sensitivities
+/// underflowed at 50 MPa until the integrator's step floor became the resolution of t
+/// (2026-11-27): `fit` exited 1 ("none of the 10 local fits reached an evaluable point") and
+/// a 20-start sweep lost 80 of its 210 fits at their start; now every fit starts at an
+/// evaluable point and both are marked.
 #[test]
 fn starts_that_cannot_be_evaluated_are_moved_and_marked() {
     let d = TempDir::new().unwrap();
     let cfg = d.path().join("900.toml");
-    let text = read(&root().join("configs/alloy617-900C.toml"))
+    let starts = [
+        ("A     = { lb = 1e-14,", "1e-14"),
+        ("B     = { lb = 1e-3, ", "1e-3"),
+        ("Hstar = { lb = 0.01, ", "0.5"),
+        ("h     = { lb = 1e1,  ", "1e3"),
+        ("Kc    = { lb = 1e-9, ", "1e-6"),
+        ("C     = { lb = 0.1,  ", "1"),
+    ];
+    let mut text = read(&root().join("configs/alloy617-900C.toml"))
         .replace("../data/", &format!("{}/data/", root().display()));
+    for (line, x) in starts {
+        assert!(text.contains(line), "{line}");
+        text = text.replace(line, &format!("{line} start = {x},"));
+    }
     std::fs::write(&cfg, format!("{text}\n[sweep]\nstarts = 20\nseed = 5\n")).unwrap();
     let fit = d.path().join("fit");
     ok(&creepfit(&[
         "fit",
+        "--start",
+        "config",
         cfg.to_str().unwrap(),
         "--out",
         fit.to_str().unwrap(),
         "--quiet",
     ]));
     let s = summary(&fit);
-    assert_eq!(s["start"], "guess, moved to an evaluable point", "{s}");
+    assert_eq!(s["start"], "config, moved to an evaluable point", "{s}");
     let sw = d.path().join("sweep");
     ok(&creepfit(&[
         "sweep",
@@ -670,6 +687,6 @@ fn starts_that_cannot_be_evaluated_are_moved_and_marked() {
         s["failed"]
     );
     let moved = s["repaired_starts"].as_array().unwrap();
-    // The guess (start_id 20) among them: it could not be evaluated either.
+    // The configured start (start_id 20) among them: it could not be evaluated either.
     assert!(moved.iter().any(|v| v == 20), "{moved:?}");
 }

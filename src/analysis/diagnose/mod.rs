@@ -741,7 +741,9 @@ pub struct Diagnosis {
     /// The decision, step by step, in words.
     pub decision: Vec<String>,
     /// Where the base fit's error model may have taken misfit for correlated reading error
-    /// ([`decide::absorbed_misfit_caution`]); `null` otherwise.
+    /// ([`decide::absorbed_misfit_caution`]), or failed null refits may have kept a test from
+    /// rejecting ([`decide::failed_refits_caution`]); both joined by ". Also: "; `null`
+    /// otherwise.
     pub caution: Option<String>,
     /// The settings used.
     pub settings: DiagnoseConfig,
@@ -1557,10 +1559,32 @@ pub fn diagnose_observed(
             )
         })
         .collect();
-    let caution = base
-        .noise
-        .as_ref()
-        .and_then(|n| decide::absorbed_misfit_caution(&n.phi, &n.strain_sd_pct));
+    // Per test: its failed refits among the replicates it was computed on (a NaN statistic:
+    // the base refit failed there, or the extension's).
+    let failed_per_test: Vec<(String, usize, usize)> = (0..n_ext + ng)
+        .map(|k| {
+            let name = if k < n_ext {
+                specs[k + 1].name.clone()
+            } else {
+                format!(
+                    "base {} goodness of fit",
+                    shape_name(gof::SHAPES[k - n_ext])
+                )
+            };
+            let n = sampled.computed[k];
+            (name, reps[..n].iter().filter(|r| r[k].is_nan()).count(), n)
+        })
+        .collect();
+    let cautions: Vec<String> = [
+        base.noise
+            .as_ref()
+            .and_then(|n| decide::absorbed_misfit_caution(&n.phi, &n.strain_sd_pct)),
+        decide::failed_refits_caution(&failed_per_test, dc.alpha),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    let caution = (!cautions.is_empty()).then(|| cautions.join(". Also: "));
     Ok(Diagnosis {
         verdict,
         cause,

@@ -73,7 +73,8 @@ pub enum Outcome {
     Ruptured,
     /// The horizon `t_end` was reached without rupture.
     Horizon,
-    /// The step size fell below the floating-point resolution of t.
+    /// The step size fell below the floating-point resolution of t (16 ε |t|; near t = 0 a
+    /// transient of any time scale is followed, within `max_steps`).
     StepUnderflow,
     /// `max_steps` was exhausted.
     MaxSteps,
@@ -385,7 +386,7 @@ where
     loop {
         let stop = if stats.steps + stats.rejected >= opts.max_steps {
             Some(Outcome::MaxSteps)
-        } else if h.abs() <= 16.0 * f64::EPSILON * t.abs().max(1.0) {
+        } else if h.abs() <= 16.0 * f64::EPSILON * t.abs() || h.abs() < f64::MIN_POSITIVE {
             Some(Outcome::StepUnderflow)
         } else {
             None
