@@ -326,7 +326,8 @@ pub const NO_FIT_FACTOR: f64 = 10.0;
 /// [`NO_FIT_FACTOR`] or more (`lifetime_err_pct`: (t_pred − t_f)/t_f in %, NaN without a measured
 /// rupture): its status only says the iteration stopped (measured: a generated 590 °C set with
 /// a hidden loading strain, seed 95102, `converged_gradient` after one iteration at lifetime
-/// errors of −99.7 to −99.97 %, from an initial guess that had to be moved). `None` otherwise,
+/// errors of −99.7 to −99.97 %, from an initial guess that had to be moved, before the
+/// integrator's step-floor fix of 2026-11-27; `tests/honest.rs` now builds such a fit). `None` otherwise,
 /// and without any measured rupture.
 pub fn no_fit_caution(lifetime_err_pct: &[f64]) -> Option<String> {
     let errs: Vec<f64> = lifetime_err_pct
@@ -539,7 +540,8 @@ pub fn repair_starts(
 /// their Jacobian can be computed there. Both matter: the sensitivity equations are
 /// integrated with the same steps and can underflow where the plain simulation does not
 /// (measured: Alloy 617 at 900 °C, the guess evaluable and its Jacobian not —
-/// `step_underflow` at 50 MPa after one evaluation).
+/// `step_underflow` at 50 MPa after one evaluation, with the integrator's step floor before
+/// 2026-11-27; a start where a curve does not rupture within the horizon still fails here).
 pub fn evaluable(
     model: &dyn Model,
     curves: &[Curve],
@@ -718,7 +720,8 @@ pub fn run_fit_observed(
     }
     // A fallback when neither the configured start nor the guess can be evaluated (a curve
     // that does not rupture within the horizon, a failed simulation; measured: Alloy 617 at
-    // 900 °C in its wide box, "none of the 10 local fits reached an evaluable point"): each
+    // 900 °C in its wide box with the step floor before 2026-11-27, "none of the 10 local fits
+    // reached an evaluable point"): each
     // is moved toward the evaluable Latin-hypercube point nearest to the guess, to the first
     // evaluable point on the way, and its label says so (summary.json `start`).
     let start_ok = |x: &[f64]| evaluable(model.as_ref(), curves, &space, &settings, x);
