@@ -113,6 +113,16 @@ fn fit_reproduces_paper(config: &str, paper_mean_lifetime_err: f64) {
             .sum()
     };
     assert!(n_points > 100);
+    // `past_predicted_rupture` marks exactly the times after errors.csv's predicted rupture.
+    let t_pred: std::collections::HashMap<String, f64> = errors
+        .iter()
+        .map(|r| (r["stress_MPa"].clone(), f(r, "rupture_time_pred_h")))
+        .collect();
+    for r in &curves {
+        let want = f(r, "time_h") > t_pred[&r["stress_MPa"]];
+        assert_eq!(r["past_predicted_rupture"] == "1", want, "{r:?}");
+        assert!(r["past_predicted_rupture"] == "0" || r["past_predicted_rupture"] == "1");
+    }
     let nr = summary["norm_residual"].as_f64().unwrap();
     assert!((sumsq - nr).abs() < 1e-9 * nr.max(1.0), "{sumsq} vs {nr}");
     let constants = read_csv(&out.path().join("constants.csv"));

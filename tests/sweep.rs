@@ -744,6 +744,24 @@ fn a_start_that_ruptures_at_once_is_moved_for_the_likelihood() {
     ]));
     let s = summary(&fit);
     assert_eq!(s["start"], "config, moved to an evaluable point", "{s}");
+    // This fit ruptures some curves before their last points: curves.csv marks exactly the
+    // times after errors.csv's predicted rupture (their strain_pred_pct is the continuation).
+    let rows = |name: &str| -> Vec<csv::StringRecord> {
+        let mut r = csv::Reader::from_path(fit.join(name)).unwrap();
+        r.records().map(|x| x.unwrap()).collect()
+    };
+    let key = |r: &csv::StringRecord| format!("{}/{}", &r[0], &r[1]);
+    let t_pred: std::collections::HashMap<String, f64> = rows("errors.csv")
+        .iter()
+        .map(|r| (key(r), r[3].parse::<f64>().unwrap()))
+        .collect();
+    let mut past = 0;
+    for r in rows("curves.csv") {
+        let want = r[2].parse::<f64>().unwrap() > t_pred[&key(&r)];
+        assert_eq!(&r[5], if want { "1" } else { "0" }, "{r:?}");
+        past += usize::from(want);
+    }
+    assert!(past > 0);
     let sw = d.path().join("sweep");
     ok(&creepfit(&[
         "sweep",

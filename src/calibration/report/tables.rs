@@ -395,8 +395,8 @@ pub fn errors_table(rows: &[ErrorRow]) -> (Vec<&'static str>, Vec<Vec<String>>) 
     (with_specimen(&header, specimens), rows)
 }
 
-/// `curves.csv` of a fit: measured and predicted strain at every measured time (plus a last
-/// `specimen` column when some curve has one).
+/// `curves.csv` of a fit: measured and predicted strain at every measured time, whether the
+/// time is past the predicted rupture (plus a last `specimen` column when some curve has one).
 pub fn write_fit_curves(path: &Path, fit: &LocalFit, curves: &[Curve]) -> Result<()> {
     let (header, rows) = fit_curves_table(fit, curves);
     write_csv_rows(path, &header, rows)
@@ -416,6 +416,7 @@ pub fn fit_curves_table<'a>(
                 num(t),
                 num(100.0 * c.strains[k]),
                 num(100.0 * fit.eval.curves[i].strain[k]),
+                past_rupture(&fit.eval.curves[i], t).to_string(),
             ];
             if specimens {
                 row.push(c.specimen.clone().unwrap_or_default());
@@ -429,8 +430,17 @@ pub fn fit_curves_table<'a>(
         "time_h",
         "strain_exp_pct",
         "strain_pred_pct",
+        "past_predicted_rupture",
     ];
     (with_specimen(&header, specimens), rows)
+}
+
+/// Whether measured time `t` (h) lies after the predicted rupture of `p`: its
+/// `strain_pred_pct` is then eq. 8's linear continuation at the rupture rate (what the
+/// objective compares with the measurement), not a strain of the specimen, which has broken
+/// (`curves.csv` column `past_predicted_rupture`, 1 or 0).
+pub fn past_rupture(p: &crate::model::objective::CurvePrediction, t: f64) -> u8 {
+    u8::from(p.outcome == crate::ode::Outcome::Ruptured && t > p.rupture_time_h)
 }
 
 /// At most about `max` of `points`, evenly spaced in index, first and last kept: what a plot
