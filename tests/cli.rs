@@ -603,6 +603,30 @@ fn specimen_in_every_per_curve_output() {
     }
 }
 
+/// `configs/alloy617.toml` with absolute data paths, written into `dir`; with `effects`, its
+/// `specimen_effects = []` line removed (the default `auto`: a hierarchical fit, the data
+/// having replicates).
+fn alloy617_config(dir: &Path, effects: bool) -> PathBuf {
+    let mut text = std::fs::read_to_string(root().join("configs/alloy617.toml"))
+        .unwrap()
+        .replace(
+            "\"../data/alloy617/",
+            &format!("\"{}/data/alloy617/", root().display()),
+        );
+    if effects {
+        let line = "specimen_effects = []\n";
+        assert!(text.contains(line));
+        text = text.replace(line, "");
+    }
+    let path = dir.join(if effects {
+        "alloy617-auto.toml"
+    } else {
+        "alloy617.toml"
+    });
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
 /// `fit` of the Alloy 617 data with specimen effects: summary.json's mean ln factors per
 /// temperature and per campaign are the means of specimens.csv's factors over those groups,
 /// with their standard errors, and the printout gives them.
@@ -610,12 +634,8 @@ fn specimen_in_every_per_curve_output() {
 fn specimen_factors_by_temperature_and_campaign() {
     let dir = TempDir::new().unwrap();
     let out = dir.path().join("fit");
-    let o = run(&[
-        "fit",
-        "configs/alloy617.toml",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let cfg = alloy617_config(dir.path(), true);
+    let o = run(&["fit", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let stdout = String::from_utf8_lossy(&o.stdout).to_string();
     assert!(stdout.contains("mean ln factor by temperature"), "{stdout}");
@@ -733,16 +753,18 @@ fn specimen_factors_by_temperature_and_campaign() {
 #[test]
 fn an_extension_never_fits_worse_than_the_model_it_extends() {
     let dir = TempDir::new().unwrap();
-    let text = std::fs::read_to_string(root().join("configs/alloy617.toml"))
-        .unwrap()
-        .replace(
-            "\"../data/alloy617/",
-            &format!("\"{}/data/alloy617/", root().display()),
-        );
+    for effects in [false, true] {
+        let text = std::fs::read_to_string(alloy617_config(dir.path(), effects)).unwrap();
+        extension_never_worse(dir.path(), &text, if effects { "auto" } else { "none" });
+    }
+}
+
+fn extension_never_worse(dir: &Path, text: &str, tag: &str) {
     let objective = |name: &str, text: &str| {
-        let cfg = dir.path().join(format!("{name}.toml"));
+        let name = format!("{name}-{tag}");
+        let cfg = dir.join(format!("{name}.toml"));
         std::fs::write(&cfg, text).unwrap();
-        let out = dir.path().join(name);
+        let out = dir.join(&name);
         let o = run(&["fit", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()]);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         let s: serde_json::Value =
@@ -753,7 +775,7 @@ fn an_extension_never_fits_worse_than_the_model_it_extends() {
             s["start"].as_str().unwrap_or("").to_string(),
         )
     };
-    let (base, _) = objective("base", &text);
+    let (base, _) = objective("base", text);
     let extended = text.replace(
         "extensions = [\"constant_load\"]",
         "extensions = [\"constant_load\", \"stress_ductility\"]",
@@ -762,7 +784,7 @@ fn an_extension_never_fits_worse_than_the_model_it_extends() {
     let (ext, start) = objective("extended", &extended);
     assert!(
         ext <= base + 1e-6,
-        "extended {ext} against {base} (start {start})"
+        "{tag}: extended {ext} against {base} (start {start})"
     );
 }
 
@@ -775,12 +797,8 @@ fn an_extension_never_fits_worse_than_the_model_it_extends() {
 fn fit_with_specimen_effects_ends_at_an_optimum_of_its_likelihood() {
     let dir = TempDir::new().unwrap();
     let out = dir.path().join("fit");
-    let o = run(&[
-        "fit",
-        "configs/alloy617.toml",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let cfg = alloy617_config(dir.path(), true);
+    let o = run(&["fit", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let s: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
@@ -789,11 +807,7 @@ fn fit_with_specimen_effects_ends_at_an_optimum_of_its_likelihood() {
         .iter()
         .map(|r| (r["name"].clone(), f(r, "value")))
         .collect();
-    let (cfg, data) = creepfit::config::RunConfig::resolve(
-        &root().join("configs/alloy617.toml"),
-        &Default::default(),
-    )
-    .unwrap();
+    let (cfg, data) = creepfit::config::RunConfig::resolve(&cfg, &Default::default()).unwrap();
     let model = cfg.build_model().unwrap();
     let setup = cfg.likelihood_setup(&data);
     let ctx = creepfit::uncertainty::report::context(&setup, model.as_ref(), &data);
