@@ -778,3 +778,62 @@ fn a_start_that_ruptures_at_once_is_moved_for_the_likelihood() {
         s["failed"]
     );
 }
+
+/// `fit` started at the best constants of a likelihood sweep ends there or better: each
+/// likelihood fit goes both ways (white reading errors first, and directly), as `diagnose`
+/// fits a fresh start. With the white path alone the fit led away from the optimum: on the
+/// generated far material at 980 °C (`tests/data/far_material/980C.toml`) it ended at
+/// −2 ln L −887.67 from the sweep's −888.20.
+#[test]
+fn fit_from_a_sweeps_best_keeps_it() {
+    let d = TempDir::new().unwrap();
+    let dir = root().join("tests/data/far_material");
+    let sw = d.path().join("sweep");
+    ok(&creepfit(&[
+        "sweep",
+        dir.join("980C.toml").to_str().unwrap(),
+        "--out",
+        sw.to_str().unwrap(),
+        "--quiet",
+    ]));
+    let mut ranked = csv::Reader::from_path(sw.join("ranked.csv")).unwrap();
+    let header = ranked.headers().unwrap().clone();
+    let best = ranked.records().next().unwrap().unwrap();
+    let col = |name: &str| &best[header.iter().position(|h| h == name).unwrap()];
+    let best_objective: f64 = col("objective").parse().unwrap();
+    let mut text = read(&dir.join("980C.toml"))
+        .replace(
+            "\"curves.csv\"",
+            &format!("\"{}\"", dir.join("curves.csv").display()),
+        )
+        .replace(
+            "\"ruptures.csv\"",
+            &format!("\"{}\"", dir.join("ruptures.csv").display()),
+        );
+    for name in ["A", "B", "Hstar", "h", "Kc", "C"] {
+        let line = text
+            .lines()
+            .find(|l| l.starts_with(&format!("{name} ")))
+            .unwrap()
+            .to_string();
+        let with = line.replace(" }", &format!(", start = {} }}", col(name)));
+        text = text.replace(&line, &with);
+    }
+    let cfg = d.path().join("best.toml");
+    std::fs::write(&cfg, &text).unwrap();
+    let fit = d.path().join("fit");
+    ok(&creepfit(&[
+        "fit",
+        "--start",
+        "config",
+        cfg.to_str().unwrap(),
+        "--out",
+        fit.to_str().unwrap(),
+        "--quiet",
+    ]));
+    let objective = summary(&fit)["objective"].as_f64().unwrap();
+    assert!(
+        objective <= best_objective + 1e-6 * best_objective.abs(),
+        "fit from the sweep's best: {objective} against {best_objective}"
+    );
+}
