@@ -660,32 +660,10 @@ fn starts_that_cannot_be_evaluated_are_moved_and_marked() {
     }
     std::fs::write(&cfg, format!("{text}\n[sweep]\nstarts = 20\nseed = 5\n")).unwrap();
     let fit = d.path().join("fit");
-    ok(&creepfit(&[
-        "fit",
-        "--start",
-        "config",
-        cfg.to_str().unwrap(),
-        "--out",
-        fit.to_str().unwrap(),
-        "--quiet",
-    ]));
+    fit_from_config(&cfg, &fit);
     let s = summary(&fit);
     assert_eq!(s["start"], "config, moved to an evaluable point", "{s}");
-    let sw = d.path().join("sweep");
-    ok(&creepfit(&[
-        "sweep",
-        cfg.to_str().unwrap(),
-        "--out",
-        sw.to_str().unwrap(),
-        "--quiet",
-    ]));
-    let s = summary(&sw);
-    assert_eq!(s["fits"], 210);
-    assert!(
-        s["failed"].as_u64().unwrap() * 10 <= 210,
-        "a sweep loses at most 10 % of its fits: {}",
-        s["failed"]
-    );
+    let s = sweep_losing_little(&cfg, &d.path().join("sweep"), 210);
     let moved = s["repaired_starts"].as_array().unwrap();
     // The configured start (start_id 20) among them: it could not be evaluated either.
     assert!(moved.iter().any(|v| v == 20), "{moved:?}");
@@ -701,7 +679,6 @@ fn starts_that_cannot_be_evaluated_are_moved_and_marked() {
 #[test]
 fn a_start_that_ruptures_at_once_is_moved_for_the_likelihood() {
     let d = TempDir::new().unwrap();
-    let dir = root().join("tests/data/far_material");
     // B σ ≈ 10–80 at these stresses: every curve ruptures within 1e-16 of its life or so.
     let starts = [
         ("A     = { lb = 1e-16,", "1.2e-6", Some("71.6")),
@@ -711,16 +688,7 @@ fn a_start_that_ruptures_at_once_is_moved_for_the_likelihood() {
         ("Kc    = { lb = 1e-12,", "4.5e-6", Some("629")),
         ("C     = { lb = 0.1,  ", "13.5", None),
     ];
-    let mut text = read(&dir.join("config.toml"))
-        .replace(
-            "\"curves.csv\"",
-            &format!("\"{}\"", dir.join("curves.csv").display()),
-        )
-        .replace(
-            "\"ruptures.csv\"",
-            &format!("\"{}\"", dir.join("ruptures.csv").display()),
-        )
-        .replace("starts = 100", "starts = 40");
+    let mut text = far_material_config("config.toml").replace("starts = 100", "starts = 40");
     for (line, x, q) in starts {
         assert!(text.contains(line), "{line}");
         text = text.replace(line, &format!("{line} start = {x},"));
@@ -733,15 +701,7 @@ fn a_start_that_ruptures_at_once_is_moved_for_the_likelihood() {
     let cfg = d.path().join("far.toml");
     std::fs::write(&cfg, &text).unwrap();
     let fit = d.path().join("fit");
-    ok(&creepfit(&[
-        "fit",
-        "--start",
-        "config",
-        cfg.to_str().unwrap(),
-        "--out",
-        fit.to_str().unwrap(),
-        "--quiet",
-    ]));
+    fit_from_config(&cfg, &fit);
     let s = summary(&fit);
     assert_eq!(s["start"], "config, moved to an evaluable point", "{s}");
     // This fit ruptures some curves before their last points: curves.csv marks exactly the
@@ -762,21 +722,7 @@ fn a_start_that_ruptures_at_once_is_moved_for_the_likelihood() {
         past += usize::from(want);
     }
     assert!(past > 0);
-    let sw = d.path().join("sweep");
-    ok(&creepfit(&[
-        "sweep",
-        cfg.to_str().unwrap(),
-        "--out",
-        sw.to_str().unwrap(),
-        "--quiet",
-    ]));
-    let s = summary(&sw);
-    assert_eq!(s["fits"], 41);
-    assert!(
-        s["failed"].as_u64().unwrap() * 10 <= 41,
-        "a sweep loses at most 10 % of its fits: {}",
-        s["failed"]
-    );
+    sweep_losing_little(&cfg, &d.path().join("sweep"), 41);
 }
 
 /// `fit` started at the best constants of a likelihood sweep ends there or better: each
@@ -801,15 +747,7 @@ fn fit_from_a_sweeps_best_keeps_it() {
     let best = ranked.records().next().unwrap().unwrap();
     let col = |name: &str| &best[header.iter().position(|h| h == name).unwrap()];
     let best_objective: f64 = col("objective").parse().unwrap();
-    let mut text = read(&dir.join("980C.toml"))
-        .replace(
-            "\"curves.csv\"",
-            &format!("\"{}\"", dir.join("curves.csv").display()),
-        )
-        .replace(
-            "\"ruptures.csv\"",
-            &format!("\"{}\"", dir.join("ruptures.csv").display()),
-        );
+    let mut text = far_material_config("980C.toml");
     for name in ["A", "B", "Hstar", "h", "Kc", "C"] {
         let line = text
             .lines()
@@ -822,18 +760,52 @@ fn fit_from_a_sweeps_best_keeps_it() {
     let cfg = d.path().join("best.toml");
     std::fs::write(&cfg, &text).unwrap();
     let fit = d.path().join("fit");
+    fit_from_config(&cfg, &fit);
+    let objective = summary(&fit)["objective"].as_f64().unwrap();
+    assert!(
+        objective <= best_objective + 1e-6 * best_objective.abs(),
+        "fit from the sweep's best: {objective} against {best_objective}"
+    );
+}
+
+/// `creepfit fit --start config CFG --out OUT --quiet`, which must succeed.
+fn fit_from_config(cfg: &Path, out: &Path) {
     ok(&creepfit(&[
         "fit",
         "--start",
         "config",
         cfg.to_str().unwrap(),
         "--out",
-        fit.to_str().unwrap(),
+        out.to_str().unwrap(),
         "--quiet",
     ]));
-    let objective = summary(&fit)["objective"].as_f64().unwrap();
+}
+
+/// `creepfit sweep CFG --out OUT --quiet`, which must succeed and have lost at most 10 % of
+/// its `fits` fits; its summary.json.
+fn sweep_losing_little(cfg: &Path, out: &Path, fits: u64) -> serde_json::Value {
+    ok(&creepfit(&[
+        "sweep",
+        cfg.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]));
+    let s = summary(out);
+    assert_eq!(s["fits"], fits);
     assert!(
-        objective <= best_objective + 1e-6 * best_objective.abs(),
-        "fit from the sweep's best: {objective} against {best_objective}"
+        s["failed"].as_u64().unwrap() * 10 <= fits,
+        "a sweep loses at most 10 % of its fits: {}",
+        s["failed"]
     );
+    s
+}
+
+/// The text of configuration `name` of `tests/data/far_material`, its data paths absolute.
+fn far_material_config(name: &str) -> String {
+    let dir = root().join("tests/data/far_material");
+    let abs = |f: &str| format!("\"{}\"", dir.join(f).display());
+    read(&dir.join(name))
+        .replace("\"curves.csv\"", &abs("curves.csv"))
+        .replace("\"ruptures.csv\"", &abs("ruptures.csv"))
 }
