@@ -210,11 +210,7 @@ fn likelihood_fit(
         white.iterations + direct.iterations,
         white.evaluations + direct.evaluations,
     );
-    let mut ml = match (white.ok(), direct.ok()) {
-        (true, true) if direct.neg2ll < white.neg2ll => direct,
-        (false, true) => direct,
-        _ => white,
-    };
+    let mut ml = white.better(direct);
     ml.iterations = its;
     ml.evaluations = evs;
     from_ml(ml, model, curves, space, start, start_label, settings, t0)

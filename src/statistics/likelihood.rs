@@ -959,6 +959,16 @@ impl MlFit {
         self.neg2ll.is_finite() && self.termination != Termination::SimulationFailure
     }
 
+    /// The better of two fits of one start (`self` on a tie, and when both failed): `other`
+    /// when it ended at an evaluable point with a lower −2 ln L, or `self` failed.
+    pub fn better(self, other: MlFit) -> MlFit {
+        match (self.ok(), other.ok()) {
+            (true, true) if other.neg2ll < self.neg2ll => other,
+            (false, true) => other,
+            _ => self,
+        }
+    }
+
     fn failed(start: &[f64], msg: String, iterations: usize, evaluations: usize) -> MlFit {
         MlFit {
             params: start.to_vec(),
@@ -2302,6 +2312,33 @@ mod tests {
                 ..tr[0].clone()
             };
             assert_eq!(t.follows_stress(), yes, "p {p}");
+        }
+    }
+
+    #[test]
+    fn the_better_fit_is_the_evaluable_one_with_the_lower_likelihood_self_on_ties() {
+        let fit = |neg2ll: f64| MlFit {
+            neg2ll,
+            termination: Termination::ConvergedObjective,
+            ..MlFit::failed(&[neg2ll], String::new(), 0, 0)
+        };
+        let failed = |tag: f64| MlFit::failed(&[tag], String::new(), 0, 0);
+        // (self, other, which one is kept: its params[0])
+        let table = [
+            (fit(-5.0), fit(-7.0), -7.0),
+            (fit(-7.0), fit(-5.0), -7.0),
+            (fit(-5.0), fit(-5.0), -5.0),
+            (failed(1.0), fit(-5.0), -5.0),
+            (fit(-5.0), failed(1.0), -5.0),
+            (failed(1.0), failed(2.0), 1.0),
+            (fit(f64::NAN), fit(-5.0), -5.0),
+        ];
+        for (a, b, want) in table {
+            let kept = a.better(b).params[0];
+            assert!(
+                kept == want || (kept.is_nan() && want.is_nan()),
+                "{kept} vs {want}"
+            );
         }
     }
 

@@ -241,12 +241,7 @@ fn fit_all(
             // takes for noise (a loading strain), the direct path keeps basins the white
             // stage leads away from (measured on the seed's 590 °C data).
             let w = ml_fit(model, curves, &spec.space, s, settings, &white);
-            let f = match (d.ok(), w.ok()) {
-                (true, true) if w.neg2ll < d.neg2ll => w,
-                (false, true) => w,
-                _ => d,
-            };
-            (i, f)
+            (i, d.better(w))
         })
         .collect()
 }
