@@ -395,6 +395,30 @@ fn a_null_set_with_specimen_scatter_is_adequate() {
         assert_eq!(t.df, x.len() - 2);
         assert!(!t.follows_stress(), "{t:?}");
     }
+    // The battery keeps the diagnosis beside the set, with every test's null statistics:
+    // each test's p-value recomputed from them, (1 + #{T* ≥ T − 0.01 or failed})/(B + 1),
+    // is the one reported.
+    let text = std::fs::read_to_string(dir.path().join("sets/set-95001/diagnosis.json")).unwrap();
+    let j: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let cols = j["bootstrap"]["null_statistics"].as_array().unwrap();
+    let reported: Vec<f64> = d
+        .candidates
+        .iter()
+        .map(|c| c.p_value.unwrap())
+        .chain(d.gof.iter().map(|g| g.p_value))
+        .collect();
+    assert_eq!(cols.len(), reported.len());
+    for (col, want) in cols.iter().zip(&reported) {
+        let obs = col["observed"].as_f64().unwrap();
+        let vals = col["values"].as_array().unwrap();
+        assert!(vals.len() >= 20, "{}", col["test"]);
+        let ge = vals
+            .iter()
+            .filter(|v| v.as_f64().is_none_or(|x| x >= obs - 0.01))
+            .count();
+        let p = (1 + ge) as f64 / (vals.len() + 1) as f64;
+        assert!((p - want).abs() < 1e-12, "{}: {p} vs {want}", col["test"]);
+    }
 }
 
 /// A catalogued effect (a loading strain) hidden under specimen scatter, clearly

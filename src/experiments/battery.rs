@@ -280,6 +280,12 @@ pub fn run_one_diagnosed(
         r.gof_p = d.gof.iter().map(|g| g.p_value).collect();
         r.replicates = d.bootstrap.replicates;
         r.wall_s = d.wall_s;
+        // The whole diagnosis beside the set (its null statistics too): why a set was missed
+        // or raised an alarm can be read afterwards, and a multiplicity procedure checked on
+        // the tests' joint null distributions without diagnosing again.
+        crate::output::write_atomic(&folder.join("diagnosis.json"), |w| {
+            serde_json::to_writer(&mut *w, &d).map_err(std::io::Error::from)
+        })?;
         diagnosis = Some(d.clone());
         if let Some(sp) = &t.specimens {
             r.scatter_true = vec![sp.rate_sd, sp.ductility_sd];

@@ -706,6 +706,22 @@ pub struct BootstrapInfo {
     pub failed_base_refits: usize,
     /// Per extension: replicates whose refit failed (they count against rejection).
     pub failed_extension_refits: Vec<(String, usize)>,
+    /// Every test's statistic in every replicate it was computed in, replicate order (the
+    /// null distribution itself; `null` where a refit failed): for plots and for checking a
+    /// multiplicity procedure on the joint distribution of the tests.
+    pub null_statistics: Vec<NullColumn>,
+}
+
+/// One test's null statistics (`diagnosis.json` → `bootstrap.null_statistics`).
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct NullColumn {
+    /// The test: an extension's name, or `base common goodness of fit` / `base per-curve
+    /// goodness of fit`.
+    pub test: String,
+    /// Its statistic on the data (likelihood ratio or G).
+    pub observed: f64,
+    /// Its statistic in replicates `0..values.len()` (NaN, written `null`: a refit failed).
+    pub values: Vec<f64>,
 }
 
 /// The outcome of [`diagnose`] (`diagnosis.json`).
@@ -1597,6 +1613,15 @@ pub fn diagnose_observed(
             stopped_early: sampled.stopped_early,
             failed_base_refits,
             failed_extension_refits,
+            null_statistics: failed_per_test
+                .iter()
+                .enumerate()
+                .map(|(k, (name, _, _))| NullColumn {
+                    test: name.clone(),
+                    observed: observed[k],
+                    values: col(k),
+                })
+                .collect(),
         },
         decision,
         caution,
