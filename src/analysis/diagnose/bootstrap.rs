@@ -19,7 +19,7 @@ use rand_distr::StandardNormal;
 use rayon::prelude::*;
 
 use crate::data::Curve;
-use crate::errmodel::ErrorModel;
+use crate::errmodel::{strain_fractions, ErrorModel, GrowingError};
 use crate::fit::FitSettings;
 use crate::likelihood::{raw_objective, MlFit};
 use crate::model::objective::Evaluation;
@@ -38,15 +38,52 @@ pub fn replicate_rng(seed: u64, purpose: u64, b: usize) -> ChaCha8Rng {
     rng
 }
 
+/// The reading error a bootstrap under `fit` draws: `fit`'s AR(1) per curve, growing with
+/// strain ([`GrowingError`]) when the likelihood of its residuals says so, its growth and
+/// AR(1)s then estimated together from them; when the best growth is zero (or `fit` kept no
+/// residuals), `fit`'s own AR(1)s unchanged.
+pub fn reading_error(curves: &[Curve], fit: &MlFit) -> GrowingError {
+    let constant = GrowingError::constant(&fit.noise.strain);
+    let Some(res) = fit.residuals.as_ref() else {
+        return constant;
+    };
+    let x: Vec<Vec<f64>> = curves
+        .iter()
+        .map(|c| strain_fractions(&c.strains))
+        .collect();
+    if res.strain.iter().zip(&x).any(|(e, x)| e.len() != x.len()) {
+        return constant;
+    }
+    let est = GrowingError::estimate(&res.strain, &x);
+    if est.growth > 0.0 {
+        est
+    } else {
+        constant
+    }
+}
+
+/// Curve `c`'s strain fractions, only where `reading` grows (else zeros are never read).
+fn fractions_of(c: &Curve, reading: &GrowingError) -> Vec<f64> {
+    if reading.growth != 0.0 {
+        strain_fractions(&c.strains)
+    } else {
+        vec![0.0; c.times_h.len()]
+    }
+}
+
 /// A replicate of `curves`: the fitted model's predictions at the measured times (`eval`,
 /// with the objective's continuation after a predicted rupture, exactly what the fit was
 /// compared with) plus AR(1) reading error per curve, and rupture times scattered on the log
 /// scale by the fitted lifetime scatter. Everything else (times, rupture strain used for
 /// normalisation, the estimated minimum rate) is the real curve's.
+///
+/// The reading error is `reading` (per curve an AR(1), growing with the curve's measured strain
+/// fraction when its growth is not zero: [`reading_error`]); `noise` gives the lifetime scatter.
 pub fn replicate_data<R: Rng>(
     curves: &[Curve],
     eval: &Evaluation,
     noise: &ErrorModel,
+    reading: &GrowingError,
     rng: &mut R,
 ) -> Vec<Curve> {
     curves
@@ -54,7 +91,7 @@ pub fn replicate_data<R: Rng>(
         .zip(&eval.curves)
         .enumerate()
         .map(|(i, (c, p))| {
-            let e = noise.strain[i].simulate(c.times_h.len(), rng);
+            let e = reading.simulate(i, &fractions_of(c, reading), rng);
             let strains: Vec<f64> = p.strain.iter().zip(&e).map(|(s, d)| s + d).collect();
             let z: f64 = rng.sample(StandardNormal);
             let rupture_time_h = c.rupture_time_h.map(|t| {
@@ -85,12 +122,13 @@ pub fn replicate_hier<R: Rng>(
     curves: &[Curve],
     model: &dyn Model,
     fit: &MlFit,
+    reading: &GrowingError,
     settings: &FitSettings,
     rng: &mut R,
 ) -> Vec<Curve> {
     let eval = fit.eval.as_ref().expect("fitted");
     let Some(sp) = &fit.specimen else {
-        return replicate_data(curves, eval, &fit.noise, rng);
+        return replicate_data(curves, eval, &fit.noise, reading, rng);
     };
     let n = curves.len();
     // Draw every effect first (a fixed use of the stream), kind-major.
@@ -140,7 +178,9 @@ pub fn replicate_hier<R: Rng>(
         .zip(&ev.curves)
         .enumerate()
         .map(|(i, (c, p))| {
-            let e = fit.noise.strain[i].simulate(c.times_h.len(), rng);
+            // The real curve's strain fractions: the replicate's times are the real ones
+            // scaled by the new specimen's life, so its readings fall at the same fractions.
+            let e = reading.simulate(i, &fractions_of(&curves[i], reading), rng);
             let strains: Vec<f64> = p.strain.iter().zip(&e).map(|(s, d)| s + d).collect();
             let z: f64 = rng.sample(StandardNormal);
             let rupture_time_h = c.rupture_time_h.map(|t| {

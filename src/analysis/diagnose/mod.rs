@@ -583,6 +583,10 @@ pub struct NoiseSummary {
     pub phi: Vec<f64>,
     /// Scatter of rupture times (sd of ln t), %.
     pub lifetime_sd_pct: f64,
+    /// Growth g of the reading error with strain ([`crate::errmodel::GrowingError`]): at a
+    /// curve's largest strain the reading error is (1 + g) times its value at zero; 0 when
+    /// it does not grow. The parametric bootstraps draw their replicates' reading error so.
+    pub reading_error_growth: f64,
 }
 
 /// Whether a candidate could be fitted.
@@ -783,8 +787,9 @@ pub struct PhaseTimes {
     pub loo: f64,
 }
 
-fn noise_summary(f: &MlFit) -> NoiseSummary {
+fn noise_summary(curves: &[Curve], f: &MlFit) -> NoiseSummary {
     NoiseSummary {
+        reading_error_growth: bootstrap::reading_error(curves, f).growth,
         strain_sd_pct: f
             .noise
             .strain
@@ -865,7 +870,7 @@ fn candidate(spec: &Spec, curves: &[Curve], fit: Option<&MlFit>, failed: usize) 
         if let Some(ev) = &f.eval {
             c.lifetime_errs_pct = ev.lifetime_errors_pct(curves);
         }
-        c.noise = Some(noise_summary(f));
+        c.noise = Some(noise_summary(curves, f));
         c.specimen = f.specimen.clone();
         c.specimen_stress_trend = f
             .specimen
@@ -895,7 +900,14 @@ fn null_replicate(
 ) -> Vec<f64> {
     let base = fits[0].as_ref().expect("base fitted");
     let mut rng = bootstrap::replicate_rng(dc.seed, NULL_STREAM, b);
-    let data = bootstrap::replicate_hier(curves, specs[0].model.as_ref(), base, settings, &mut rng);
+    let data = bootstrap::replicate_hier(
+        curves,
+        specs[0].model.as_ref(),
+        base,
+        &bootstrap::reading_error(curves, base),
+        settings,
+        &mut rng,
+    );
     let n_ext = specs.len() - 1;
     let mut starts = basins[0].clone();
     for _ in 0..dc.replicate_starts {
@@ -1013,7 +1025,14 @@ fn null_again(
     }
     let (b0_ll, b0_params) = (first[n_ext + ng + 1], &first[n_ext + ng + 2..]);
     let mut rng = bootstrap::replicate_rng(dc.seed, NULL_STREAM, b);
-    let data = bootstrap::replicate_hier(curves, specs[0].model.as_ref(), base, settings, &mut rng);
+    let data = bootstrap::replicate_hier(
+        curves,
+        specs[0].model.as_ref(),
+        base,
+        &bootstrap::reading_error(curves, base),
+        settings,
+        &mut rng,
+    );
     let base_names = specs[0].names();
     for k in (0..n_ext).filter(|&k| again[k]) {
         let spec = &specs[k + 1];
@@ -1061,6 +1080,7 @@ fn gof_bootstrap(
         })
         .collect();
     let observed: Vec<f64> = gs.iter().map(|g| g.statistic).collect();
+    let reading = bootstrap::reading_error(curves, fit);
     let key = hooks::model_key(&(&spec.name, fit, basins));
     let phase = "cause's goodness-of-fit bootstrap";
     let none = vec![false; observed.len()];
@@ -1073,8 +1093,14 @@ fn gof_bootstrap(
         dc.bootstrap,
         |b, _| {
             let mut rng = bootstrap::replicate_rng(dc.seed, GOF_STREAM, b);
-            let data =
-                bootstrap::replicate_hier(curves, spec.model.as_ref(), fit, settings, &mut rng);
+            let data = bootstrap::replicate_hier(
+                curves,
+                spec.model.as_ref(),
+                fit,
+                &reading,
+                settings,
+                &mut rng,
+            );
             let mut st = basins.to_vec();
             for _ in 0..dc.replicate_starts {
                 st.push(spec.random_start(&mut rng));

@@ -213,6 +213,15 @@ pub fn report_md(name: &str, setup: &DiagnoseSetup, d: &Diagnosis) -> String {
             n.lifetime_sd_pct,
             100.0 * d.settings.lifetime_sd_floor
         );
+        s += &if n.reading_error_growth > 0.0 {
+            format!(
+                "The reading error grows with strain: at each curve's largest strain it is {:.2} times its value at zero (fitted to the residuals; the bootstrap's replicates draw it so).\n",
+                1.0 + n.reading_error_growth
+            )
+        } else {
+            "The reading error does not grow with strain (the likelihood's best growth is zero).\n"
+                .to_string()
+        };
     }
     s += &specimens_md(d, setup);
     if d.bootstrap.failed_base_refits > 0

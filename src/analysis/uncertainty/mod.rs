@@ -37,7 +37,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::data::Curve;
-use crate::errmodel::{ErrorModel, Residuals};
+use crate::errmodel::{ErrorModel, GrowingError, Residuals};
 use crate::error::{Error, Result};
 use crate::fit::FitSettings;
 use crate::likelihood::{
@@ -300,13 +300,16 @@ impl Reference {
 /// effects every curve a new specimen whose factors are drawn from the fitted scatter
 /// ([`crate::diagnose::bootstrap::replicate_hier`]), else the fitted curves plus the error
 /// model's reading error and rupture-time scatter
-/// ([`crate::diagnose::bootstrap::replicate_data`]).
+/// ([`crate::diagnose::bootstrap::replicate_data`]). The reading error does not grow with
+/// strain here (g = 0): the intervals' coverage was calibrated so (docs/UNCERTAINTY.md);
+/// `diagnose`'s bootstrap fits the growth ([`crate::diagnose::bootstrap::reading_error`]).
 pub fn replicate<R: rand::Rng>(ctx: &Context, reference: &Reference, rng: &mut R) -> Vec<Curve> {
     if reference.specimen.is_some() {
         crate::diagnose::bootstrap::replicate_hier(
             ctx.curves,
             ctx.model,
             &reference.as_fit(),
+            &GrowingError::constant(&reference.noise.strain),
             &ctx.settings,
             rng,
         )
@@ -315,6 +318,7 @@ pub fn replicate<R: rand::Rng>(ctx: &Context, reference: &Reference, rng: &mut R
             ctx.curves,
             &reference.eval,
             &reference.noise,
+            &GrowingError::constant(&reference.noise.strain),
             rng,
         )
     }
