@@ -882,6 +882,29 @@ fn candidate(spec: &Spec, curves: &[Curve], fit: Option<&MlFit>, failed: usize) 
     c
 }
 
+/// Null replicate `b`'s data under the base fit `base` (its own random stream, which is
+/// returned for the replicate's random starts): [`null_replicate`] and [`null_again`] must
+/// draw the same data.
+fn null_data(
+    specs: &[Spec],
+    base: &MlFit,
+    curves: &[Curve],
+    settings: &FitSettings,
+    dc: &DiagnoseConfig,
+    b: usize,
+) -> (Vec<Curve>, ChaCha8Rng) {
+    let mut rng = bootstrap::replicate_rng(dc.seed, NULL_STREAM, b);
+    let data = bootstrap::replicate_hier(
+        curves,
+        specs[0].model.as_ref(),
+        base,
+        &bootstrap::reading_error(curves, base),
+        settings,
+        &mut rng,
+    );
+    (data, rng)
+}
+
 /// What one null replicate gives: the likelihood ratio of every extension and the base
 /// goodness-of-fit statistic (NaN where a refit failed), whether the base refit failed, and
 /// (when it did not) the base refit's −2 ln L and constants, for [`null_again`]. An extension
@@ -899,15 +922,7 @@ fn null_replicate(
     active: &[bool],
 ) -> Vec<f64> {
     let base = fits[0].as_ref().expect("base fitted");
-    let mut rng = bootstrap::replicate_rng(dc.seed, NULL_STREAM, b);
-    let data = bootstrap::replicate_hier(
-        curves,
-        specs[0].model.as_ref(),
-        base,
-        &bootstrap::reading_error(curves, base),
-        settings,
-        &mut rng,
-    );
+    let (data, mut rng) = null_data(specs, base, curves, settings, dc, b);
     let n_ext = specs.len() - 1;
     let mut starts = basins[0].clone();
     for _ in 0..dc.replicate_starts {
@@ -1024,15 +1039,7 @@ fn null_again(
         return out; // the base refit failed there
     }
     let (b0_ll, b0_params) = (first[n_ext + ng + 1], &first[n_ext + ng + 2..]);
-    let mut rng = bootstrap::replicate_rng(dc.seed, NULL_STREAM, b);
-    let data = bootstrap::replicate_hier(
-        curves,
-        specs[0].model.as_ref(),
-        base,
-        &bootstrap::reading_error(curves, base),
-        settings,
-        &mut rng,
-    );
+    let (data, _) = null_data(specs, base, curves, settings, dc, b);
     let base_names = specs[0].names();
     for k in (0..n_ext).filter(|&k| again[k]) {
         let spec = &specs[k + 1];
