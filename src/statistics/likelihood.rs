@@ -2284,6 +2284,82 @@ pub fn min_whitened_ss(
     best
 }
 
+/// The smallest penalised sum of squares Σ r²/σ² + Σ η²/τ² of `model` on `curves` at the
+/// known error model `noise` and the known scatter `scatter` (one per kind of `kinds`,
+/// kind-major effects `eta` free, started at `eta0`), over fits from `starts`: on noise-free
+/// data, the "expected data" noncentrality of a likelihood-ratio test between two
+/// hierarchical models is the difference of two such minima (the specimens' factors unknown,
+/// as in every laboratory; [`min_whitened_ss`] knows them). Kinds whose constant the model
+/// lacks or `space` holds are left out with their scatter. Returns (minimum, constants,
+/// effects); `None` if every start failed.
+#[allow(clippy::too_many_arguments)]
+pub fn min_penalised_ss(
+    model: &dyn Model,
+    curves: &[Curve],
+    space: &ParamSpace,
+    starts: &[Vec<f64>],
+    settings: &FitSettings,
+    noise: &ErrorModel,
+    kinds: &[(EffectKind, f64)],
+    eta0: &[f64],
+) -> Option<(f64, Vec<f64>, Vec<f64>)> {
+    let wanted: Vec<EffectKind> = kinds.iter().map(|k| k.0).collect();
+    let (layout, _) = EffectLayout::new(model, curves, space, &wanted);
+    let n = curves.len();
+    let (tau, eta_start): (Vec<f64>, Vec<f64>) = match &layout {
+        Some(l) => {
+            let mut tau = vec![];
+            let mut eta = vec![];
+            for (kind, _, _) in &l.kinds {
+                let k = wanted
+                    .iter()
+                    .position(|w| w == kind)
+                    .expect("a wanted kind");
+                tau.push(kinds[k].1);
+                eta.extend_from_slice(&eta0[k * n..(k + 1) * n]);
+            }
+            (tau, eta)
+        }
+        None => (vec![], vec![]),
+    };
+    let mut best: Option<(f64, Vec<f64>, Vec<f64>)> = None;
+    for s in starts {
+        let inner = CreepProblem {
+            objective: raw_objective(model, curves, settings),
+            space: space.clone(),
+            jacobian: settings.jacobian,
+        };
+        let problem = match &layout {
+            Some(l) => LikelihoodProblem::fixed(inner, noise.clone()).with_effects(
+                l.clone(),
+                tau.clone(),
+                true,
+            ),
+            None => LikelihoodProblem::fixed(inner, noise.clone()),
+        };
+        let mut u0 = space.to_unit(s);
+        let nt = u0.len();
+        u0.extend_from_slice(&eta_start);
+        let k = u0.len();
+        let mut lo = vec![0.0; k];
+        let mut hi = vec![1.0; k];
+        for j in nt..k {
+            lo[j] = -EFFECT_MAX;
+            hi[j] = EFFECT_MAX;
+        }
+        let lm = minimize(&problem, &u0, &lo, &hi, &settings.lm);
+        if lm.termination == Termination::SimulationFailure || !lm.objective.is_finite() {
+            continue;
+        }
+        if best.as_ref().is_none_or(|b| lm.objective < b.0) {
+            let mut x = s.clone();
+            space.from_unit(&lm.x[..nt], &mut x);
+            best = Some((lm.objective, x, lm.x[nt..].to_vec()));
+        }
+    }
+    best
+}
+
 #[cfg(test)]
 mod tests {
     /// A ruptured two-point curve at `t` °C and `s` MPa: what the factor summaries read of a

@@ -120,6 +120,21 @@ impl Effect {
     pub fn catalogued(&self) -> bool {
         crate::model::ext::CATALOGUE.contains(&self.name())
     }
+    /// The catalogued extension that models the effect and its constants' true values
+    /// (appended to the base model's); empty for none and for effects outside the catalogue.
+    pub fn true_extension(&self) -> (Vec<String>, Vec<f64>) {
+        match *self {
+            Effect::ConstantLoad => (vec!["constant_load".into()], vec![]),
+            Effect::LoadingStrain { e_l } => (vec!["loading_strain".into()], vec![e_l]),
+            Effect::DislocationDamage { c_d } => (vec!["dislocation_damage".into()], vec![c_d]),
+            Effect::StressDuctility { nu } => (vec!["stress_ductility".into()], vec![nu]),
+            Effect::StrainSoftening { phi0, phi1 } => {
+                (vec!["strain_softening".into()], vec![phi0, phi1])
+            }
+            Effect::RuptureDamage { omega_f } => (vec!["rupture_damage".into()], vec![omega_f]),
+            _ => (vec![], vec![]),
+        }
+    }
     /// The effect's size as one number (for power-versus-size tables): E_L in MPa, C_d, ν,
     /// φ0, ω_f, amp (fraction of ε_f); 0 for none and constant load.
     pub fn size(&self) -> f64 {
@@ -455,17 +470,7 @@ fn generate_inner(
     let lifetime_sd = 0.01;
 
     // The true model.
-    let (exts, extra): (Vec<String>, Vec<f64>) = match effect {
-        Effect::ConstantLoad => (vec!["constant_load".into()], vec![]),
-        Effect::LoadingStrain { e_l } => (vec!["loading_strain".into()], vec![e_l]),
-        Effect::DislocationDamage { c_d } => (vec!["dislocation_damage".into()], vec![c_d]),
-        Effect::StressDuctility { nu } => (vec!["stress_ductility".into()], vec![nu]),
-        Effect::StrainSoftening { phi0, phi1 } => {
-            (vec!["strain_softening".into()], vec![phi0, phi1])
-        }
-        Effect::RuptureDamage { omega_f } => (vec!["rupture_damage".into()], vec![omega_f]),
-        _ => (vec![], vec![]),
-    };
+    let (exts, extra) = effect.true_extension();
     let model = build("khd", &exts)?;
     let mut params = base.to_vec();
     params.extend(extra);
