@@ -890,6 +890,15 @@ pub fn write_reports(dir: &Path, results: &[SetResult], first_seed: u64) -> Resu
             100.0 * hi
         );
     }
+    if results.iter().any(|r| !r.lambda_scatter.is_nan()) {
+        md += &format!(
+            "- Detectable: specimen-world sets of a catalogued effect by the oracle with the specimens' factors unknown (`lambda_scatter`); with them known (`lambda`), {} of those sets would be\n",
+            results
+                .iter()
+                .filter(|r| !r.lambda_scatter.is_nan() && r.lambda >= DETECTABLE_LAMBDA)
+                .count()
+        );
+    }
     md += &format!(
         "- Effects outside the catalogue: {} sets, `extension` verdict in {} = {:.1} %\n",
         r.outside_sets,
@@ -1077,6 +1086,37 @@ mod tests {
             ..run_one_skeleton()
         };
         assert!(r.power_lambda().is_nan());
+    }
+
+    /// summary.md counts the sets the known-factor oracle would have called detectable beside
+    /// the scatter oracle's, and results.csv carries both λ.
+    #[test]
+    fn the_summary_names_both_oracles() {
+        let dir = tempfile::tempdir().unwrap();
+        let set = |seed: u64, lambda: f64, scatter: f64| SetResult {
+            name: format!("set-{seed}"),
+            seed,
+            scenario: "constant_load".into(),
+            lambda,
+            lambda_scatter: scatter,
+            detectable: scatter >= DETECTABLE_LAMBDA,
+            verdict: Some(Verdict::Adequate),
+            error: None,
+            ..run_one_skeleton()
+        };
+        let results = vec![set(1, 3094.4, 3.3), set(2, 232.2, 71.7), set(3, 5.0, 1.0)];
+        write_reports(dir.path(), &results, 1).unwrap();
+        let md = std::fs::read_to_string(dir.path().join("summary.md")).unwrap();
+        assert!(md.contains("- constant_load: 3 sets, 1 detectable"), "{md}");
+        assert!(
+            md.contains("with them known (`lambda`), 2 of those sets would be"),
+            "{md}"
+        );
+        let csv = std::fs::read_to_string(dir.path().join("results.csv")).unwrap();
+        let mut lines = csv.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let col = header.iter().position(|h| *h == "lambda_scatter").unwrap();
+        assert_eq!(lines.next().unwrap().split(',').nth(col), Some("3.3"));
     }
 
     fn run_one_skeleton() -> SetResult {
