@@ -27,8 +27,8 @@ LAYERS = [
     # (the calibration layer's sweep keeps a journal and reports progress, so they are low).
     ("infra", ["error", "output", "identity", "journal", "progress"]),
     # Numerics: forward-mode duals, the least-squares solver, the integrator (generic over
-    # its `OdeSystem`, knows no model), start-point sampling.
-    ("numerics", ["dual", "lsq", "ode", "sampling"]),
+    # its `OdeSystem`, knows no model), start-point sampling, one-dimensional minimisation.
+    ("numerics", ["dual", "lsq", "ode", "sampling", "scalar_min"]),
     # Measured data: curves, ruptures, test conditions, specimens.
     ("data", ["data", "specimen"]),
     # The constitutive models, their parameter space, the eq. 8 objective over simulated

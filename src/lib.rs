@@ -14,7 +14,7 @@
 //! | layer (folder) | modules | what |
 //! |---|---|---|
 //! | [`infra`] | [`error`], [`output`], [`identity`], [`journal`], [`progress`] | the error enum, atomic files, run identities, resumable work, progress observers |
-//! | [`numerics`] | [`dual`], [`lsq`], [`ode`], [`sampling`] | forward-mode duals, the bounded Levenberg–Marquardt solver, the integrator (an [`ode::OdeSystem`] with events, no creep words), start sampling |
+//! | [`numerics`] | [`dual`], [`lsq`], [`ode`], [`sampling`], [`scalar_min`] | forward-mode duals, the bounded Levenberg–Marquardt solver, the integrator (an [`ode::OdeSystem`] with events, no creep words), start sampling, one-dimensional minimisation (grid then golden section) |
 //! | `data` | [`data`], [`specimen`] | curves, ruptures, conditions, specimens |
 //! | `model` | [`model`] | model families (registry), extensions, temperature laws, the eq. 8 objective, initial guesses |
 //! | [`statistics`] | [`errmodel`], [`likelihood`], [`activation`], [`lmp`], [`baseline`], [`synth`] | error models, the likelihood, activation energies, Larson–Miller and the classical baselines, generated data |
@@ -119,7 +119,7 @@ pub use data::specimen;
 pub use experiments::battery;
 pub use infra::{error, identity, journal, output, progress};
 pub use io::export;
-pub use numerics::{dual, lsq, ode, sampling};
+pub use numerics::{dual, lsq, ode, sampling, scalar_min};
 pub use settings::config;
 pub use statistics::{activation, baseline, errmodel, likelihood, lmp, synth};
 

@@ -305,44 +305,14 @@ fn minimise_one(tau: &[f64], k: usize, f: impl Fn(&[f64]) -> f64) -> f64 {
         f(&t)
     };
     let (lf, lm) = (SCATTER_FLOOR.ln(), SCATTER_MAX.ln());
-    const GRID: usize = 40;
-    let step = (lm - lf) / GRID as f64;
-    let mut best = (f64::INFINITY, lf);
-    for q in 0..=GRID {
-        let x = lf + q as f64 * step;
-        let v = g(x);
-        if v < best.0 {
-            best = (v, x);
-        }
-    }
-    let (mut lo, mut hi) = ((best.1 - step).max(lf), (best.1 + step).min(lm));
-    let gr = 0.5 * (5f64.sqrt() - 1.0);
-    let (mut x1, mut x2) = (hi - gr * (hi - lo), lo + gr * (hi - lo));
-    let (mut f1, mut f2) = (g(x1), g(x2));
-    for _ in 0..60 {
-        if f1 <= f2 {
-            hi = x2;
-            x2 = x1;
-            f2 = f1;
-            x1 = hi - gr * (hi - lo);
-            f1 = g(x1);
-        } else {
-            lo = x1;
-            x1 = x2;
-            f1 = f2;
-            x2 = lo + gr * (hi - lo);
-            f2 = g(x2);
-        }
-        if hi - lo < 1e-9 {
-            break;
-        }
-    }
-    let x = 0.5 * (lo + hi);
-    if g(x) <= best.0 {
-        x.exp()
-    } else {
-        best.1.exp()
-    }
+    let opts = crate::scalar_min::GridGolden {
+        grid: 40,
+        iterations: 60,
+        tol: 1e-9,
+        tie_to_section: true,
+        fallback: lf,
+    };
+    crate::scalar_min::grid_golden(lf, lm, opts, g).0.exp()
 }
 
 /// Coordinate-wise minimisation of `f` over the scatters from `start` (clamped to the

@@ -6,3 +6,4 @@ pub mod dual;
 pub mod lsq;
 pub mod ode;
 pub mod sampling;
+pub mod scalar_min;

@@ -20,6 +20,8 @@
 use rand::Rng;
 use rand_distr::StandardNormal;
 
+use crate::scalar_min::{grid_golden, GridGolden};
+
 /// Largest |φ| an estimate may take: beyond it the process is a random walk in all but name
 /// and the likelihood's −ln(1 − φ²) term dominates.
 pub const PHI_MAX: f64 = 0.995;
@@ -191,48 +193,23 @@ impl Ar1 {
     }
 }
 
-/// φ minimising the profile likelihood on [−PHI_MAX, PHI_MAX]: a grid, then golden section
-/// around the best grid point (the profile is smooth and, in practice, unimodal).
+/// φ minimising the profile likelihood on [−PHI_MAX, PHI_MAX]: a grid of 80 intervals, then
+/// golden section around the best grid point (the profile is smooth and, in practice,
+/// unimodal).
 fn argmin_phi(q: &Quad) -> f64 {
-    const GRID: usize = 80;
-    let step = 2.0 * PHI_MAX / GRID as f64;
-    let mut best = (f64::INFINITY, 0.0);
-    for i in 0..=GRID {
-        let p = -PHI_MAX + i as f64 * step;
-        let f = q.profile(p);
-        if f < best.0 {
-            best = (f, p);
-        }
-    }
-    let (mut lo, mut hi) = ((best.1 - step).max(-PHI_MAX), (best.1 + step).min(PHI_MAX));
-    let g = 0.5 * (5f64.sqrt() - 1.0);
-    let mut x1 = hi - g * (hi - lo);
-    let mut x2 = lo + g * (hi - lo);
-    let (mut f1, mut f2) = (q.profile(x1), q.profile(x2));
-    for _ in 0..60 {
-        if f1 <= f2 {
-            hi = x2;
-            x2 = x1;
-            f2 = f1;
-            x1 = hi - g * (hi - lo);
-            f1 = q.profile(x1);
-        } else {
-            lo = x1;
-            x1 = x2;
-            f1 = f2;
-            x2 = lo + g * (hi - lo);
-            f2 = q.profile(x2);
-        }
-        if hi - lo < 1e-10 {
-            break;
-        }
-    }
-    let x = 0.5 * (lo + hi);
-    if q.profile(x) <= best.0 {
-        x
-    } else {
-        best.1
-    }
+    grid_golden(
+        -PHI_MAX,
+        PHI_MAX,
+        GridGolden {
+            grid: 80,
+            iterations: 60,
+            tol: 1e-10,
+            tie_to_section: true,
+            fallback: 0.0,
+        },
+        |p| q.profile(p),
+    )
+    .0
 }
 
 /// The error model of one data set: an AR(1) per curve and the rupture-time scatter.
@@ -411,42 +388,28 @@ impl GrowingError {
                 .collect();
             (total, ar)
         };
-        const GRID: usize = 40;
-        let step = GROWTH_MAX / GRID as f64;
-        let mut best = (f64::INFINITY, 0.0);
-        for i in 0..=GRID {
-            let g = i as f64 * step;
-            let f = at(g).0;
-            if f < best.0 {
-                best = (f, g);
-            }
-        }
-        let (mut lo, mut hi) = ((best.1 - step).max(0.0), (best.1 + step).min(GROWTH_MAX));
-        let r = 0.5 * (5f64.sqrt() - 1.0);
-        let (mut x1, mut x2) = (hi - r * (hi - lo), lo + r * (hi - lo));
-        let (mut f1, mut f2) = (at(x1).0, at(x2).0);
-        for _ in 0..40 {
-            if f1 <= f2 {
-                hi = x2;
-                x2 = x1;
-                f2 = f1;
-                x1 = hi - r * (hi - lo);
-                f1 = at(x1).0;
-            } else {
-                lo = x1;
-                x1 = x2;
-                f1 = f2;
-                x2 = lo + r * (hi - lo);
-                f2 = at(x2).0;
-            }
-            if hi - lo < 1e-6 {
-                break;
-            }
-        }
-        let g = 0.5 * (lo + hi);
-        let (fg, ar) = at(g);
-        let growth = if fg < best.0 { g } else { best.1 };
-        let strain = if growth == g { ar } else { at(growth).1 };
+        // The curves' AR(1) of the last evaluation, kept for the end point.
+        let mut last: Option<(f64, Vec<Ar1>)> = None;
+        let (growth, _) = grid_golden(
+            0.0,
+            GROWTH_MAX,
+            GridGolden {
+                grid: 40,
+                iterations: 40,
+                tol: 1e-6,
+                tie_to_section: false,
+                fallback: 0.0,
+            },
+            |g| {
+                let (f, ar) = at(g);
+                last = Some((g, ar));
+                f
+            },
+        );
+        let strain = match last {
+            Some((g, ar)) if g == growth => ar,
+            _ => at(growth).1,
+        };
         GrowingError { growth, strain }
     }
 
