@@ -28,8 +28,10 @@ fn main() {
     if a.get(4).map(String::as_str) == Some("ratio") {
         // Only the data's ratio of sets diagnosed before (OUT/diagnosed/sets/set-<seed>).
         for s in first..first + n {
-            let lr = data_ratio(&out.join("diagnosed"), &scenario, s);
-            println!("{s} {scenario} LR at the truth's nuisances {lr:.2}");
+            let (lr, lr_est) = data_ratio(&out.join("diagnosed"), &scenario, s);
+            println!(
+                "{s} {scenario} LR at the truth's nuisances {lr:.2}, with the error model estimated {lr_est:.2}"
+            );
         }
         return;
     }
@@ -84,13 +86,13 @@ fn main() {
         );
         done += 1;
         named += usize::from(r.named_correctly());
-        let lr_data = data_ratio(&out.join("diagnosed"), &scenario, *s);
+        let (lr_data, lr_est) = data_ratio(&out.join("diagnosed"), &scenario, *s);
         let lr_diag = d
             .as_ref()
             .and_then(|d| d.candidates.iter().find(|c| c.name == scenario))
             .map_or(f64::NAN, |c| c.lr);
         println!(
-            "diagnosed {s} {scenario}: {} (λ known {known:.1}, unknown {unknown:.1}; LR at the truth's nuisances {lr_data:.1}, in diagnose {lr_diag:.1}; {:.0} s)",
+            "diagnosed {s} {scenario}: {} (λ known {known:.1}, unknown {unknown:.1}; LR at the truth's nuisances {lr_data:.1}, error model estimated {lr_est:.1}, in diagnose {lr_diag:.1}; {:.0} s)",
             r.error.clone().unwrap_or_else(|| r.outcome()),
             r.wall_s
         );
@@ -103,8 +105,9 @@ fn main() {
 
 /// The likelihood ratio of set `seed`'s measured data (as `diagnose` loads them from
 /// `dir/sets/set-<seed>/`) between the hierarchical base model and the generating extension at
-/// the true error model and the true scatter, the specimens' factors free.
-fn data_ratio(dir: &std::path::Path, scenario: &str, seed: u64) -> f64 {
+/// the true error model and the true scatter, the specimens' factors free; and the same with
+/// the error model estimated with the constants (the scatter still the truth's).
+fn data_ratio(dir: &std::path::Path, scenario: &str, seed: u64) -> (f64, f64) {
     let name = format!("set-{seed}");
     let Ok(set) = creepfit::synth::generate_in(
         &name,
@@ -113,11 +116,11 @@ fn data_ratio(dir: &std::path::Path, scenario: &str, seed: u64) -> f64 {
         seed,
         creepfit::synth::World::Specimens,
     ) else {
-        return f64::NAN;
+        return (f64::NAN, f64::NAN);
     };
     let t = &set.truth;
     let Some(sp) = t.specimens.as_ref() else {
-        return f64::NAN;
+        return (f64::NAN, f64::NAN);
     };
     let cfg = creepfit::config::RunConfig::load(&dir.join("sets").join(&name).join("config.toml"))
         .expect("config");
@@ -147,21 +150,34 @@ fn data_ratio(dir: &std::path::Path, scenario: &str, seed: u64) -> f64 {
     let setup = cfg.diagnose_setup().expect("setup");
     let mut alt_truth = t.constants.clone();
     alt_truth.extend(t.effect.true_extension().1);
-    let fit = |v: &creepfit::config::ModelVariant, start: &Vec<f64>| {
-        creepfit::likelihood::min_penalised_ss(
+    let fit = |v: &creepfit::config::ModelVariant, start: &Vec<f64>, profile: Option<f64>| {
+        let starts = creepfit::battery::oracle_starts(
+            v.model.as_ref(),
+            &v.space,
+            &data.curves,
+            &setup.settings,
+            start.clone(),
+            seed,
+        );
+        creepfit::likelihood::min_penalised(
             v.model.as_ref(),
             &data.curves,
             &v.space,
-            std::slice::from_ref(start),
+            &starts,
             &setup.settings,
             &noise,
             &kinds,
             &eta,
+            profile,
         )
         .map_or(f64::NAN, |b| b.0)
     };
     let Some(alt) = setup.variants.iter().find(|v| v.name == scenario) else {
-        return f64::NAN;
+        return (f64::NAN, f64::NAN);
     };
-    fit(&setup.variants[0], &t.constants) - fit(alt, &alt_truth)
+    let floor = creepfit::errmodel::DEFAULT_LIFETIME_SD_FLOOR;
+    (
+        fit(&setup.variants[0], &t.constants, None) - fit(alt, &alt_truth, None),
+        fit(&setup.variants[0], &t.constants, Some(floor)) - fit(alt, &alt_truth, Some(floor)),
+    )
 }

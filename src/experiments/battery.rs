@@ -190,7 +190,7 @@ pub fn true_noise(truth: &Truth) -> ErrorModel {
 
 /// The oracle's starts in `space`: `truth_start`, the initial guess on `curves`, and 8
 /// Latin-hypercube points of the set's seed.
-fn oracle_starts(
+pub fn oracle_starts(
     model: &dyn crate::model::Model,
     space: &crate::model::objective::ParamSpace,
     curves: &[Curve],

@@ -2291,7 +2291,8 @@ pub fn min_whitened_ss(
 /// hierarchical models is the difference of two such minima (the specimens' factors unknown,
 /// as in every laboratory; [`min_whitened_ss`] knows them). Kinds whose constant the model
 /// lacks or `space` holds are left out with their scatter. Returns (minimum, constants,
-/// effects); `None` if every start failed.
+/// effects); `None` if every start failed. [`min_penalised`] with the error model profiled
+/// instead is what a fit that must estimate it reaches.
 #[allow(clippy::too_many_arguments)]
 pub fn min_penalised_ss(
     model: &dyn Model,
@@ -2302,6 +2303,27 @@ pub fn min_penalised_ss(
     noise: &ErrorModel,
     kinds: &[(EffectKind, f64)],
     eta0: &[f64],
+) -> Option<(f64, Vec<f64>, Vec<f64>)> {
+    min_penalised(
+        model, curves, space, starts, settings, noise, kinds, eta0, None,
+    )
+}
+
+/// [`min_penalised_ss`], or with `profile = Some(floor)` the error model re-estimated with
+/// the constants (AR(1) per curve and the rupture-time scatter above `floor`, started at
+/// `noise`, as every likelihood fit profiles it; the scatter still held): then the minimum
+/// is the penalised −2 ln L, Σ r²/σ² + Σ η²/τ² plus the error model's normalising term.
+#[allow(clippy::too_many_arguments)]
+pub fn min_penalised(
+    model: &dyn Model,
+    curves: &[Curve],
+    space: &ParamSpace,
+    starts: &[Vec<f64>],
+    settings: &FitSettings,
+    noise: &ErrorModel,
+    kinds: &[(EffectKind, f64)],
+    eta0: &[f64],
+    profile: Option<f64>,
 ) -> Option<(f64, Vec<f64>, Vec<f64>)> {
     let wanted: Vec<EffectKind> = kinds.iter().map(|k| k.0).collect();
     let (layout, _) = EffectLayout::new(model, curves, space, &wanted);
@@ -2329,13 +2351,13 @@ pub fn min_penalised_ss(
             space: space.clone(),
             jacobian: settings.jacobian,
         };
-        let problem = match &layout {
-            Some(l) => LikelihoodProblem::fixed(inner, noise.clone()).with_effects(
-                l.clone(),
-                tau.clone(),
-                true,
-            ),
+        let problem = match profile {
+            Some(floor) => LikelihoodProblem::new(inner, noise.clone(), floor),
             None => LikelihoodProblem::fixed(inner, noise.clone()),
+        };
+        let problem = match &layout {
+            Some(l) => problem.with_effects(l.clone(), tau.clone(), true),
+            None => problem,
         };
         let mut u0 = space.to_unit(s);
         let nt = u0.len();
@@ -2351,10 +2373,15 @@ pub fn min_penalised_ss(
         if lm.termination == Termination::SimulationFailure || !lm.objective.is_finite() {
             continue;
         }
-        if best.as_ref().is_none_or(|b| lm.objective < b.0) {
+        let value = if profile.is_some() {
+            lm.objective + problem.objective_offset()
+        } else {
+            lm.objective
+        };
+        if best.as_ref().is_none_or(|b| value < b.0) {
             let mut x = s.clone();
             space.from_unit(&lm.x[..nt], &mut x);
-            best = Some((lm.objective, x, lm.x[nt..].to_vec()));
+            best = Some((value, x, lm.x[nt..].to_vec()));
         }
     }
     best
