@@ -506,12 +506,19 @@ pub fn run_battery_observed(
             let k = counter.fetch_add(1, std::sync::atomic::Ordering::SeqCst) + 1;
             observer.advance(1);
             observer.note(&format!(
-                "[{k}/{total}] {} {}: {} (λ = {:.1}, with unknown specimen factors {:.1}, {:.1} s)",
+                "[{k}/{total}] {} {}: {} (λ = {:.1}{}, {:.1} s)",
                 r.name,
                 r.scenario,
                 r.error.clone().unwrap_or_else(|| r.outcome()),
                 r.lambda,
-                r.lambda_scatter,
+                if r.lambda_scatter.is_nan() {
+                    String::new()
+                } else {
+                    format!(
+                        ", with the specimens' factors unknown {:.1}",
+                        r.lambda_scatter
+                    )
+                },
                 r.wall_s
             ));
             Ok(r)
