@@ -292,11 +292,21 @@ pub fn oracle_lambda_scatter(cfg: &RunConfig, truth: &Truth) -> Option<f64> {
     let settings = &setup.settings;
     let curves = true_curves(truth);
     let noise = true_noise(truth);
-    let mut kinds = vec![(EffectKind::Rate, sp.rate_sd)];
-    let mut eta0 = sp.rate_effects.clone();
-    if sp.ductility_sd > 0.0 {
-        kinds.push((EffectKind::Ductility, sp.ductility_sd));
-        eta0.extend_from_slice(&sp.ductility_effects);
+    // The kinds the truth carries (a scatter of zero is no kind: every factor is 1).
+    let mut kinds = vec![];
+    let mut eta0 = vec![];
+    for (kind, sd, effects) in [
+        (EffectKind::Rate, sp.rate_sd, &sp.rate_effects),
+        (
+            EffectKind::Ductility,
+            sp.ductility_sd,
+            &sp.ductility_effects,
+        ),
+    ] {
+        if sd > 0.0 {
+            kinds.push((kind, sd));
+            eta0.extend_from_slice(effects);
+        }
     }
     let mut alt_truth = truth.constants.clone();
     alt_truth.extend_from_slice(&extra);

@@ -2285,8 +2285,8 @@ pub fn min_whitened_ss(
 }
 
 /// The smallest penalised sum of squares Σ r²/σ² + Σ η²/τ² of `model` on `curves` at the
-/// known error model `noise` and the known scatter `scatter` (one per kind of `kinds`,
-/// kind-major effects `eta` free, started at `eta0`), over fits from `starts`: on noise-free
+/// known error model `noise` and the known scatter τ > 0 of each kind in `kinds` (the effects
+/// free, kind-major, started at `eta0`), over fits from `starts`: on noise-free
 /// data, the "expected data" noncentrality of a likelihood-ratio test between two
 /// hierarchical models is the difference of two such minima (the specimens' factors unknown,
 /// as in every laboratory; [`min_whitened_ss`] knows them). Kinds whose constant the model
