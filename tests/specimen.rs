@@ -328,6 +328,50 @@ fn the_scatter_of_generated_specimens_is_recovered() {
     );
 }
 
+/// The scatter's 95 % interval covers its truth in 90–98 % of sets (issue 20's must-show),
+/// over 300 generated sets of the specimens world with no hidden effect (rate scatter
+/// 10–30 % in every set, ductility 8 % in about half; replicates; reading error growing with
+/// strain, white or AR(1)): the base model fitted as a user's `fit` is, from the data's
+/// initial guess, both kinds of specimen effects (`battery::scatter_fit`). Fixed seeds
+/// 132001–132300, first run for this test (the study behind it used 131001–131400:
+/// rate 94.2 %, ductility 95.4 %; docs/SPECIMENS.md). About 60 s of fits on 2 cores.
+#[test]
+fn the_scatter_interval_covers_its_truth_at_its_level_over_many_sets() {
+    use creepfit::battery::{coverage_of, scatter_fit, wilson, ScatterStart};
+    use rayon::prelude::*;
+    let dir = tempfile::TempDir::new().unwrap();
+    let fits: Vec<_> = (132001..132301u64)
+        .into_par_iter()
+        .map(|s| scatter_fit(dir.path(), s, "none", ScatterStart::Guess).unwrap())
+        .collect();
+    let cov = coverage_of(fits.iter().map(|f| {
+        (
+            &f.scatter_true[..],
+            &f.scatter_lo95[..],
+            &f.scatter_hi95[..],
+        )
+    }));
+    for c in &cov {
+        let share = c.covered as f64 / c.true_sets as f64;
+        let (lo, hi) = wilson(c.covered, c.true_sets);
+        eprintln!(
+            "{}: covered {} of {} = {:.1} % (Wilson {:.1}–{:.1} %); zero excluded in {} of {} sets without it",
+            c.kind,
+            c.covered,
+            c.true_sets,
+            100.0 * share,
+            100.0 * lo,
+            100.0 * hi,
+            c.spurious,
+            c.absent_sets
+        );
+        assert!(c.true_sets >= 100, "{}: {} sets", c.kind, c.true_sets);
+        assert!((0.90..=0.98).contains(&share), "{}: {:.3}", c.kind, share);
+    }
+    // Every set has rate scatter; the ductility kind is in about half of them.
+    assert_eq!(cov[0].true_sets, 300);
+}
+
 /// One generated set of the specimens world (`creepfit battery --world specimens`): scenario
 /// by `index` (0: none, 2: loading_strain), diagnosed with the default settings.
 fn diagnose_generated(index: usize, seed: u64) -> creepfit::battery::SetResult {

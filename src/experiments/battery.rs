@@ -600,6 +600,21 @@ pub struct ScatterCoverage {
 
 /// [`ScatterCoverage`] per kind over the diagnosed specimens-world sets of `ok`.
 fn scatter_coverage(ok: &[&SetResult]) -> Vec<ScatterCoverage> {
+    coverage_of(ok.iter().map(|r| {
+        (
+            &r.scatter_true[..],
+            &r.scatter_lo95[..],
+            &r.scatter_hi95[..],
+        )
+    }))
+}
+
+/// [`ScatterCoverage`] per kind (rate, ductility) over sets given as (true sd, lower and upper
+/// end of the 95 % interval) per kind; a set without an entry for a kind is not counted for
+/// it.
+pub fn coverage_of<'a>(
+    sets: impl Iterator<Item = (&'a [f64], &'a [f64], &'a [f64])> + Clone,
+) -> Vec<ScatterCoverage> {
     ["rate", "ductility"]
         .iter()
         .enumerate()
@@ -611,12 +626,8 @@ fn scatter_coverage(ok: &[&SetResult]) -> Vec<ScatterCoverage> {
                 spurious: 0,
                 absent_sets: 0,
             };
-            for r in ok {
-                let (Some(&t), Some(&lo), Some(&hi)) = (
-                    r.scatter_true.get(k),
-                    r.scatter_lo95.get(k),
-                    r.scatter_hi95.get(k),
-                ) else {
+            for (tr, los, his) in sets.clone() {
+                let (Some(&t), Some(&lo), Some(&hi)) = (tr.get(k), los.get(k), his.get(k)) else {
                     continue;
                 };
                 if t > 0.0 {
@@ -630,6 +641,112 @@ fn scatter_coverage(ok: &[&SetResult]) -> Vec<ScatterCoverage> {
             c
         })
         .collect()
+}
+
+/// The base model's scatter on one generated set of the specimens world, fitted as `fit`
+/// and `diagnose` fit data with replicates (maximum likelihood, both kinds of specimen
+/// effects, curves reduced to `[diagnose] max_points`) from one start, without a multistart:
+/// what [`scatter_fit`] gives.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ScatterFit {
+    /// The set's seed.
+    pub seed: u64,
+    /// True sd of the ln rate and ln ductility factors (0: none).
+    pub scatter_true: Vec<f64>,
+    /// Estimated sd per kind (rate, ductility; 0 where the fit dropped the kind).
+    pub scatter_est: Vec<f64>,
+    /// Lower end of the 95 % REML profile interval per kind (NaN: kind dropped).
+    pub scatter_lo95: Vec<f64>,
+    /// Upper end of the 95 % interval per kind (NaN: kind dropped).
+    pub scatter_hi95: Vec<f64>,
+    /// −2 ln L of the fit.
+    pub neg2ll: f64,
+    /// Outer iterations of the fit.
+    pub iterations: usize,
+}
+
+/// Where [`scatter_fit`] starts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ScatterStart {
+    /// The data's initial guess (the family's procedure): the path of a user's fit.
+    Guess,
+    /// The true constants: the interval's calibration without search failure.
+    Truth,
+}
+
+/// Generate set `seed` of the specimens world (`scenario`) into `dir/sets/set-<seed>/`, fit
+/// the base model with both kinds of specimen effects from `start`, and compute the REML
+/// profile intervals of the scatter ([`crate::likelihood::scatter_intervals`]): the
+/// interval's coverage over many sets is [`coverage_of`] of the results. Far cheaper than a
+/// battery (about 0.2 s a set against a diagnosis's minute), so the coverage can be
+/// measured on hundreds of sets.
+pub fn scatter_fit(
+    dir: &Path,
+    seed: u64,
+    scenario: &str,
+    start: ScatterStart,
+) -> Result<ScatterFit> {
+    use crate::likelihood::{ml_fit, scatter_intervals, MlOptions, SpecimenOptions};
+    let name = format!("set-{seed}");
+    let set = generate_in(&name, scenario, None, seed, World::Specimens)?;
+    let folder = dir.join("sets").join(&name);
+    write_set(&set, &folder)?;
+    let sp = set.truth.specimens.as_ref().ok_or_else(|| {
+        Error::Invalid(format!(
+            "{name}: a specimens-world set without its specimens' truth"
+        ))
+    })?;
+    let cfg = RunConfig::load(&folder.join("config.toml"))?;
+    let data = cfg.load_data()?;
+    let curves: Vec<Curve> = data
+        .curves
+        .iter()
+        .map(|c| crate::data::binned(c, cfg.diagnose.max_points))
+        .collect();
+    let model = cfg.build_model()?;
+    let space = cfg.space();
+    let settings = FitSettings::from_config(&cfg);
+    let opts = MlOptions {
+        specimen: SpecimenOptions::BOTH,
+        ..MlOptions::default()
+    };
+    let x0 = match start {
+        ScatterStart::Guess => {
+            crate::model::guess::initial_guess(
+                model.as_ref(),
+                &curves,
+                &space,
+                settings.omega_f,
+                &settings.ode,
+            )
+            .params
+        }
+        ScatterStart::Truth => set.truth.constants.clone(),
+    };
+    let mut fit = ml_fit(model.as_ref(), &curves, &space, &x0, &settings, &opts);
+    scatter_intervals(&mut fit, model.as_ref(), &curves, &space, &settings, &opts);
+    let mut out = ScatterFit {
+        seed,
+        scatter_true: vec![sp.rate_sd, sp.ductility_sd],
+        scatter_est: vec![],
+        scatter_lo95: vec![],
+        scatter_hi95: vec![],
+        neg2ll: fit.neg2ll,
+        iterations: fit.iterations,
+    };
+    for kind in [EffectKind::Rate, EffectKind::Ductility] {
+        let got = fit.specimen.as_ref().and_then(|f| {
+            f.kinds
+                .iter()
+                .position(|k| *k == kind)
+                .map(|j| (f.scatter[j], f.scatter_lo95[j], f.scatter_hi95[j]))
+        });
+        let (e, lo, hi) = got.unwrap_or((0.0, f64::NAN, f64::NAN));
+        out.scatter_est.push(e);
+        out.scatter_lo95.push(lo);
+        out.scatter_hi95.push(hi);
+    }
+    Ok(out)
 }
 
 /// Compute the [`Rates`] of a set of results.
