@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The calibration of `diagnose` beyond CI's reduced check (tests/diagnose.rs runs 8 sets):
+# The calibration of `diagnose` beyond CI's reduced check (tests/diagnose.rs runs 6 sets):
 # the full battery on evaluation seeds never used while developing, in both worlds
 # (identical specimens; specimens with scatter and replicates), null sets with scatter alone,
 # then the Alloy 617

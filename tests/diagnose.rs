@@ -3,14 +3,16 @@
 //! - A reduced battery of generated data sets (`creepfit::synth`: three material families,
 //!   3–5 stresses, digitised or logged sampling ending at 95–100 % of life, some curves cut at
 //!   a strain limit, white or AR(1) reading error, 1 % scatter of rupture times, shuffled rows;
-//!   every catalogued effect over a range of sizes, no effect, and two effects outside the
-//!   catalogue): false alarms on the no-effect sets and the share of detectable catalogued
-//!   effects named correctly. Fixed seeds 1001–1008 (development seeds; 8 sets so that the
-//!   statistical tests fit CI's budget of 8 min: the 40-set run took 19 min on 2 cores, 16
-//!   sets 9 min. The sets cycle through the eight scenarios, so 8 sets hold 2 no-effect sets
-//!   and one of every effect. The calibration itself — false-alarm rate and power over many
-//!   sets, on seeds not used while developing — is `creepfit battery`, run by
-//!   `scripts/bench_battery.sh`).
+//!   every catalogued effect over a range of sizes, and no effect): false alarms on the
+//!   no-effect sets and the share of detectable catalogued effects named correctly. Fixed
+//!   seeds 1001–1006 (development seeds). The sets cycle through the battery's eight
+//!   scenarios (`synth::scenario_of`), so 6 sets hold its 2 no-effect sets and its 4
+//!   catalogued effects; the last two of the cycle, effects outside the catalogue (seeds 1007
+//!   and 1008), were left out on 2026-11-27 to keep CI under 30 minutes: nothing here asserted
+//!   their outcome, and 1008 alone took 136 s of the battery's 375 s (`creepfit battery DIR
+//!   --seed 1001 --sets 8 --threads 2`, Intel Xeon, 2 cores). The calibration itself —
+//!   false-alarm rate and power over many sets, on seeds not used while developing — is
+//!   `creepfit battery`, run by `scripts/bench_battery.sh`.
 //! - Real laboratory curves (Alloy 617, `data/alloy617/`): the verdict and the cause are the
 //!   same on all points and on every 10th point, at every temperature (`-- --ignored`: eight
 //!   diagnoses of Alloy 617: 516 s on 2 cores with a battery running beside it).
@@ -25,18 +27,18 @@ mod common;
 use common::*;
 
 #[test]
-fn battery_of_8_generated_sets() {
+fn battery_of_6_generated_sets() {
     let dir = TempDir::new().unwrap();
     let results = run_battery_observed(
         dir.path(),
         1001,
-        8,
+        6,
         creepfit::synth::World::Identical,
         None,
-        &TestProgress::new("battery_of_8_generated_sets"),
+        &TestProgress::new("battery_of_6_generated_sets"),
     )
     .unwrap();
-    assert_eq!(results.len(), 8);
+    assert_eq!(results.len(), 6);
     let r = write_reports(dir.path(), &results, 1001).unwrap();
     for (i, res) in results.iter().enumerate() {
         eprintln!(
@@ -70,7 +72,7 @@ fn battery_of_8_generated_sets() {
         .skip(1)
         .flat_map(|l| l.split(',').skip(1).map(|v| v.parse::<usize>().unwrap()))
         .sum();
-    assert_eq!(total, 8);
+    assert_eq!(total, 6);
     assert!(dir.path().join("power.png").exists());
     // summary.json holds the same rates; identical specimens carry no scatter to cover.
     let sj = json(&dir.path().join("summary.json"));
@@ -88,7 +90,7 @@ fn battery_of_8_generated_sets() {
     let again = run_battery(
         dir.path(),
         1001,
-        8,
+        6,
         creepfit::synth::World::Identical,
         None,
         false,
