@@ -3,7 +3,8 @@
 # the full battery on evaluation seeds never used while developing, in both worlds
 # (identical specimens; specimens with scatter and replicates), null sets with scatter alone,
 # then the Alloy 617
-# logging-density check at every temperature. Resumable: rerun to continue a battery.
+# logging-density check at every temperature and the hidden effect under scatter of
+# tests/specimen.rs (both ignored in CI for their time). Resumable: rerun to continue a battery.
 #
 #   scripts/bench_battery.sh [SETS] [OUT]      (default: 200 sets per world, results/battery)
 #
@@ -31,3 +32,5 @@ echo "== battery: $sets null sets, world specimens, seeds from 98001 -> $dir"
 time "$bin" battery "$dir" --sets "$sets" --seed 98001 --world specimens --scenario none
 echo "== Alloy 617: the same verdict on every 10th point, every temperature"
 cargo test --release --test diagnose -- --ignored
+echo "== a loading strain hidden under specimen scatter, named (seed 95102)"
+cargo test --release --test specimen -- --ignored an_effect_under_specimen_scatter_is_named

@@ -466,19 +466,24 @@ fn a_null_set_with_specimen_scatter_is_adequate() {
 }
 
 /// A catalogued effect (a loading strain) hidden under specimen scatter, clearly
-/// detectable: the first fresh seed from 95101 whose set the oracle gives λ ≥ 100 (four
+/// detectable: the first fresh seed from 95101 whose set the oracle with the specimens'
+/// factors unknown (`battery::oracle_lambda_scatter`, the power table's) gives λ ≥ 100 (four
 /// times the detectability threshold; chosen by the generator's truth, never by the
-/// verdict). Seed 95101 itself (λ 43, just detectable) came out `adequate`: README's
-/// battery measures the power over sizes.
+/// verdict): seed 95101 has λ 42.1 (43.0 with the factors known), seed 95102 λ 1,542.9
+/// (1,592.0).
 ///
-/// FAILS today, kept as the open measurement (issue 20): seed 95102 (λ 1592, rate scatter
-/// 0.28) comes out `adequate` — loading_strain LR 850 but bootstrap p 0.168, because the
-/// null replicates, drawn with the base fit's AR(1) reading error (φ 1.00: the misfit taken
-/// up as correlated noise), give the extensions LRs of hundreds too. Still `adequate` after
-/// the plateau test was fixed (2026-11-26, commit a2dcd77; 198 s). Run it with
-/// `cargo test --release --test specimen -- --ignored`.
+/// History: seed 95102 came out `adequate` until 2026-11-26 (loading_strain LR 850,
+/// bootstrap p 0.168: the null replicates' nested refits gave LRs of hundreds too). It
+/// **passes since** (re-run 2026-11-27 on commit ed6a114: `extension:loading_strain`, LR
+/// 162.45, bootstrap p 0.006 = 1/160, Holm-adjusted 0.050: at the level exactly; 519 s
+/// beside a niced battery, Intel Xeon, 2 cores; `creepfit diagnose` of the same set 626 s,
+/// 518 s of it the null bootstrap). Ignored in CI for its time only (a diagnosis that
+/// rejects runs the whole bootstrap, its second run and the cause's own goodness of fit:
+/// about 10 min here, where CI's budget is 30 for everything);
+/// `scripts/bench_battery.sh` runs it. Run it alone with
+/// `cargo test --release --test specimen -- --ignored an_effect_under_specimen_scatter_is_named`.
 #[test]
-#[ignore = "fails: power under specimen scatter (issue 20, see the doc comment)"]
+#[ignore = "long: one full diagnosis that rejects (about 10 min on 2 cores); scripts/bench_battery.sh runs it"]
 fn an_effect_under_specimen_scatter_is_named() {
     let dir = tempfile::TempDir::new().unwrap();
     let seed = (95101..95121)
@@ -495,14 +500,15 @@ fn an_effect_under_specimen_scatter_is_named() {
             let folder = dir.path().join(&name);
             creepfit::synth::write_set(&set, &folder).unwrap();
             let cfg = creepfit::config::RunConfig::load(&folder.join("config.toml")).unwrap();
-            let lambda = creepfit::battery::oracle_lambda(&cfg, &set.truth);
-            eprintln!("seed {seed}: λ {lambda:.1}");
+            let lambda = creepfit::battery::oracle_lambda_scatter(&cfg, &set.truth)
+                .expect("a catalogued effect in the specimens world");
+            eprintln!("seed {seed}: λ (factors unknown) {lambda:.1}");
             lambda >= 100.0
         })
         .expect("a clearly detectable set among 20 seeds");
     let r = diagnose_generated(2, seed);
     assert_eq!(r.scenario, "loading_strain");
-    assert!(r.lambda >= 100.0, "oracle λ {}", r.lambda);
+    assert!(r.lambda_scatter >= 100.0, "oracle λ {}", r.lambda_scatter);
     assert_eq!(r.outcome(), "extension:loading_strain");
 }
 
