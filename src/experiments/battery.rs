@@ -422,20 +422,7 @@ pub fn run_one_diagnosed(
         if let Some(sp) = &t.specimens {
             r.scatter_true = vec![sp.rate_sd, sp.ductility_sd];
         }
-        // Per kind (rate, ductility): the estimate and interval, 0 where not fitted (the
-        // interval of a kind the fit dropped is not known: NaN).
-        for kind in [EffectKind::Rate, EffectKind::Ductility] {
-            let got = d.base.specimen.as_ref().and_then(|sp| {
-                sp.kinds
-                    .iter()
-                    .position(|k| *k == kind)
-                    .map(|j| (sp.scatter[j], sp.scatter_lo95[j], sp.scatter_hi95[j]))
-            });
-            let (e, lo, hi) = got.unwrap_or((0.0, f64::NAN, f64::NAN));
-            r.scatter_est.push(e);
-            r.scatter_lo95.push(lo);
-            r.scatter_hi95.push(hi);
-        }
+        (r.scatter_est, r.scatter_lo95, r.scatter_hi95) = scatter_by_kind(d.base.specimen.as_ref());
         Ok(())
     })();
     if let Err(e) = res {
@@ -725,28 +712,36 @@ pub fn scatter_fit(
     };
     let mut fit = ml_fit(model.as_ref(), &curves, &space, &x0, &settings, &opts);
     scatter_intervals(&mut fit, model.as_ref(), &curves, &space, &settings, &opts);
-    let mut out = ScatterFit {
+    let (scatter_est, scatter_lo95, scatter_hi95) = scatter_by_kind(fit.specimen.as_ref());
+    Ok(ScatterFit {
         seed,
         scatter_true: vec![sp.rate_sd, sp.ductility_sd],
-        scatter_est: vec![],
-        scatter_lo95: vec![],
-        scatter_hi95: vec![],
+        scatter_est,
+        scatter_lo95,
+        scatter_hi95,
         neg2ll: fit.neg2ll,
         iterations: fit.iterations,
-    };
+    })
+}
+
+/// A fit's scatter estimate and 95 % interval per kind (rate, ductility): 0 where the fit
+/// does not carry the kind, and NaN ends (the interval of a kind the fit dropped is not
+/// known).
+fn scatter_by_kind(sp: Option<&crate::likelihood::SpecimenFit>) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+    let (mut est, mut lo, mut hi) = (vec![], vec![], vec![]);
     for kind in [EffectKind::Rate, EffectKind::Ductility] {
-        let got = fit.specimen.as_ref().and_then(|f| {
+        let got = sp.and_then(|f| {
             f.kinds
                 .iter()
                 .position(|k| *k == kind)
                 .map(|j| (f.scatter[j], f.scatter_lo95[j], f.scatter_hi95[j]))
         });
-        let (e, lo, hi) = got.unwrap_or((0.0, f64::NAN, f64::NAN));
-        out.scatter_est.push(e);
-        out.scatter_lo95.push(lo);
-        out.scatter_hi95.push(hi);
+        let (e, l, h) = got.unwrap_or((0.0, f64::NAN, f64::NAN));
+        est.push(e);
+        lo.push(l);
+        hi.push(h);
     }
-    Ok(out)
+    (est, lo, hi)
 }
 
 /// Compute the [`Rates`] of a set of results.
@@ -1150,6 +1145,38 @@ mod tests {
         assert!(back.scatter_lo95[1].is_nan() && back.scatter_hi95[0] == 0.3);
         // Written again, it is the same line.
         assert_eq!(serde_json::to_string(&back).unwrap(), line);
+    }
+
+    /// Each kind's estimate and interval in the fixed order rate, ductility, whatever order
+    /// the fit carries them in: 0 and NaN ends for a kind the fit lacks, and for no fit.
+    #[test]
+    fn scatter_by_kind_puts_rate_first_and_marks_a_missing_kind() {
+        use crate::likelihood::SpecimenFit;
+        let fit = |kinds: Vec<EffectKind>, s: Vec<f64>| SpecimenFit {
+            scatter_lo95: s.iter().map(|v| v / 2.0).collect(),
+            scatter_hi95: s.iter().map(|v| v * 2.0).collect(),
+            effects: vec![vec![]; kinds.len()],
+            effects_sd: vec![vec![]; kinds.len()],
+            kinds,
+            scatter: s,
+            neg2ll_effects: 0.0,
+            dropped: vec![],
+        };
+        let both = fit(
+            vec![EffectKind::Ductility, EffectKind::Rate],
+            vec![0.1, 0.3],
+        );
+        assert_eq!(
+            scatter_by_kind(Some(&both)),
+            (vec![0.3, 0.1], vec![0.15, 0.05], vec![0.6, 0.2])
+        );
+        let rate = fit(vec![EffectKind::Rate], vec![0.2]);
+        let (e, lo, hi) = scatter_by_kind(Some(&rate));
+        assert_eq!((e[0], lo[0], hi[0], e[1]), (0.2, 0.1, 0.4, 0.0));
+        assert!(lo[1].is_nan() && hi[1].is_nan());
+        let (e, lo, _) = scatter_by_kind(None);
+        assert_eq!(e, vec![0.0, 0.0]);
+        assert!(lo.iter().all(|v| v.is_nan()));
     }
 
     /// Coverage counts as a table: covered inside the interval (ends included), a dropped
