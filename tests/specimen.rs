@@ -331,8 +331,8 @@ fn the_scatter_of_generated_specimens_is_recovered() {
 /// The scatter's 95 % interval covers its truth in 90–98 % of sets (issue 20's must-show),
 /// over 300 generated sets of the specimens world with no hidden effect (rate scatter
 /// 10–30 % in every set, ductility 8 % in about half; replicates; reading error growing with
-/// strain, white or AR(1)): the base model fitted as a user's `fit` is, from the data's
-/// initial guess, both kinds of specimen effects (`battery::scatter_fit`). Fixed seeds
+/// strain, white or AR(1)): one hierarchical maximum-likelihood fit of the base model
+/// from the data's initial guess, both kinds of specimen effects (`battery::scatter_fit`). Fixed seeds
 /// 132001–132300, first run for this test (the study behind it used 131001–131400:
 /// rate 94.2 %, ductility 95.4 %; docs/SPECIMENS.md). About 60 s of fits on 2 cores.
 #[test]

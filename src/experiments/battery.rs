@@ -630,10 +630,10 @@ pub fn coverage_of<'a>(
         .collect()
 }
 
-/// The base model's scatter on one generated set of the specimens world, fitted as `fit`
-/// and `diagnose` fit data with replicates (maximum likelihood, both kinds of specimen
-/// effects, curves reduced to `[diagnose] max_points`) from one start, without a multistart:
-/// what [`scatter_fit`] gives.
+/// The base model's scatter on one generated set of the specimens world by one hierarchical
+/// maximum-likelihood fit (both kinds of specimen effects, as `fit` and `diagnose` carry them
+/// on data with replicates; curves reduced to `[diagnose] max_points`) from one start,
+/// without the multistart of `diagnose`: what [`scatter_fit`] gives.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ScatterFit {
     /// The set's seed.
