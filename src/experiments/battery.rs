@@ -639,14 +639,20 @@ pub struct ScatterFit {
     /// The set's seed.
     pub seed: u64,
     /// True sd of the ln rate and ln ductility factors (0: none).
+    #[serde(deserialize_with = "de_vec_f64")]
     pub scatter_true: Vec<f64>,
     /// Estimated sd per kind (rate, ductility; 0 where the fit dropped the kind).
+    #[serde(deserialize_with = "de_vec_f64")]
     pub scatter_est: Vec<f64>,
-    /// Lower end of the 95 % REML profile interval per kind (NaN: kind dropped).
+    /// Lower end of the 95 % REML profile interval per kind (NaN: kind dropped; `null` in
+    /// JSON, read back as NaN).
+    #[serde(deserialize_with = "de_vec_f64")]
     pub scatter_lo95: Vec<f64>,
     /// Upper end of the 95 % interval per kind (NaN: kind dropped).
+    #[serde(deserialize_with = "de_vec_f64")]
     pub scatter_hi95: Vec<f64>,
-    /// −2 ln L of the fit.
+    /// −2 ln L of the fit (NaN: it failed).
+    #[serde(deserialize_with = "de_f64")]
     pub neg2ll: f64,
     /// Outer iterations of the fit.
     pub iterations: usize,
@@ -1145,6 +1151,27 @@ mod tests {
         assert!(back.scatter_lo95[1].is_nan() && back.scatter_hi95[0] == 0.3);
         // Written again, it is the same line.
         assert_eq!(serde_json::to_string(&back).unwrap(), line);
+    }
+
+    /// A scatter fit with a dropped kind (NaN interval ends) reads back from its JSON line as
+    /// it was written: `examples/scatter_coverage.rs` resumes from those lines.
+    #[test]
+    fn a_scatter_fit_with_a_dropped_kind_reads_back_from_json() {
+        let f = ScatterFit {
+            seed: 7,
+            scatter_true: vec![0.2, 0.0],
+            scatter_est: vec![0.18, 0.0],
+            scatter_lo95: vec![0.1, f64::NAN],
+            scatter_hi95: vec![0.4, f64::NAN],
+            neg2ll: -123.5,
+            iterations: 12,
+        };
+        let text = serde_json::to_string(&("guess", &f)).unwrap();
+        let (start, back): (String, ScatterFit) = serde_json::from_str(&text).unwrap();
+        assert_eq!(start, "guess");
+        assert_eq!((back.seed, back.iterations, back.neg2ll), (7, 12, -123.5));
+        assert_eq!(back.scatter_lo95[0], 0.1);
+        assert!(back.scatter_lo95[1].is_nan() && back.scatter_hi95[1].is_nan());
     }
 
     /// Each kind's estimate and interval in the fixed order rate, ductility, whatever order
