@@ -49,13 +49,28 @@ def test_public_signatures():
     assert "at" in p and "intervals" in p and "constants" in p
 
 
+# Runs the quickstart with its `diagnose` call given few starts and replicates (alpha 0.4, as
+# in test_cli_parity.py, lets 19 replicates reject over 8 tests): the test is
+# that the example runs whole against the installed package, not the diagnosis's power
+# (tests/test_cli_parity.py and the Rust suite test that). The full diagnosis took 52 s of
+# the suite's 89 s (2026-11-28, 2 cores).
+QUICK_RUN = """
+import os, runpy, sys
+sys.path[0] = os.path.dirname(sys.argv[1])  # as `python quickstart.py`: not the source folder
+import creepfit
+full = creepfit.diagnose
+creepfit.diagnose = lambda *a, **k: full(*a, **{**k, "starts": 4, "bootstrap": 19, "alpha": 0.4})
+runpy.run_path(sys.argv[1], run_name="__main__")
+"""
+
+
 def test_quickstart_example_runs(root):
     """python/examples/quickstart.py runs whole and prints its three results."""
     import subprocess
     import sys
 
     p = subprocess.run(
-        [sys.executable, str(root / "python" / "examples" / "quickstart.py")],
+        [sys.executable, "-c", QUICK_RUN, str(root / "python" / "examples" / "quickstart.py")],
         capture_output=True, text=True, cwd=root / "python",
     )
     assert p.returncode == 0, p.stderr

@@ -22,8 +22,14 @@ trap cleanup EXIT
 t0=$(date +%s)
 
 echo "-- 1. run-local.sh configs/560C.toml 60 3 against the unsharded sweep"
-cargo build --release --quiet
-bin=$repo/target/release/creepfit
+# The binary: $CREEPFIT when set (.ci/run hands over the one its test build made, so that CI
+# builds the release library once for the tests and once for the Python wheel, not a third
+# time here), else this checkout's release build.
+if [ -z "${CREEPFIT:-}" ]; then
+    cargo build --release --quiet
+    export CREEPFIT=$repo/target/release/creepfit
+fi
+bin=$CREEPFIT
 "$bin" sweep configs/560C.toml --starts 60 --out "$work/reference" >/dev/null
 CREEPFIT_SLURM_KEEP=1 scripts/slurm/run-local.sh configs/560C.toml 60 3 "$work/slurm"
 cmp "$work/slurm/ranked.csv" "$work/reference/ranked.csv"
@@ -42,7 +48,6 @@ wait_job() { # until the job (all its array tasks) has left the queue
     squeue >&2
     return 1
 }
-export CREEPFIT=$bin
 out=$work/partial
 ids=$(scripts/slurm/submit.sh configs/560C.toml 60 3 "$out" --partition=creepfit \
     --cpus-per-task=1 --hold | awk '/^submitted:/ {print $3, $5}')
