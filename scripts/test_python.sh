@@ -2,8 +2,9 @@
 # Build the Python package (python/, PyO3 + maturin) into the virtualenv python/.venv and run
 # its pytest suite (python/tests). Needs only Rust and Python >= 3.9 with pip and venv, and
 # the package registry for pandas, tqdm, pytest and maturin (the build backend). The wheel
-# build reuses the library compiled in target/ by `cargo build --release` or
-# `cargo test --release` (one workspace, one target folder). Re-running is harmless.
+# build reuses the library compiled in target/ by `cargo test --release --workspace` (one
+# workspace, one target folder; python/Cargo.toml says how the features agree) and compiles
+# only PyO3 and the bindings. Re-running is harmless.
 # PYTHON: the interpreter of the virtualenv (default python3). Extra arguments go to pytest.
 set -euo pipefail
 cd "$(dirname "$0")/.."
