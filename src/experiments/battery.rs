@@ -656,6 +656,11 @@ pub struct ScatterFit {
     pub neg2ll: f64,
     /// Outer iterations of the fit.
     pub iterations: usize,
+    /// The fitted reading error's AR(1) correlation φ per curve (data order): with the
+    /// generator's one φ per set, it shows how well short curves estimate it. Empty in
+    /// records written before it was kept.
+    #[serde(default, deserialize_with = "de_vec_f64")]
+    pub phi_est: Vec<f64>,
 }
 
 /// Where [`scatter_fit`] starts.
@@ -727,6 +732,7 @@ pub fn scatter_fit(
         scatter_hi95,
         neg2ll: fit.neg2ll,
         iterations: fit.iterations,
+        phi_est: fit.noise.strain.iter().map(|a| a.phi).collect(),
     })
 }
 
@@ -1165,6 +1171,7 @@ mod tests {
             scatter_hi95: vec![0.4, f64::NAN],
             neg2ll: -123.5,
             iterations: 12,
+            phi_est: vec![0.25, 0.5],
         };
         let text = serde_json::to_string(&("guess", &f)).unwrap();
         let (start, back): (String, ScatterFit) = serde_json::from_str(&text).unwrap();
@@ -1172,6 +1179,12 @@ mod tests {
         assert_eq!((back.seed, back.iterations, back.neg2ll), (7, 12, -123.5));
         assert_eq!(back.scatter_lo95[0], 0.1);
         assert!(back.scatter_lo95[1].is_nan() && back.scatter_hi95[1].is_nan());
+        assert_eq!(back.phi_est, vec![0.25, 0.5]);
+        // A record written before φ was kept reads with none.
+        let old = text.replace(",\"phi_est\":[0.25,0.5]", "");
+        assert!(!old.contains("phi_est"), "{old}");
+        let (_, back): (String, ScatterFit) = serde_json::from_str(&old).unwrap();
+        assert!(back.phi_est.is_empty());
     }
 
     /// Each kind's estimate and interval in the fixed order rate, ductility, whatever order
