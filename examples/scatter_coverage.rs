@@ -136,7 +136,7 @@ fn by_reading_error(
     const BINS: [(f64, f64, &str); 3] = [
         (0.0, 1e-9, "0 (white)"),
         (1e-9, 0.6, "0–0.6"),
-        (0.6, 1.0, "0.6–0.9"),
+        (0.6, 1.0, "0.6–1"),
     ];
     // (sampling, bin) → (sets, zero excluded, Σ true φ, Σ mean fitted φ)
     let mut t: BTreeMap<(String, usize), (usize, usize, f64, f64)> = BTreeMap::new();
