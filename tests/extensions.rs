@@ -113,8 +113,9 @@ fn every_extension_switched_off_is_the_base_model() {
 
 /// The defining equations of `constant_load`, `dislocation_damage` and `strain_softening`
 /// integrated as written: state [ε, H, Φ, ω, D] with σ = σ0(1+ε) in the rate and in dH/dt,
-/// and the rate multiplied by 1/(1−D), dD/dt = C_d (1−D)² dε/dt, and by 1 + φ0 ε^φ1 (a
-/// power, not the extension's exp(φ1 ln ε)).
+/// and the rate multiplied by 1/(1−D), dD/dt = C_d (1−D)² dε/dt, and by 1 + k ε^φ1 with
+/// k = φ0/0.2^φ1 (Walker's prefactor form and a power, not the extension's
+/// exp(φ1 ln(ε/0.2))).
 struct Defining {
     constant_load: bool,
     c_d: f64,
@@ -168,9 +169,11 @@ impl CreepModel<5> for Defining {
         if !(arg.re().abs() < 200.0) {
             return false;
         }
+        // Walker's Φ = 1 + k ε^φ1 with the prefactor k = φ0/ε_ref^φ1 (ε_ref = 0.2): the
+        // extension's φ0 is the rate's increase at 20 % strain.
         let (p0, p1) = self.soft;
         let soft = if eps.re() > 0.0 {
-            eps.powf(p1) * p0 + 1.0
+            eps.powf(p1) * (p0 / 0.2f64.powf(p1)) + 1.0
         } else {
             S::cst(1.0)
         };

@@ -247,10 +247,10 @@ fn recovers_extension_constants_without_noise() {
         ("loading_strain", vec![(8e4, 1e3, 1e7, Scale::Log)]),
         ("dislocation_damage", vec![(6.0, 0.0, 50.0, lin)]),
         ("stress_ductility", vec![(1.5, -10.0, 10.0, lin)]),
-        // φ0 ε^φ1 = 200·ε² doubles the rate at the rupture strain ω_f/C ≈ 0.067.
+        // φ0 (ε/0.2)^φ1 = 8·(ε/0.2)² doubles the rate at the rupture strain ω_f/C ≈ 0.067.
         (
             "strain_softening",
-            vec![(200.0, 0.0, 1000.0, lin), (2.0, 0.5, 8.0, lin)],
+            vec![(8.0, 0.0, 40.0, lin), (2.0, 0.5, 8.0, lin)],
         ),
         ("rupture_damage", vec![(0.45, 0.05, 0.9, lin)]),
     ] {

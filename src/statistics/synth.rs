@@ -89,7 +89,8 @@ pub enum Effect {
     DislocationDamage { c_d: f64 },
     /// Ductility (σ/100 MPa)^−ν (catalogued).
     StressDuctility { nu: f64 },
-    /// Strain softening, rate × (1 + φ0 ε^φ1) (catalogued).
+    /// Strain softening, rate × (1 + φ0 (ε/0.2)^φ1) (catalogued; φ0 the rate's increase at
+    /// 20 % strain, as the extension's constant).
     StrainSoftening { phi0: f64, phi1: f64 },
     /// Damage at rupture ω_f instead of 1/3 (catalogued).
     RuptureDamage { omega_f: f64 },
@@ -290,13 +291,19 @@ pub fn draw_effect<R: Rng>(scenario: &str, rng: &mut R) -> Effect {
                 nu: if rng.gen::<bool>() { m } else { -m },
             }
         }
-        // At the families' rupture strains (≈ 0.05–0.15) the rate factor 1 + φ0 ε^φ1 at rupture
+        // At the families' rupture strains (≈ 0.05–0.15) the rate factor 1 + k ε^φ1 at rupture
         // spans ≈ 1.0001 to ≈ 40 (measured: sets with factors 1.02–1.03 and 1.10–1.15 at the
-        // last point, seeds 12 and 14, gave `adequate`; an upper end of φ0 = 150 stayed there).
-        "strain_softening" => Effect::StrainSoftening {
-            phi0: log_uniform(rng, 2.0, 2000.0),
-            phi1: 1.5 + 1.5 * rng.gen::<f64>(),
-        },
+        // last point, seeds 12 and 14, gave `adequate`; an upper end of k = 150 stayed there).
+        // Drawn as the prefactor k of ε^φ1 (the extension's form until 2026-11-28, so the
+        // sets are the same), given as the extension's φ0 = k·0.2^φ1.
+        "strain_softening" => {
+            let k = log_uniform(rng, 2.0, 2000.0);
+            let phi1 = 1.5 + 1.5 * rng.gen::<f64>();
+            Effect::StrainSoftening {
+                phi0: k * crate::model::ext::strain_softening::EPS_REF.powf(phi1),
+                phi1,
+            }
+        }
         // ω_f = (1/3)·r^±1, r from 1.05 to 2: rupture strain and final acceleration change.
         "rupture_damage" => {
             let r = log_uniform(rng, 1.05, 2.0);
