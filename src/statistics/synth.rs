@@ -137,7 +137,8 @@ impl Effect {
         }
     }
     /// The effect's size as one number (for power-versus-size tables): E_L in MPa, C_d, ν,
-    /// φ0, ω_f, amp (fraction of ε_f); 0 for none and constant load.
+    /// φ0 (the rate's increase at 20 % strain; until 2026-11-28 the prefactor of ε^φ1), ω_f,
+    /// amp (fraction of ε_f); 0 for none and constant load.
     pub fn size(&self) -> f64 {
         match *self {
             Effect::None | Effect::ConstantLoad => 0.0,

@@ -1,9 +1,10 @@
 //! `strain_softening`: tertiary creep by strain softening, the creep rate multiplied by
-//! Φ(ε) = 1 + φ0 (ε/ε_ref)^φ1 with ε_ref = 0.2 ([`EPS_REF`]) — the softening function of Walker's unified viscoplastic model of
-//! Alloy 617 (Sham & Walker, "Preliminary development of a unified viscoplastic constitutive
-//! model for Alloy 617 with special reference to long term creep behavior", HTR2008-58274,
-//! 2008; the basis of ASME's Alloy 617 constitutive model as written up by Messner & Sham,
-//! Argonne National Laboratory, 2020: ṗ = ε̇0 Φ(p) χ(T) F with Φ = 1 + φ0 p^φ1, p the
+//! Φ(ε) = 1 + φ0 (ε/ε_ref)^φ1 with ε_ref = 0.2 ([`EPS_REF`]) — the softening function of
+//! Walker's unified viscoplastic model of Alloy 617 (Sham & Walker, "Preliminary development
+//! of a unified viscoplastic constitutive model for Alloy 617 with special reference to long
+//! term creep behavior", HTR2008-58274, 2008; the basis of ASME's Alloy 617 constitutive
+//! model as written up by Messner & Sham, Argonne National Laboratory, 2020:
+//! ṗ = ε̇0 Φ(p) χ(T) F with Φ = 1 + φ0 p^φ1 in their notation, p the
 //! equivalent inelastic strain). Written about a reference strain, φ0 is the rate's
 //! increase at 20 % strain (Walker's prefactor is φ0/ε_ref^φ1): the same family, but the fit's
 //! valley is nearly straight. With the prefactor of ε^φ1 as the constant (until 2026-11-28)
