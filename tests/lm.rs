@@ -3,7 +3,8 @@
 //! ever evaluated outside the box.
 
 use creepfit::lsq::{
-    minimize, small_gain_to_come, EvalFailure, LeastSquaresProblem, LmOptions, Termination,
+    minimize, small_gain_to_come, EvalFailure, LeastSquaresProblem, LmCounter, LmCounts, LmOptions,
+    Termination,
 };
 use std::sync::Mutex;
 
@@ -657,4 +658,40 @@ fn the_gain_to_come_stop_ends_a_linear_crawl_within_its_tail() {
         cut.iterations,
         full.iterations
     );
+}
+
+#[test]
+fn lm_counts_count_runs_iterations_and_runs_at_the_limit() {
+    // Exactly, on a counter of its own: one run stopped by the limit, one converged.
+    let (lb, ub) = free(2);
+    let capped = LmOptions {
+        max_iterations: 3,
+        ..LmOptions::default()
+    };
+    let counter = LmCounter::new();
+    let short = minimize(&rosenbrock(), &[-1.2, 1.0], &lb, &ub, &capped);
+    assert_eq!(short.termination, Termination::IterationLimit);
+    assert_eq!(short.iterations, 3);
+    let full = minimize(&rosenbrock(), &[-1.2, 1.0], &lb, &ub, &LmOptions::default());
+    assert!(full.termination.converged(), "{:?}", full.termination);
+    counter.record(&short);
+    counter.record(&full);
+    assert_eq!(
+        counter.snapshot(),
+        LmCounts {
+            runs: 2,
+            iterations: 3 + full.iterations as u64,
+            runs_at_limit: 1,
+            iterations_at_limit: 3,
+        }
+    );
+    // The process's counter: other tests of this binary run beside this one, so the
+    // difference is at least this run's.
+    let before = LmCounts::now();
+    let again = minimize(&rosenbrock(), &[-1.2, 1.0], &lb, &ub, &capped);
+    let d = LmCounts::now().since(&before);
+    assert_eq!(again.termination, Termination::IterationLimit);
+    assert!(d.runs >= 1 && d.runs_at_limit >= 1, "{d:?}");
+    assert!(d.iterations >= 3 && d.iterations_at_limit >= 3, "{d:?}");
+    assert!(d.runs_at_limit <= d.runs && d.iterations_at_limit <= d.iterations);
 }

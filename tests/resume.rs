@@ -95,6 +95,28 @@ fn an_interrupted_diagnosis_resumes_to_the_same_files() {
     let total = records(&plain);
     assert_eq!(timings(&plain)["journal_records_written"], total);
     assert!(total > 12, "{total}");
+    // The Levenberg–Marquardt work per phase: the phases add up to the whole.
+    let lm = &timings(&plain)["phase_lm"];
+    let count = |phase: &str, what: &str| lm[phase][what].as_u64().unwrap();
+    for what in ["runs", "iterations", "runs_at_limit", "iterations_at_limit"] {
+        let phases: u64 = ["fits", "null_bootstrap", "cause_bootstrap", "loo"]
+            .iter()
+            .map(|p| count(p, what))
+            .sum();
+        assert_eq!(phases, count("total", what), "{what}: {lm}");
+    }
+    assert!(
+        count("fits", "runs") > 0 && count("null_bootstrap", "runs") > 0,
+        "{lm}"
+    );
+    assert!(
+        count("total", "iterations") >= count("total", "runs"),
+        "{lm}"
+    );
+    assert!(
+        count("null_bootstrap", "runs") >= count("null_again", "runs"),
+        "{lm}"
+    );
 
     let resumed = d.path().join("resumed");
     // Stopped during the fits on the data (one record per model: 7 models), then again
@@ -145,6 +167,14 @@ fn an_interrupted_diagnosis_resumes_to_the_same_files() {
     // A rerun of a finished run recomputes nothing and writes the same files.
     ok(&diagnose(&resumed, &["--threads", "2"]));
     assert_eq!(timings(&resumed)["journal_records_written"], 0);
+    // Its fits are the journal's: a few polishing runs at most, not the diagnosis again.
+    let rerun = timings(&resumed)["phase_lm"]["total"]["runs"]
+        .as_u64()
+        .unwrap();
+    let first = timings(&plain)["phase_lm"]["total"]["runs"]
+        .as_u64()
+        .unwrap();
+    assert!(10 * rerun < first, "{rerun} runs against {first}");
     assert!(bytes(&plain.join("diagnosis.json")) == bytes(&resumed.join("diagnosis.json")));
 }
 

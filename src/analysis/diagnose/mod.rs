@@ -43,6 +43,7 @@ use crate::fit::FitSettings;
 use crate::likelihood::{
     ml_fit, ml_fit_from, raw_objective, with_specimens, EffectStart, MlFit, MlOptions,
 };
+use crate::lsq::LmCounts;
 use crate::model::ext;
 use crate::model::guess::initial_guess;
 use crate::model::objective::mean_abs;
@@ -770,6 +771,9 @@ pub struct Diagnosis {
     /// goodness-of-fit bootstrap, leave-one-stress-out (`timings.json`).
     #[serde(skip)]
     pub phase_s: PhaseTimes,
+    /// Levenberg–Marquardt runs and iterations per phase (`timings.json`).
+    #[serde(skip)]
+    pub phase_lm: PhaseWork,
 }
 
 /// Wall time per phase of [`diagnose`], s.
@@ -785,6 +789,26 @@ pub struct PhaseTimes {
     pub cause_bootstrap: f64,
     /// Leave-one-stress-out refits.
     pub loo: f64,
+}
+
+/// The Levenberg–Marquardt work of each phase of [`diagnose`] (the phases of [`PhaseTimes`]):
+/// its time is the count of its iterations, and runs at the iteration limit are the ones a
+/// better parametrisation could shorten. Counted process-wide ([`LmCounts::now`]): exact for
+/// the binary's one diagnosis, a sum with any concurrent work in a library caller.
+#[derive(Debug, Clone, Copy, Default, serde::Serialize)]
+pub struct PhaseWork {
+    /// The whole diagnosis.
+    pub total: LmCounts,
+    /// Multistart fits of every model on the data.
+    pub fits: LmCounts,
+    /// Null bootstrap, its second run included.
+    pub null_bootstrap: LmCounts,
+    /// The null bootstrap's second run.
+    pub null_again: LmCounts,
+    /// Goodness-of-fit bootstrap of the chosen extension.
+    pub cause_bootstrap: LmCounts,
+    /// Leave-one-stress-out refits.
+    pub loo: LmCounts,
 }
 
 fn noise_summary(curves: &[Curve], f: &MlFit) -> NoiseSummary {
@@ -1170,6 +1194,7 @@ pub fn diagnose_observed(
     dc.validate()
         .map_err(|m| Error::Diagnose(format!("{}: {}", m.field, m.what)))?;
     let t0 = Instant::now();
+    let lm0 = LmCounts::now();
     let binned_curves: Vec<Curve> = data
         .curves
         .iter()
@@ -1343,6 +1368,11 @@ pub fn diagnose_observed(
         fits: t0.elapsed().as_secs_f64(),
         ..PhaseTimes::default()
     };
+    let lm_fits = LmCounts::now();
+    let mut work = PhaseWork {
+        fits: lm_fits.since(&lm0),
+        ..PhaseWork::default()
+    };
     let base_fit = fits[0].clone().expect("checked");
     let n_ext = specs.len() - 1;
 
@@ -1422,6 +1452,7 @@ pub fn diagnose_observed(
         })
         .collect();
     let t_again = std::time::Instant::now();
+    let lm_again = LmCounts::now();
     let sampled = if again.iter().any(|a| *a) {
         let observed_again: Vec<f64> = observed
             .iter()
@@ -1460,6 +1491,9 @@ pub fn diagnose_observed(
     };
     phase.null_bootstrap = t0.elapsed().as_secs_f64() - phase.fits;
     phase.null_again = t_again.elapsed().as_secs_f64();
+    let lm_null = LmCounts::now();
+    work.null_bootstrap = lm_null.since(&lm_fits);
+    work.null_again = lm_null.since(&lm_again);
     let reps = &sampled.reps;
     let failed_base_refits = reps.iter().filter(|r| r[n_ext + ng] > 0.0).count();
     let col = |k: usize| -> Vec<f64> { sampled.column(k) };
@@ -1518,6 +1552,8 @@ pub fn diagnose_observed(
     let (verdict, cause_idx) = decide::verdict(&sel, &cause_p, dc.alpha);
     let t_loo = Instant::now();
     phase.cause_bootstrap = t0.elapsed().as_secs_f64() - phase.fits - phase.null_bootstrap;
+    let lm_loo = LmCounts::now();
+    work.cause_bootstrap = lm_loo.since(&lm_null);
 
     // 5. Leave-one-stress-out, explanation, assembly.
     hooks.phase("leave-one-stress-out", specs.len());
@@ -1537,6 +1573,7 @@ pub fn diagnose_observed(
         })
         .collect::<Result<_>>()?;
     phase.loo = t_loo.elapsed().as_secs_f64();
+    work.loo = LmCounts::now().since(&lm_loo);
     let n_eff = base_fit
         .noise
         .effective_n(base_fit.residuals.as_ref().expect("fitted"));
@@ -1661,6 +1698,10 @@ pub fn diagnose_observed(
         settings: dc.clone(),
         wall_s: t0.elapsed().as_secs_f64(),
         phase_s: phase,
+        phase_lm: PhaseWork {
+            total: LmCounts::now().since(&lm0),
+            ..work
+        },
     })
 }
 

@@ -31,7 +31,7 @@ pub fn write(
         out,
         "diagnose",
         journal,
-        serde_json::json!({ "wall_s": d.wall_s, "phase_s": d.phase_s }),
+        serde_json::json!({ "wall_s": d.wall_s, "phase_s": d.phase_s, "phase_lm": d.phase_lm }),
     )?;
     let md = crate::diagnose::report::report_md(&cfg.name, setup, d);
     write_text(&out.join("report.md"), &md)?;

@@ -448,8 +448,102 @@ pub fn small_gain_to_come(f0: f64, f1: f64, f2: f64, delta: f64) -> bool {
     d2 * q / (1.0 - q) <= delta
 }
 
+/// The work of [`minimize`] runs: how many, their iterations, and how many of them ran to
+/// [`LmOptions::max_iterations`] (with those runs' iterations). Where a command's time goes is
+/// the count of its iterations; runs at the limit are the ones a better parametrisation or
+/// stop could shorten.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct LmCounts {
+    /// Runs of [`minimize`].
+    pub runs: u64,
+    /// Their iterations (Jacobians), as [`LmReport::iterations`] counts them.
+    pub iterations: u64,
+    /// Runs that ended with [`Termination::IterationLimit`].
+    pub runs_at_limit: u64,
+    /// The iterations of those runs.
+    pub iterations_at_limit: u64,
+}
+
+impl LmCounts {
+    /// Every run of [`minimize`] in this process so far, on any thread ([`LmCounter`]).
+    pub fn now() -> Self {
+        PROCESS_COUNTS.snapshot()
+    }
+
+    /// The runs between `earlier` and `self` (two snapshots of one counter).
+    pub fn since(&self, earlier: &LmCounts) -> LmCounts {
+        LmCounts {
+            runs: self.runs.saturating_sub(earlier.runs),
+            iterations: self.iterations.saturating_sub(earlier.iterations),
+            runs_at_limit: self.runs_at_limit.saturating_sub(earlier.runs_at_limit),
+            iterations_at_limit: self
+                .iterations_at_limit
+                .saturating_sub(earlier.iterations_at_limit),
+        }
+    }
+}
+
+/// A counter of [`LmCounts`] that any thread may add to (relaxed atomics: the counts are
+/// sums, the order of additions does not matter).
+#[derive(Debug, Default)]
+pub struct LmCounter([std::sync::atomic::AtomicU64; 4]);
+
+impl LmCounter {
+    /// A counter at zero.
+    pub const fn new() -> Self {
+        use std::sync::atomic::AtomicU64;
+        LmCounter([
+            AtomicU64::new(0),
+            AtomicU64::new(0),
+            AtomicU64::new(0),
+            AtomicU64::new(0),
+        ])
+    }
+
+    /// Count one finished run.
+    pub fn record(&self, report: &LmReport) {
+        use std::sync::atomic::Ordering::Relaxed;
+        let it = report.iterations as u64;
+        self.0[0].fetch_add(1, Relaxed);
+        self.0[1].fetch_add(it, Relaxed);
+        if report.termination == Termination::IterationLimit {
+            self.0[2].fetch_add(1, Relaxed);
+            self.0[3].fetch_add(it, Relaxed);
+        }
+    }
+
+    /// The counts so far.
+    pub fn snapshot(&self) -> LmCounts {
+        use std::sync::atomic::Ordering::Relaxed;
+        LmCounts {
+            runs: self.0[0].load(Relaxed),
+            iterations: self.0[1].load(Relaxed),
+            runs_at_limit: self.0[2].load(Relaxed),
+            iterations_at_limit: self.0[3].load(Relaxed),
+        }
+    }
+}
+
+/// Every [`minimize`] run of the process. A difference of two snapshots counts the runs in
+/// between on every thread: exactly one command's work in the binary (one command per
+/// process), the sum with any concurrent work elsewhere (threads of a Python session, tests).
+static PROCESS_COUNTS: LmCounter = LmCounter::new();
+
 /// Minimise ½‖r(x)‖² over the box [lb, ub] from `x0` (projected onto the box first).
 pub fn minimize<P: LeastSquaresProblem + ?Sized>(
+    problem: &P,
+    x0: &[f64],
+    lb: &[f64],
+    ub: &[f64],
+    opts: &LmOptions,
+) -> LmReport {
+    let report = minimize_uncounted(problem, x0, lb, ub, opts);
+    PROCESS_COUNTS.record(&report);
+    report
+}
+
+/// [`minimize`] without counting the run.
+fn minimize_uncounted<P: LeastSquaresProblem + ?Sized>(
     problem: &P,
     x0: &[f64],
     lb: &[f64],
