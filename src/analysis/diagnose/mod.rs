@@ -792,9 +792,9 @@ pub struct PhaseTimes {
 }
 
 /// The Levenberg–Marquardt work of each phase of [`diagnose`] (the phases of [`PhaseTimes`]):
-/// its time is the count of its iterations, and runs at the iteration limit are the ones a
-/// better parametrisation could shorten. Counted process-wide ([`LmCounts::now`]): exact for
-/// the binary's one diagnosis, a sum with any concurrent work in a library caller.
+/// its time is the count of its iterations, and runs at the iteration limit are the ones
+/// stopped unconverged. Counted process-wide ([`LmCounts::now`]): exact for the binary's one
+/// diagnosis, a sum with any concurrent work in a library caller.
 #[derive(Debug, Clone, Copy, Default, serde::Serialize)]
 pub struct PhaseWork {
     /// The whole diagnosis.

@@ -450,8 +450,8 @@ pub fn small_gain_to_come(f0: f64, f1: f64, f2: f64, delta: f64) -> bool {
 
 /// The work of [`minimize`] runs: how many, their iterations, and how many of them ran to
 /// [`LmOptions::max_iterations`] (with those runs' iterations). Where a command's time goes is
-/// the count of its iterations; runs at the limit are the ones a better parametrisation or
-/// stop could shorten.
+/// the count of its iterations; runs at the limit were stopped before any convergence test
+/// passed.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
 pub struct LmCounts {
     /// Runs of [`minimize`].
