@@ -254,6 +254,31 @@ fn diagnosis_json_keeps_its_contract() {
         ] {
             assert!(c.get(k).is_some(), "{} lacks {k}", c["name"]);
         }
+        // How the kept fit's iteration ended, in the words of `lsq::Termination`.
+        let t = c["termination"]
+            .as_str()
+            .expect("a fitted model's termination");
+        assert!(
+            [
+                "converged_step",
+                "converged_objective",
+                "converged_gradient",
+                "stalled",
+                "plateau",
+                "small_gain_to_come",
+                "iteration_limit"
+            ]
+            .contains(&t),
+            "{t}"
+        );
+        // An unconverged fit is named in the caution.
+        if ["stalled", "iteration_limit"].contains(&t) {
+            let caution = d["caution"].as_str().expect("a caution");
+            assert!(
+                caution.contains(&format!("{} ({t})", c["name"].as_str().unwrap())),
+                "{caution}"
+            );
+        }
     }
     assert!(d["base"]["lr_critical"].is_null());
     let alpha = d["alpha"].as_f64().unwrap();

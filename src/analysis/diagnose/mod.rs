@@ -613,6 +613,11 @@ pub struct Candidate {
     pub status: FitStatus,
     /// Starts that failed (simulation failure).
     pub failed_starts: usize,
+    /// How the Levenberg–Marquardt iteration of the kept fit ended (`None` if not fitted):
+    /// `iteration_limit` or `stalled` mean it stopped before convergence, so `objective`
+    /// may lie above the optimum (the diagnosis then carries a caution,
+    /// [`decide::unconverged_fits_caution`]).
+    pub termination: Option<crate::lsq::Termination>,
     /// −2 ln L at the maximum-likelihood fit (what `diagnose` compares; NaN if not fitted).
     pub objective: f64,
     /// Number of fitted constants.
@@ -757,8 +762,9 @@ pub struct Diagnosis {
     /// The decision, step by step, in words.
     pub decision: Vec<String>,
     /// Where the base fit's error model may have taken misfit for correlated reading error
-    /// ([`decide::absorbed_misfit_caution`]), or failed null refits may have kept a test from
-    /// rejecting ([`decide::failed_refits_caution`]); both joined by ". Also: "; `null`
+    /// ([`decide::absorbed_misfit_caution`]), failed null refits may have kept a test from
+    /// rejecting ([`decide::failed_refits_caution`]), or a fit on the data stopped before
+    /// convergence ([`decide::unconverged_fits_caution`]); joined by ". Also: "; `null`
     /// otherwise.
     pub caution: Option<String>,
     /// The settings used.
@@ -851,6 +857,7 @@ fn candidate(spec: &Spec, curves: &[Curve], fit: Option<&MlFit>, failed: usize) 
         extra_constants: spec.extra.clone(),
         status: FitStatus::Failed,
         failed_starts: failed,
+        termination: None,
         objective: f64::NAN,
         k,
         aic: f64::NAN,
@@ -876,6 +883,7 @@ fn candidate(spec: &Spec, curves: &[Curve], fit: Option<&MlFit>, failed: usize) 
     };
     if let Some(f) = fit {
         c.status = FitStatus::Fitted;
+        c.termination = Some(f.termination);
         c.objective = f.neg2ll;
         c.aic = f.neg2ll + 2.0 * k as f64;
         c.constants = spec
@@ -1661,6 +1669,12 @@ pub fn diagnose_observed(
             .as_ref()
             .and_then(|n| decide::absorbed_misfit_caution(&n.phi, &n.strain_sd_pct)),
         decide::failed_refits_caution(&failed_per_test, dc.alpha),
+        decide::unconverged_fits_caution(
+            &std::iter::once(&base)
+                .chain(&cands)
+                .filter_map(|c| c.termination.map(|t| (c.name.clone(), t)))
+                .collect::<Vec<_>>(),
+        ),
     ]
     .into_iter()
     .flatten()
