@@ -261,7 +261,8 @@ mod tests {
         let f = |v: &[(&str, T)]| -> Vec<(String, T)> {
             v.iter().map(|(n, t)| (n.to_string(), *t)).collect()
         };
-        let table: [(&[(&str, T)], bool, &[&str]); 6] = [
+        type Row<'a> = (&'a [(&'a str, T)], bool, &'a [&'a str]);
+        let table: [Row; 6] = [
             (&[], false, &[]),
             (
                 &[("base", T::ConvergedObjective), ("a", T::Plateau)],
