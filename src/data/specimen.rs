@@ -38,19 +38,26 @@ pub fn has_replicates(curves: &[crate::data::Curve]) -> bool {
     })
 }
 
-/// One curve's sums for the linear mixed model (k ≤ 2 effects, p fixed effects).
+/// Most kinds of specimen effect a curve carries (rate, ductility, coarsening).
+pub const MAX_KINDS: usize = 3;
+/// A k × k matrix of the effects (k ≤ [`MAX_KINDS`], the rest zero).
+pub type KMat = [[f64; MAX_KINDS]; MAX_KINDS];
+/// A vector over the effects.
+pub type KVec = [f64; MAX_KINDS];
+
+/// One curve's sums for the linear mixed model (k ≤ [`MAX_KINDS`] effects, p fixed effects).
 #[derive(Debug, Clone, PartialEq)]
 pub struct CurveBlock {
     /// G = ZᵀZ (k × k).
-    pub zz: [[f64; 2]; 2],
+    pub zz: KMat,
     /// XᵀZ (p × k).
-    pub xz: Vec<[f64; 2]>,
+    pub xz: Vec<KVec>,
     /// XᵀX (p × p).
     pub xx: DMatrix<f64>,
     /// Xᵀy.
     pub xy: DVector<f64>,
     /// Zᵀy.
-    pub zy: [f64; 2],
+    pub zy: KVec,
     /// yᵀy.
     pub yy: f64,
 }
@@ -66,30 +73,76 @@ pub struct Lmm {
     pub blocks: Vec<CurveBlock>,
 }
 
-/// The k × k matrix M = D⁻¹ + G and its inverse, for scatter `tau`.
-fn m_inv(k: usize, g: &[[f64; 2]; 2], tau: &[f64]) -> [[f64; 2]; 2] {
-    if k == 1 {
-        let m = 1.0 / (tau[0] * tau[0]) + g[0][0];
-        [[1.0 / m, 0.0], [0.0, 0.0]]
-    } else {
-        let a = 1.0 / (tau[0] * tau[0]) + g[0][0];
-        let d = 1.0 / (tau[1] * tau[1]) + g[1][1];
-        let (b, c) = (g[0][1], g[1][0]);
-        let det = a * d - b * c;
-        [[d / det, -b / det], [-c / det, a / det]]
+/// The k × k matrix M = D⁻¹ + G and its inverse, for scatter `tau` (Gauss–Jordan with
+/// partial pivoting; k ≤ [`MAX_KINDS`]).
+fn m_inv(k: usize, g: &KMat, tau: &[f64]) -> KMat {
+    let mut m = *g;
+    for a in 0..k {
+        m[a][a] += 1.0 / (tau[a] * tau[a]);
+    }
+    small_inverse(k, &m)
+}
+
+/// Inverse of the leading k × k block of `m` (zeros elsewhere; NaN if singular).
+pub fn small_inverse(k: usize, m: &KMat) -> KMat {
+    let mut a = *m;
+    let mut inv = [[0.0; MAX_KINDS]; MAX_KINDS];
+    for (d, row) in inv.iter_mut().enumerate().take(k) {
+        row[d] = 1.0;
+    }
+    for c in 0..k {
+        let piv = (c..k)
+            .max_by(|&x, &y| a[x][c].abs().total_cmp(&a[y][c].abs()))
+            .unwrap_or(c);
+        a.swap(c, piv);
+        inv.swap(c, piv);
+        let d = a[c][c];
+        for col in 0..k {
+            a[c][col] /= d;
+            inv[c][col] /= d;
+        }
+        for r in 0..k {
+            if r != c {
+                let f = a[r][c];
+                for col in 0..k {
+                    a[r][col] -= f * a[c][col];
+                    inv[r][col] -= f * inv[c][col];
+                }
+            }
+        }
+    }
+    inv
+}
+
+/// Determinant of the leading k × k block of `m` (k ≤ [`MAX_KINDS`]).
+pub fn small_det(k: usize, m: &KMat) -> f64 {
+    match k {
+        0 => 1.0,
+        1 => m[0][0],
+        2 => m[0][0] * m[1][1] - m[0][1] * m[1][0],
+        _ => {
+            m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+                - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+                + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+        }
     }
 }
 
-/// ln det(I + D G) for k ≤ 2.
-fn ln_det_idg(k: usize, g: &[[f64; 2]; 2], tau: &[f64]) -> f64 {
-    if k == 1 {
-        (1.0 + tau[0] * tau[0] * g[0][0]).ln()
-    } else {
-        let (d0, d1) = (tau[0] * tau[0], tau[1] * tau[1]);
-        let m00 = 1.0 + d0 * g[0][0];
-        let m11 = 1.0 + d1 * g[1][1];
-        (m00 * m11 - d0 * g[0][1] * d1 * g[1][0]).ln()
+/// Whether the leading k × k block of the symmetric `m` is positive definite (all leading
+/// minors positive).
+pub fn small_pd(k: usize, m: &KMat) -> bool {
+    (1..=k).all(|j| small_det(j, m) > 0.0)
+}
+
+/// ln det(I + D G) for k ≤ [`MAX_KINDS`].
+fn ln_det_idg(k: usize, g: &KMat, tau: &[f64]) -> f64 {
+    let mut m = [[0.0; MAX_KINDS]; MAX_KINDS];
+    for a in 0..k {
+        for b in 0..k {
+            m[a][b] = tau[a] * tau[a] * g[a][b] + if a == b { 1.0 } else { 0.0 };
+        }
     }
+    small_det(k, &m).ln()
 }
 
 impl Lmm {
@@ -125,17 +178,17 @@ impl Lmm {
                         v
                     })
                     .collect();
-                let mut zz = [[0.0; 2]; 2];
-                let mut zy = [0.0; 2];
+                let mut zz = [[0.0; MAX_KINDS]; MAX_KINDS];
+                let mut zy = [0.0; MAX_KINDS];
                 for kk in 0..k {
                     for ll in 0..k {
                         zz[kk][ll] = dot(zc(kk), zc(ll));
                     }
                     zy[kk] = dot(zc(kk), &y);
                 }
-                let xz: Vec<[f64; 2]> = (0..p)
+                let xz: Vec<KVec> = (0..p)
                     .map(|c| {
-                        let mut v = [0.0; 2];
+                        let mut v = [0.0; MAX_KINDS];
                         for kk in 0..k {
                             v[kk] = dot(col(c), zc(kk));
                         }
@@ -174,7 +227,7 @@ impl Lmm {
         let mut b = DVector::<f64>::zeros(p);
         let mut q = 0.0;
         let mut ld = 0.0;
-        let mut xzm = vec![[0.0; 2]; p];
+        let mut xzm = vec![[0.0; MAX_KINDS]; p];
         for bl in &self.blocks {
             let mi = m_inv(k, &bl.zz, tau);
             ld += ln_det_idg(k, &bl.zz, tau);
@@ -188,7 +241,7 @@ impl Lmm {
             q += bl.yy - s;
             // (XᵀZ) M⁻¹.
             for (v, row) in xzm.iter_mut().zip(&bl.xz) {
-                *v = [0.0; 2];
+                *v = [0.0; MAX_KINDS];
                 for ll in 0..k {
                     for kk in 0..k {
                         v[ll] += row[kk] * mi[kk][ll];
@@ -261,9 +314,13 @@ impl Lmm {
             if self.k == 1 {
                 return self.neg2l(&t, restricted) - best;
             }
-            let other = 1 - kind;
-            let t_other = minimise_one(&t, other, |tt| self.neg2l(tt, restricted));
-            t[other] = t_other;
+            // The others re-estimated (coordinate-wise, as [`minimise_scatter`]).
+            let rounds = if self.k > 2 { 3 } else { 1 };
+            for _ in 0..rounds {
+                for other in (0..self.k).filter(|&o| o != kind) {
+                    t[other] = minimise_one(&t, other, |tt| self.neg2l(tt, restricted));
+                }
+            }
             self.neg2l(&t, restricted) - best
         };
         let lh = tau_hat[kind].clamp(SCATTER_FLOOR, SCATTER_MAX).ln();
@@ -334,7 +391,7 @@ pub fn minimise_scatter(start: &[f64], f: impl Fn(&[f64]) -> f64) -> Vec<f64> {
 /// The random-effects terms of the Laplace −2 ln L, Σ_i [η_iᵀD⁻¹η_i + ln det(I + D G_i)],
 /// for effects `eta` (kind-major: kind k of curve i at k·n + i), Gram matrices `g` and
 /// scatter `tau` (one per kind).
-pub fn laplace_terms(eta: &[f64], g: &[[[f64; 2]; 2]], tau: &[f64]) -> f64 {
+pub fn laplace_terms(eta: &[f64], g: &[KMat], tau: &[f64]) -> f64 {
     let n = g.len();
     let k = tau.len();
     let mut s = 0.0;
@@ -448,7 +505,11 @@ mod tests {
 
     #[test]
     fn woodbury_criterion_equals_the_dense_gaussian() {
-        for (k, tau) in [(1usize, vec![0.7]), (2, vec![0.4, 1.3])] {
+        for (k, tau) in [
+            (1usize, vec![0.7]),
+            (2, vec![0.4, 1.3]),
+            (3, vec![0.4, 1.3, 0.8]),
+        ] {
             let (x, z, y, groups) = problem(3 + k as u64, 6, 5, 3, k, &tau);
             let lmm = lmm_of(&x, &z, &y, &groups, k);
             for t in [tau.clone(), tau.iter().map(|v| v * 0.3).collect::<Vec<_>>()] {
@@ -536,7 +597,10 @@ mod tests {
 
     #[test]
     fn laplace_terms_are_the_penalty_and_log_determinant() {
-        let g = vec![[[4.0, 1.0], [1.0, 9.0]], [[2.0, 0.0], [0.0, 1.0]]];
+        let g = vec![
+            [[4.0, 1.0, 0.0], [1.0, 9.0, 0.0], [0.0; 3]],
+            [[2.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0; 3]],
+        ];
         let eta = [0.1, -0.2, 0.3, 0.05];
         let tau = [0.5, 0.25];
         let want: f64 = (0.1f64 / 0.5).powi(2)
@@ -546,5 +610,43 @@ mod tests {
             + ((1.0 + 0.25 * 4.0) * (1.0 + 0.0625 * 9.0) - 0.25 * 1.0 * 0.0625 * 1.0f64).ln()
             + ((1.0 + 0.25 * 2.0) * (1.0 + 0.0625 * 1.0f64)).ln();
         assert!((laplace_terms(&eta, &g, &tau) - want).abs() < 1e-12);
+    }
+
+    #[test]
+    fn three_kinds_match_dense_linear_algebra() {
+        // Random symmetric positive definite 3 × 3 Gram matrices: M⁻¹ and ln det(I + D G)
+        // against nalgebra's dense inverse and determinant.
+        let mut rng = ChaCha8Rng::seed_from_u64(31);
+        let tau = [0.3, 0.9, 0.5];
+        for _ in 0..50 {
+            let z = DMatrix::<f64>::from_fn(6, 3, |_, _| StandardNormal.sample(&mut rng));
+            let gd = z.transpose() * &z;
+            let mut g = [[0.0; MAX_KINDS]; MAX_KINDS];
+            for a in 0..3 {
+                for b in 0..3 {
+                    g[a][b] = gd[(a, b)];
+                }
+            }
+            let d = DMatrix::<f64>::from_diagonal(&DVector::from_iterator(
+                3,
+                tau.iter().map(|t| t * t),
+            ));
+            let m = &gd + d.clone().try_inverse().unwrap();
+            let mi = m.clone().try_inverse().unwrap();
+            let got = m_inv(3, &g, &tau);
+            for a in 0..3 {
+                for b in 0..3 {
+                    assert!((got[a][b] - mi[(a, b)]).abs() < 1e-10 * mi.amax(), "{a}{b}");
+                }
+            }
+            let want = (DMatrix::<f64>::identity(3, 3) + &d * &gd)
+                .determinant()
+                .ln();
+            assert!((ln_det_idg(3, &g, &tau) - want).abs() < 1e-10);
+            assert!(small_pd(3, &g));
+            let mut neg = g;
+            neg[2][2] = -1.0;
+            assert!(!small_pd(3, &neg));
+        }
     }
 }

@@ -59,7 +59,7 @@ pub fn constants() -> Vec<ConstantSpec> {
             ub: 3e-5,
             default: 6.86e-6,
             scale: Scale::Log,
-            role: Role::Other,
+            role: Role::Softening,
             doc: "carbide coarsening rate",
         },
         ConstantSpec {

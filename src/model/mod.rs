@@ -71,6 +71,8 @@ pub enum Role {
     Rate,
     /// Dividing it by g multiplies the rupture strain by g (KHD: C, ε_r = ω_f/C).
     InverseDuctility,
+    /// The rate of the softening that brings on the tertiary stage (KHD: Kc).
+    Softening,
 }
 
 pub use crate::data::ZERO_CELSIUS_K;

@@ -111,7 +111,8 @@ pub struct ObjectiveConfig {
     /// replicates (two or more specimens at one temperature and stress), none otherwise —
     /// with one specimen per condition a specimen's own rate or ductility cannot be told
     /// from the stress and temperature dependence of the constants. A list (`["rate"]`,
-    /// `["rate", "ductility"]`, `[]`) asks for exactly those.
+    /// `["rate", "ductility"]`, `["rate", "ductility", "coarsening"]`, `[]`) asks for exactly
+    /// those (`coarsening`: a factor on the softening constant Kc, only by name).
     pub specimen_effects: SpecimenEffects,
 }
 
@@ -155,6 +156,7 @@ impl SpecimenEffects {
                 SpecimenOptions {
                     rate: k.contains(&EffectKind::Rate),
                     ductility: k.contains(&EffectKind::Ductility),
+                    coarsening: k.contains(&EffectKind::Coarsening),
                 },
                 None,
             ),
@@ -2077,6 +2079,33 @@ rtol = 1e-8
 
     /// The resolved solver settings give exactly the options the fits used before they were
     /// resolved in one place (results must not change).
+    #[test]
+    fn specimen_effects_parse_by_name_and_resolve_to_those_kinds() {
+        use crate::likelihood::SpecimenOptions;
+        for (list, want) in [
+            ("[]", SpecimenOptions::NONE),
+            ("[\"rate\", \"ductility\"]", SpecimenOptions::BOTH),
+            (
+                "[\"rate\", \"coarsening\"]",
+                SpecimenOptions {
+                    rate: true,
+                    ductility: false,
+                    coarsening: true,
+                },
+            ),
+        ] {
+            let c = parse(&format!(
+                "curves = \"a.csv\"\nruptures = \"b.csv\"\n{CONSTANTS}\n[objective]\nspecimen_effects = {list}\n"
+            ))
+            .unwrap();
+            assert_eq!(c.objective.specimen_effects.resolve(&[]).0, want, "{list}");
+        }
+        let bad = parse(&format!(
+            "curves = \"a.csv\"\nruptures = \"b.csv\"\n{CONSTANTS}\n[objective]\nspecimen_effects = [\"hardening\"]\n"
+        ));
+        assert!(bad.is_err());
+    }
+
     #[test]
     fn solver_options_match_the_previous_construction() {
         let s = SolverConfig::default();

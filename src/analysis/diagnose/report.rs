@@ -336,10 +336,14 @@ fn specimens_md(d: &Diagnosis, setup: &DiagnoseSetup) -> String {
         return s;
     };
     for (j, k) in sp.kinds.iter().enumerate() {
-        let what = match k {
-            EffectKind::Rate => "creep rate",
-            EffectKind::Ductility => "rupture strain (ductility)",
-        };
+        let what = k.describe();
+        if crate::likelihood::scatter_at_bound(sp.scatter[j]) {
+            s += &format!(
+                "- The {what}'s scatter is at the estimate's bound (sd of the ln factor {:.1}): the data do not bound it, and the null bootstrap draws new specimens from it; read the tests with care.\n",
+                sp.scatter[j]
+            );
+            continue;
+        }
         s += &format!(
             "- The {what} varies {:.0} % between specimens (sd of the ln factor {:.3}, 95 % {:.3}–{:.3}).\n",
             crate::report::tables::lognormal_cv_pct(sp.scatter[j]),
@@ -374,6 +378,7 @@ fn specimens_md(d: &Diagnosis, setup: &DiagnoseSetup) -> String {
         s += match k {
             EffectKind::Rate => " creep-rate factor |",
             EffectKind::Ductility => " ductility factor |",
+            EffectKind::Coarsening => " coarsening factor |",
         };
     }
     s += "\n|---|---|";
@@ -396,7 +401,8 @@ fn specimens_md(d: &Diagnosis, setup: &DiagnoseSetup) -> String {
 /// The residual series of the base model and of the chosen (else the lowest-AIC) extension,
 /// on the curves diagnose worked on (each binned to `max_points`): per curve, (t / t_f,
 /// predicted − measured strain in % of the rupture strain), thinned to
-/// [`crate::report::plot::PLOT_POINTS`]. Returned as (candidate name, series), base first.
+/// [`crate::report::plot::PLOT_POINTS`]. With specimen effects every curve is predicted at its
+/// own specimen's factors (as the tests see it). Returned as (candidate name, series), base first.
 pub fn residual_series(
     setup: &DiagnoseSetup,
     data: &crate::data::Dataset,
@@ -430,7 +436,14 @@ pub fn residual_series(
                 crate::error::Error::Diagnose(format!("no model '{}' was compared", c.name))
             })?;
         let x: Vec<f64> = c.constants.iter().map(|p| p.1).collect();
-        let obj = crate::likelihood::raw_objective(variant.model.as_ref(), &curves, settings);
+        // With specimen effects, each curve at its own specimen's constants: the residuals the
+        // tests and the report's table see, not the population's.
+        let factors = c
+            .specimen
+            .as_ref()
+            .and_then(|sp| sp.curve_factors(variant.model.as_ref()));
+        let obj = crate::likelihood::raw_objective(variant.model.as_ref(), &curves, settings)
+            .with_factors(factors);
         let ev = obj.evaluate(&x);
         let series: Vec<CurveSeries> = curves
             .iter()

@@ -138,7 +138,34 @@ pub fn specimen_scatter(ctx: &Context, reference: &Reference) -> [(f64, usize); 
                 EffectKind::Ductility => {
                     s_e = if s_e.is_finite() { s_e.max(*tau) } else { *tau };
                 }
+                EffectKind::Coarsening => {}
             }
+        }
+        // A coarsening factor acts on ln t_r and ln ε̇_min through the simulation, not
+        // proportionally: its elasticities are measured by central differences of the
+        // population's predictions (ln factor ±0.1) on the data's conditions, the median of
+        // the curves taken, and its scatter added to the rate's in quadrature (independent
+        // effects).
+        if let Some(j) = sp.kinds.iter().position(|k| *k == EffectKind::Coarsening) {
+            let tau_k = sp.scatter[j];
+            let tau_r = sp
+                .kinds
+                .iter()
+                .position(|k| *k == EffectKind::Rate)
+                .map_or(0.0, |i| sp.scatter[i]);
+            let [e_t, e_r] = coarsening_elasticities(ctx, reference);
+            let add = |s: f64, e: f64| {
+                let v = (tau_r * tau_r + (e * tau_k).powi(2)).sqrt();
+                if !e.is_finite() {
+                    s
+                } else if s.is_finite() {
+                    s.max(v)
+                } else {
+                    v
+                }
+            };
+            s_t = add(s_t, e_t);
+            s_r = add(s_r, e_r);
         }
     }
     [
@@ -146,6 +173,48 @@ pub fn specimen_scatter(ctx: &Context, reference: &Reference) -> [(f64, usize); 
         (s_r, rates.len()),
         (s_e, strains.len()),
     ]
+}
+
+/// Median over the data's curves of d ln t_r / d ln Kc and d ln ε̇_min / d ln Kc at the
+/// reference constants (central differences at ±0.1 in ln Kc; NaN where no curve gives both
+/// sides).
+fn coarsening_elasticities(ctx: &Context, reference: &Reference) -> [f64; 2] {
+    let Some(kc) = ctx
+        .model
+        .constants()
+        .iter()
+        .position(|c| c.role == crate::model::Role::Softening)
+    else {
+        return [f64::NAN; 2];
+    };
+    let h: f64 = 0.1;
+    let at = |f: f64| {
+        crate::likelihood::raw_objective(ctx.model, ctx.curves, &ctx.settings)
+            .with_factors(Some(crate::model::objective::CurveFactors {
+                index: vec![kc],
+                factors: vec![vec![f]; ctx.curves.len()],
+            }))
+            .evaluate(&reference.params)
+    };
+    let (up, down) = (at(h.exp()), at((-h).exp()));
+    let median = |mut v: Vec<f64>| {
+        v.retain(|x| x.is_finite());
+        if v.is_empty() {
+            return f64::NAN;
+        }
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let d = |g: &dyn Fn(&crate::model::objective::CurvePrediction) -> f64| {
+        median(
+            up.curves
+                .iter()
+                .zip(&down.curves)
+                .map(|(u, w)| (g(u).ln() - g(w).ln()) / (2.0 * h))
+                .collect(),
+        )
+    };
+    [d(&|p| p.rupture_time_h), d(&|p| p.min_rate)]
 }
 
 /// The specimen effects of the hierarchical fit from `reference`'s constants, when the

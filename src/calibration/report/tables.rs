@@ -688,9 +688,10 @@ pub fn p_text(p: f64) -> String {
 }
 
 /// The kinds of specimen effect, in the order of `specimens.csv` and `summary.json`.
-const EFFECT_KINDS: [(crate::likelihood::EffectKind, &str); 2] = [
+const EFFECT_KINDS: [(crate::likelihood::EffectKind, &str); 3] = [
     (crate::likelihood::EffectKind::Rate, "rate"),
     (crate::likelihood::EffectKind::Ductility, "ductility"),
+    (crate::likelihood::EffectKind::Coarsening, "coarsening"),
 ];
 
 /// `summary.json`'s `specimens`: the scatter between specimens the likelihood fit found (per
@@ -710,6 +711,7 @@ pub fn specimens_json(sp: &crate::fit::FitSpecimens) -> Value {
                         "sd_ln_lo95": jnum(f.scatter_lo95[j]),
                         "sd_ln_hi95": jnum(f.scatter_hi95[j]),
                         "cv_pct": jnum(lognormal_cv_pct(f.scatter[j])),
+                        "at_bound": crate::likelihood::scatter_at_bound(f.scatter[j]),
                     }),
                 )
             })
@@ -809,6 +811,9 @@ pub fn write_specimens(
             "ductility_factor",
             "ductility_factor_lo95",
             "ductility_factor_hi95",
+            "coarsening_factor",
+            "coarsening_factor_lo95",
+            "coarsening_factor_hi95",
         ],
         &rows,
     )

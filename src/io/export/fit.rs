@@ -179,10 +179,14 @@ fn print_activation(a: &serde_json::Value) {
 fn print_specimens(sp: &crate::fit::FitSpecimens) {
     if let Some(f) = &sp.fit {
         for (j, k) in f.kinds.iter().enumerate() {
-            let what = match k {
-                crate::likelihood::EffectKind::Rate => "creep rate",
-                crate::likelihood::EffectKind::Ductility => "rupture strain (ductility)",
-            };
+            let what = k.describe();
+            if crate::likelihood::scatter_at_bound(f.scatter[j]) {
+                println!(
+                    "specimens: the {what}'s scatter is at the estimate's bound (sd of ln factor {:.1}): the data do not bound it",
+                    f.scatter[j]
+                );
+                continue;
+            }
             println!(
                 "specimens: the {what} varies {:.0} % between specimens (sd of ln factor {:.3}, 95 % {:.3}–{:.3}; specimens.csv: each specimen's factor)",
                 tables::lognormal_cv_pct(f.scatter[j]),
