@@ -175,24 +175,48 @@ fn brute_force(
 /// The Laplace approximation and the brute-force integral of one specimen's curve of `n`
 /// points, its rate (and ductility, if `both`) scattering with `tau`.
 fn laplace_and_brute(n: usize, sd: f64, tau: &[f64], both: bool, seed: u64) -> (f64, f64) {
+    if both {
+        laplace_and_brute_of(
+            n,
+            sd,
+            tau,
+            [0.15, -0.05, 0.0],
+            &[(EffectKind::Rate, 0, 1.0), (EffectKind::Ductility, 5, -1.0)],
+            160,
+            seed,
+        )
+    } else {
+        laplace_and_brute_of(
+            n,
+            sd,
+            tau,
+            [0.15, 0.0, 0.0],
+            &[(EffectKind::Rate, 0, 1.0)],
+            4000,
+            seed,
+        )
+    }
+}
+
+/// The Laplace approximation and the brute-force integral (`steps` intervals per kind) of one
+/// specimen's curve of `n` points at 100 MPa with true effects `effects` ([η, ζ, κ]), white
+/// reading error `sd`; `kinds` the effects integrated (kind, its constant's index, the sign
+/// of the effect on it), scattering with `tau`.
+fn laplace_and_brute_of(
+    n: usize,
+    sd: f64,
+    tau: &[f64],
+    effects: [f64; 3],
+    kinds: &[(EffectKind, usize, f64)],
+    steps: usize,
+    seed: u64,
+) -> (f64, f64) {
     let model = registry("khd").unwrap();
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let curves = vec![specimen(
-        model.as_ref(),
-        100.0,
-        0.15,
-        if both { -0.05 } else { 0.0 },
-        n,
-        sd,
-        &mut rng,
-    )];
-    let kinds = if both {
-        vec![EffectKind::Rate, EffectKind::Ductility]
-    } else {
-        vec![EffectKind::Rate]
-    };
+    let curves = vec![specimen3(model.as_ref(), 100.0, effects, n, sd, &mut rng)];
     let sp = space();
-    let (layout, dropped) = EffectLayout::new(model.as_ref(), &curves, &sp, &kinds);
+    let which: Vec<EffectKind> = kinds.iter().map(|k| k.0).collect();
+    let (layout, dropped) = EffectLayout::new(model.as_ref(), &curves, &sp, &which);
     assert!(dropped.is_empty());
     let layout = layout.unwrap();
     let noise = ErrorModel {
@@ -210,19 +234,8 @@ fn laplace_and_brute(n: usize, sd: f64, tau: &[f64], both: bool, seed: u64) -> (
         &settings(),
     )
     .unwrap();
-    let signs: Vec<(usize, f64)> = if both {
-        vec![(0, 1.0), (5, -1.0)]
-    } else {
-        vec![(0, 1.0)]
-    };
-    let brute = brute_force(
-        model.as_ref(),
-        &curves,
-        &signs,
-        tau,
-        &noise,
-        if both { 160 } else { 4000 },
-    );
+    let signs: Vec<(usize, f64)> = kinds.iter().map(|k| (k.1, k.2)).collect();
+    let brute = brute_force(model.as_ref(), &curves, &signs, tau, &noise, steps);
     (lap, brute)
 }
 
@@ -258,39 +271,41 @@ fn laplace_matches_a_brute_force_integral_for_a_coarsening_effect() {
     // One specimen whose coarsening rate Kc scatters with τ = 0.3 (its tertiary stage sets
     // in earlier or later): the effect acts through the damage ODE, not a scale of time, so
     // its conditional posterior is less Gaussian than the rate's. 80 points, 0.2 % strain.
-    let model = registry("khd").unwrap();
-    let mut rng = ChaCha8Rng::seed_from_u64(7);
-    let curves = vec![specimen3(
-        model.as_ref(),
-        100.0,
-        [0.0, 0.0, 0.2],
+    let (lap, brute) = laplace_and_brute_of(
         80,
         2e-3,
-        &mut rng,
-    )];
-    let sp = space();
-    let (layout, dropped) =
-        EffectLayout::new(model.as_ref(), &curves, &sp, &[EffectKind::Coarsening]);
-    assert!(dropped.is_empty());
-    let layout = layout.expect("Kc is free");
-    let noise = ErrorModel {
-        strain: vec![Ar1::white(2e-3)],
-        lifetime_sd: 0.01,
-    };
-    let (lap, _) = laplace_at(
-        model.as_ref(),
-        &curves,
-        &sp,
-        &TRUTH,
-        &layout,
         &[0.3],
-        &noise,
-        &settings(),
-    )
-    .unwrap();
-    let brute = brute_force(model.as_ref(), &curves, &[(4, 1.0)], &[0.3], &noise, 4000);
+        [0.0, 0.0, 0.2],
+        &[(EffectKind::Coarsening, 4, 1.0)],
+        4000,
+        7,
+    );
     eprintln!("coarsening: Laplace {lap:.6}, brute force {brute:.6}");
     assert!((lap - brute).abs() < 0.01, "{lap} vs {brute}");
+}
+
+/// The fit's specimen effects, asserted to be of `kinds` with each 95 % interval covering its
+/// true scatter in `truth`.
+fn scatter_covers<'a>(
+    fit: &'a creepfit::likelihood::MlFit,
+    kinds: &[EffectKind],
+    truth: &[f64],
+) -> &'a creepfit::likelihood::SpecimenFit {
+    let f = fit.specimen.as_ref().expect("scatter found");
+    eprintln!(
+        "scatter {:?} [{:?}, {:?}], −2 ln L {:.2}",
+        f.scatter, f.scatter_lo95, f.scatter_hi95, fit.neg2ll
+    );
+    assert_eq!(f.kinds, kinds);
+    for (k, t) in truth.iter().enumerate() {
+        assert!(
+            f.scatter_lo95[k] <= *t && *t <= f.scatter_hi95[k],
+            "kind {k}: {t} outside [{}, {}]",
+            f.scatter_lo95[k],
+            f.scatter_hi95[k]
+        );
+    }
+    f
 }
 
 #[test]
@@ -342,20 +357,7 @@ fn the_coarsening_scatter_of_generated_specimens_is_recovered() {
         &settings(),
         &opts(true),
     );
-    let f = fit.specimen.as_ref().expect("scatter found");
-    eprintln!(
-        "scatter {:?} [{:?}, {:?}], −2 ln L {:.2}",
-        f.scatter, f.scatter_lo95, f.scatter_hi95, fit.neg2ll
-    );
-    assert_eq!(f.kinds, [EffectKind::Rate, EffectKind::Coarsening]);
-    for (k, t) in [tr, tk].iter().enumerate() {
-        assert!(
-            f.scatter_lo95[k] <= *t && *t <= f.scatter_hi95[k],
-            "kind {k}: {t} outside [{}, {}]",
-            f.scatter_lo95[k],
-            f.scatter_hi95[k]
-        );
-    }
+    let f = scatter_covers(&fit, &[EffectKind::Rate, EffectKind::Coarsening], &[tr, tk]);
     // Each curve at its own specimen's factors (what diagnose's residual plots draw since
     // 2026-11-29) is the fit's own prediction; the population's is not.
     let own = raw_objective(model.as_ref(), &curves, &settings())
@@ -464,20 +466,7 @@ fn the_scatter_of_generated_specimens_is_recovered() {
     let same = ml_fit(model.as_ref(), &curves, &sp, &TRUTH, &with_stop, &opts);
     assert_eq!((&same.params, same.neg2ll), (&fit.params, fit.neg2ll));
     scatter_intervals(&mut fit, model.as_ref(), &curves, &sp, &settings(), &opts);
-    let f = fit.specimen.as_ref().expect("scatter found");
-    eprintln!(
-        "scatter {:?} [{:?}, {:?}], −2 ln L {:.2}",
-        f.scatter, f.scatter_lo95, f.scatter_hi95, fit.neg2ll
-    );
-    assert_eq!(f.kinds, [EffectKind::Rate, EffectKind::Ductility]);
-    for (k, t) in [tr, td].iter().enumerate() {
-        assert!(
-            f.scatter_lo95[k] <= *t && *t <= f.scatter_hi95[k],
-            "kind {k}: {t} outside [{}, {}]",
-            f.scatter_lo95[k],
-            f.scatter_hi95[k]
-        );
-    }
+    let f = scatter_covers(&fit, &[EffectKind::Rate, EffectKind::Ductility], &[tr, td]);
     // The specimens' own rate factors follow the truth's up to what the constants take (the
     // mean, and a trend with stress): their correlation.
     let est = &f.effects[0];
