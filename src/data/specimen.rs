@@ -76,6 +76,24 @@ pub struct Lmm {
 /// The k × k matrix M = D⁻¹ + G and its inverse, for scatter `tau` (Gauss–Jordan with
 /// partial pivoting; k ≤ [`MAX_KINDS`]).
 fn m_inv(k: usize, g: &KMat, tau: &[f64]) -> KMat {
+    // One and two kinds in closed form, as before the third kind: the same arithmetic, so
+    // fits and batteries of rate and ductility effects reproduce to the bit.
+    let mut out = [[0.0; MAX_KINDS]; MAX_KINDS];
+    if k == 1 {
+        out[0][0] = 1.0 / (1.0 / (tau[0] * tau[0]) + g[0][0]);
+        return out;
+    }
+    if k == 2 {
+        let a = 1.0 / (tau[0] * tau[0]) + g[0][0];
+        let d = 1.0 / (tau[1] * tau[1]) + g[1][1];
+        let (b, c) = (g[0][1], g[1][0]);
+        let det = a * d - b * c;
+        out[0][0] = d / det;
+        out[0][1] = -b / det;
+        out[1][0] = -c / det;
+        out[1][1] = a / det;
+        return out;
+    }
     let mut m = *g;
     for a in 0..k {
         m[a][a] += 1.0 / (tau[a] * tau[a]);
@@ -136,6 +154,15 @@ pub fn small_pd(k: usize, m: &KMat) -> bool {
 
 /// ln det(I + D G) for k ≤ [`MAX_KINDS`].
 fn ln_det_idg(k: usize, g: &KMat, tau: &[f64]) -> f64 {
+    if k == 1 {
+        return (1.0 + tau[0] * tau[0] * g[0][0]).ln();
+    }
+    if k == 2 {
+        let (d0, d1) = (tau[0] * tau[0], tau[1] * tau[1]);
+        let m00 = 1.0 + d0 * g[0][0];
+        let m11 = 1.0 + d1 * g[1][1];
+        return (m00 * m11 - d0 * g[0][1] * d1 * g[1][0]).ln();
+    }
     let mut m = [[0.0; MAX_KINDS]; MAX_KINDS];
     for a in 0..k {
         for b in 0..k {
@@ -610,6 +637,32 @@ mod tests {
             + ((1.0 + 0.25 * 4.0) * (1.0 + 0.0625 * 9.0) - 0.25 * 1.0 * 0.0625 * 1.0f64).ln()
             + ((1.0 + 0.25 * 2.0) * (1.0 + 0.0625 * 1.0f64)).ln();
         assert!((laplace_terms(&eta, &g, &tau) - want).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_closed_forms_of_one_and_two_kinds_agree_with_the_general_inverse() {
+        let g = [[4.0, 1.5, 0.0], [1.5, 9.0, 0.0], [0.0; 3]];
+        let tau = [0.5, 0.25];
+        for k in [1, 2] {
+            let mut m = g;
+            for a in 0..k {
+                m[a][a] += 1.0 / (tau[a] * tau[a]);
+            }
+            let want = small_inverse(k, &m);
+            let got = m_inv(k, &g, &tau);
+            for a in 0..k {
+                for b in 0..k {
+                    assert!((got[a][b] - want[a][b]).abs() < 1e-14, "k {k}: {a}{b}");
+                }
+            }
+            let mut idg = [[0.0; MAX_KINDS]; MAX_KINDS];
+            for a in 0..k {
+                for b in 0..k {
+                    idg[a][b] = tau[a] * tau[a] * g[a][b] + if a == b { 1.0 } else { 0.0 };
+                }
+            }
+            assert!((ln_det_idg(k, &g, &tau) - small_det(k, &idg).ln()).abs() < 1e-14);
+        }
     }
 
     #[test]
