@@ -683,6 +683,16 @@ fn specimen_factors_by_temperature_and_campaign() {
         assert_eq!(total, rows.len());
         groups.len()
     };
+    // The error model is estimated at each specimen's own factors, as the likelihood saw the
+    // data: its −2 ln L is then at most the fit's Laplace −2 ln L, which adds the effects'
+    // penalties and log-determinants (≥ 0). At the population's prediction it was far above.
+    let em = &s["error_model"];
+    assert_eq!(em["at_specimen_factors"], true, "{em}");
+    let (data_term, objective) = (
+        em["neg2_log_likelihood"].as_f64().unwrap(),
+        s["objective"].as_f64().unwrap(),
+    );
+    assert!(data_term <= objective + 1e-6, "{data_term} vs {objective}");
     let sp_json = &s["specimens"];
     assert_eq!(
         check(&sp_json["by_temperature"], &|r| format!("{} °C", r[t])),

@@ -530,13 +530,25 @@ pub fn error_table(rows: &[ErrorRow], min_rate_measured: bool) -> String {
 /// chosen constants cannot be evaluated.
 pub fn error_model_json(cfg: &RunConfig, run: &FitRun, curves: &[Curve]) -> Value {
     let best = &run.fits[run.best];
-    let Ok(res) =
-        crate::likelihood::residuals_at(run.model.as_ref(), curves, &best.params, &run.settings)
-    else {
+    // With specimen effects, each curve at its own specimen's factors: the residuals the
+    // likelihood saw (the population's prediction misses each specimen by its factor, up to
+    // hundreds of % strain on Alloy 617 at 950 °C).
+    let factors = run
+        .specimens
+        .fit
+        .as_ref()
+        .and_then(|sp| sp.curve_factors(run.model.as_ref()));
+    let at_factors = factors.is_some();
+    let obj = crate::likelihood::raw_objective(run.model.as_ref(), curves, &run.settings)
+        .with_factors(factors);
+    let mut r = vec![0.0; obj.n_residuals()];
+    if obj.residuals(&best.params, &mut r).is_err() {
         return Value::Null;
-    };
+    }
+    let res = crate::likelihood::split_residuals(curves, &r);
     let m = crate::errmodel::ErrorModel::estimate(&res, cfg.diagnose.lifetime_sd_floor);
     json!({
+        "at_specimen_factors": at_factors,
         "curves": curves.iter().zip(&m.strain).zip(&res.strain).map(|((c, p), e)| json!({
             "temperature_C": c.temperature_c,
             "stress_MPa": c.stress_mpa,
