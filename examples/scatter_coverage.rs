@@ -119,6 +119,22 @@ fn main() {
             ));
         }
     }
+    // Where the Laplace criterion at the modes refuted the linear mixed model's estimate.
+    for (k, _) in STARTS {
+        let fits: Vec<&ScatterFit> = have
+            .iter()
+            .filter(|((seed, st), _)| st == k && (first..first + n).contains(seed))
+            .map(|(_, f)| f)
+            .collect();
+        let laplace = fits
+            .iter()
+            .filter(|f| f.scatter_method == Some(creepfit::specimen::ScatterMethod::LaplaceAtModes))
+            .count();
+        s.push_str(&format!(
+            "\n{k}: the scatter estimated by the Laplace criterion at the modes (the linear mixed model stopped short or overshot) in {laplace} of {} sets\n",
+            fits.len()
+        ));
+    }
     s.push_str(&by_reading_error(&out, &have, first, n));
     std::fs::write(out.join("summary.md"), &s).expect("summary.md");
     print!("{s}");

@@ -246,9 +246,9 @@ impl Lmm {
         Lmm { k, p, blocks }
     }
 
-    /// −2 × the (restricted, if `restricted`) log-likelihood at scatter `tau` (one per kind),
-    /// up to a constant.
-    pub fn neg2l(&self, tau: &[f64], restricted: bool) -> f64 {
+    /// The sums at scatter `tau`: A = Σ XᵀV⁻¹X (lower triangle), b = Σ XᵀV⁻¹y, Σ yᵀV⁻¹y and
+    /// Σ ln det(I + D G_i).
+    fn sums(&self, tau: &[f64]) -> (DMatrix<f64>, DVector<f64>, f64, f64) {
         let (k, p) = (self.k, self.p);
         let mut a = DMatrix::<f64>::zeros(p, p);
         let mut b = DVector::<f64>::zeros(p);
@@ -291,21 +291,32 @@ impl Lmm {
                 }
             }
         }
-        if p == 0 {
-            return ld + q;
-        }
-        // A may be near singular (a constant the data hardly determine): a small ridge
-        // relative to its diagonal keeps the factorisation defined without changing the
-        // τ-dependence that matters.
+        (a, b, q, ld)
+    }
+
+    /// The Cholesky factor of A with a small ridge: A may be near singular (a constant the
+    /// data hardly determine), and the ridge, relative to its diagonal, keeps the
+    /// factorisation defined without changing the τ-dependence that matters.
+    fn factor(&self, mut a: DMatrix<f64>) -> Option<nalgebra::Cholesky<f64, nalgebra::Dyn>> {
         let scale = a
             .diagonal()
             .iter()
             .fold(0.0f64, |m, v| m.max(v.abs()))
             .max(1e-300);
-        for c in 0..p {
+        for c in 0..self.p {
             a[(c, c)] += 1e-12 * scale;
         }
-        let Some(ch) = a.cholesky() else {
+        a.cholesky()
+    }
+
+    /// −2 × the (restricted, if `restricted`) log-likelihood at scatter `tau` (one per kind),
+    /// up to a constant.
+    pub fn neg2l(&self, tau: &[f64], restricted: bool) -> f64 {
+        let (a, b, mut q, ld) = self.sums(tau);
+        if self.p == 0 {
+            return ld + q;
+        }
+        let Some(ch) = self.factor(a) else {
             return f64::INFINITY;
         };
         let sol = ch.solve(&b);
@@ -315,6 +326,20 @@ impl Lmm {
             out += 2.0 * ch.l().diagonal().iter().map(|d| d.ln()).sum::<f64>();
         }
         out
+    }
+
+    /// ln det A(τ), A = Σ X_iᵀV_i⁻¹X_i: the constants' information with the effects
+    /// integrated out at scatter `tau`, the term REML adds to the ML criterion (0 without
+    /// constants; +∞ where A is not positive definite).
+    pub fn ln_det_info(&self, tau: &[f64]) -> f64 {
+        if self.p == 0 {
+            return 0.0;
+        }
+        let (a, ..) = self.sums(tau);
+        match self.factor(a) {
+            Some(ch) => 2.0 * ch.l().diagonal().iter().map(|d| d.ln()).sum::<f64>(),
+            None => f64::INFINITY,
+        }
     }
 
     /// The scatter minimising [`Lmm::neg2l`], each within [[`SCATTER_FLOOR`],
@@ -334,50 +359,64 @@ impl Lmm {
         chi2: f64,
         restricted: bool,
     ) -> (f64, f64) {
-        let best = self.neg2l(tau_hat, restricted);
-        let prof = |lt: f64| -> f64 {
-            let mut t = tau_hat.to_vec();
-            t[kind] = lt.exp();
-            if self.k == 1 {
-                return self.neg2l(&t, restricted) - best;
-            }
-            // The others re-estimated (coordinate-wise, as [`minimise_scatter`]).
-            let rounds = if self.k > 2 { 3 } else { 1 };
-            for _ in 0..rounds {
-                for other in (0..self.k).filter(|&o| o != kind) {
-                    t[other] = minimise_one(&t, other, |tt| self.neg2l(tt, restricted));
-                }
-            }
-            self.neg2l(&t, restricted) - best
-        };
-        let lh = tau_hat[kind].clamp(SCATTER_FLOOR, SCATTER_MAX).ln();
-        let (lf, lm) = (SCATTER_FLOOR.ln(), SCATTER_MAX.ln());
-        let cross = |mut inside: f64, mut outside: f64| -> f64 {
-            for _ in 0..60 {
-                let mid = 0.5 * (inside + outside);
-                if prof(mid) <= chi2 {
-                    inside = mid;
-                } else {
-                    outside = mid;
-                }
-                if (inside - outside).abs() < 1e-6 {
-                    break;
-                }
-            }
-            0.5 * (inside + outside)
-        };
-        let lo = if prof(lf) <= chi2 {
-            0.0
-        } else {
-            cross(lh, lf).exp()
-        };
-        let hi = if prof(lm) <= chi2 {
-            SCATTER_MAX
-        } else {
-            cross(lh, lm).exp()
-        };
-        (lo, hi)
+        profile_interval(kind, tau_hat, chi2, |t| self.neg2l(t, restricted))
     }
+}
+
+/// The profile interval of τ_kind at level `chi2` under the criterion `f` (−2 ln L in the
+/// scatters, minimal at `tau_hat`): the scatters whose criterion, the others re-estimated,
+/// lies within `chi2` of the minimum. The lower end is 0 when the floor is inside; the upper
+/// end [`SCATTER_MAX`] when the interval reaches it.
+pub fn profile_interval(
+    kind: usize,
+    tau_hat: &[f64],
+    chi2: f64,
+    f: impl Fn(&[f64]) -> f64,
+) -> (f64, f64) {
+    let k = tau_hat.len();
+    let best = f(tau_hat);
+    let prof = |lt: f64| -> f64 {
+        let mut t = tau_hat.to_vec();
+        t[kind] = lt.exp();
+        if k == 1 {
+            return f(&t) - best;
+        }
+        // The others re-estimated (coordinate-wise, as [`minimise_scatter`]).
+        let rounds = if k > 2 { 3 } else { 1 };
+        for _ in 0..rounds {
+            for other in (0..k).filter(|&o| o != kind) {
+                t[other] = minimise_one(&t, other, &f);
+            }
+        }
+        f(&t) - best
+    };
+    let lh = tau_hat[kind].clamp(SCATTER_FLOOR, SCATTER_MAX).ln();
+    let (lf, lm) = (SCATTER_FLOOR.ln(), SCATTER_MAX.ln());
+    let cross = |mut inside: f64, mut outside: f64| -> f64 {
+        for _ in 0..60 {
+            let mid = 0.5 * (inside + outside);
+            if prof(mid) <= chi2 {
+                inside = mid;
+            } else {
+                outside = mid;
+            }
+            if (inside - outside).abs() < 1e-6 {
+                break;
+            }
+        }
+        0.5 * (inside + outside)
+    };
+    let lo = if prof(lf) <= chi2 {
+        0.0
+    } else {
+        cross(lh, lf).exp()
+    };
+    let hi = if prof(lm) <= chi2 {
+        SCATTER_MAX
+    } else {
+        cross(lh, lm).exp()
+    };
+    (lo, hi)
 }
 
 /// The value of coordinate `k` of `tau` minimising `f` with the others held: a grid in ln τ,
@@ -429,6 +468,53 @@ pub fn laplace_terms(eta: &[f64], g: &[KMat], tau: &[f64]) -> f64 {
         s += ln_det_idg(k, gi, tau);
     }
     s
+}
+
+/// Where a hierarchical fit's scatter estimate comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ScatterMethod {
+    /// The linear mixed model of the fit's Gauss–Newton linearisation ([`Lmm`]; Lindstrom &
+    /// Bates' LME step): constants and effects move with τ along the linear model.
+    #[default]
+    LinearMixedModel,
+    /// The Laplace criterion at the fitted conditional modes, held ([`laplace_criterion`]):
+    /// used once a step of the scatter to the linear mixed model's estimate did not pay
+    /// ([`step_pays`]), or that model would stay where this criterion still falls, i.e.
+    /// where the linear model's promise of gains from larger or smaller effects is not what
+    /// the curves, refitted, deliver.
+    LaplaceAtModes,
+}
+
+impl ScatterMethod {
+    /// A sentence for reports where the method is not the usual one (empty otherwise).
+    pub fn note(self) -> &'static str {
+        match self {
+            ScatterMethod::LinearMixedModel => "",
+            ScatterMethod::LaplaceAtModes => {
+                "estimated by the Laplace criterion at the fitted effects (the linear mixed model of the fit's linearisation stopped where that criterion still fell, or its step did not pay)"
+            }
+        }
+    }
+}
+
+/// Whether a step of the scatter paid: the Laplace −2 ln L after refitting the constants
+/// and effects at the new scatter (`after`) is not above its value at the previous accepted
+/// point (`before`) by more than `tol`. A value that cannot be evaluated (NaN) does not pay.
+pub fn step_pays(before: f64, after: f64, tol: f64) -> bool {
+    after <= before + tol
+}
+
+/// −2 ln L in the scatter `tau` at fixed conditional modes `eta` (kind-major) with Gram
+/// matrices `g`: the Laplace terms ([`laplace_terms`]; the data term does not depend on τ
+/// at fixed modes), plus, if `restricted`, REML's ln det A(τ) from `lmm`.
+pub fn laplace_criterion(lmm: &Lmm, eta: &[f64], g: &[KMat], tau: &[f64], restricted: bool) -> f64 {
+    laplace_terms(eta, g, tau)
+        + if restricted {
+            lmm.ln_det_info(tau)
+        } else {
+            0.0
+        }
 }
 
 #[cfg(test)]
@@ -700,6 +786,154 @@ mod tests {
             let mut neg = g;
             neg[2][2] = -1.0;
             assert!(!small_pd(3, &neg));
+        }
+    }
+
+    /// The conditional modes (β̂, η̂) of the linear problem at scatter `tau`: penalised least
+    /// squares [X Z; 0 D^-1/2] against [y; 0], solved densely.
+    fn pls_modes(
+        x: &DMatrix<f64>,
+        z: &DMatrix<f64>,
+        y: &DVector<f64>,
+        k: usize,
+        n: usize,
+        tau: &[f64],
+    ) -> (DVector<f64>, Vec<f64>) {
+        let (m, p, q) = (x.nrows(), x.ncols(), z.ncols());
+        let mut a = DMatrix::zeros(m + q, p + q);
+        a.view_mut((0, 0), (m, p)).copy_from(x);
+        a.view_mut((0, p), (m, q)).copy_from(z);
+        for kk in 0..k {
+            for i in 0..n {
+                a[(m + kk * n + i, p + kk * n + i)] = 1.0 / tau[kk];
+            }
+        }
+        let mut rhs = DVector::zeros(m + q);
+        rhs.rows_mut(0, m).copy_from(y);
+        let sol = a.svd(true, true).solve(&rhs, 1e-14).expect("svd solve");
+        (
+            sol.rows(0, p).into_owned(),
+            sol.rows(p, q).iter().copied().collect(),
+        )
+    }
+
+    /// The linear problem's Lmm linearised at (β, η), with its Gram blocks.
+    fn lmm_at(
+        x: &DMatrix<f64>,
+        z: &DMatrix<f64>,
+        y: &DVector<f64>,
+        groups: &[(usize, usize)],
+        k: usize,
+        beta: &DVector<f64>,
+        eta: &[f64],
+    ) -> (Lmm, Vec<KMat>) {
+        let p = x.ncols();
+        let n = groups.len();
+        let mut jac = DMatrix::zeros(x.nrows(), p + z.ncols());
+        jac.view_mut((0, 0), (x.nrows(), p)).copy_from(x);
+        jac.view_mut((0, p), (z.nrows(), z.ncols())).copy_from(z);
+        let fitted = x * beta + z * DVector::from_column_slice(eta);
+        let r: Vec<f64> = (0..y.len()).map(|i| fitted[i] - y[i]).collect();
+        let g = groups
+            .iter()
+            .enumerate()
+            .map(|(i, &(a, b))| {
+                let mut gi = [[0.0; MAX_KINDS]; MAX_KINDS];
+                for kk in 0..k {
+                    for ll in 0..k {
+                        gi[kk][ll] = (a..b)
+                            .map(|row| z[(row, kk * n + i)] * z[(row, ll * n + i)])
+                            .sum();
+                    }
+                }
+                gi
+            })
+            .collect();
+        (Lmm::from_jacobian(&jac, &r, groups, p, k, eta), g)
+    }
+
+    #[test]
+    fn at_the_modes_of_its_own_estimate_the_laplace_criterion_agrees_with_the_linear_model() {
+        // Linear in the effects, the Laplace criterion at the modes fitted at the linear
+        // model's ML estimate τ̂ lies above the profiled criterion everywhere and touches it
+        // at τ̂ (the modes minimise the penalised sum there): its minimiser is τ̂ itself.
+        for (seed, k, tau) in [
+            (31u64, 1, vec![0.4]),
+            (32, 2, vec![0.3, 0.15]),
+            (33, 3, vec![0.3, 0.2, 0.5]),
+        ] {
+            let (n, per, p) = (8, 30, 2);
+            let (x, z, y, groups) = problem(seed, n, per, p, k, &tau);
+            let ml = lmm_of(&x, &z, &y, &groups, k).estimate(&vec![0.1; k], false);
+            let (beta, eta) = pls_modes(&x, &z, &y, k, n, &ml);
+            let (lmm, g) = lmm_at(&x, &z, &y, &groups, k, &beta, &eta);
+            let modes = minimise_scatter(&ml, |t| laplace_criterion(&lmm, &eta, &g, t, false));
+            for kk in 0..k {
+                assert!(
+                    (modes[kk] / ml[kk]).ln().abs() < 1e-3,
+                    "seed {seed}: kind {kk} at the modes {} against the linear model's {}",
+                    modes[kk],
+                    ml[kk]
+                );
+            }
+            // And above the profiled criterion away from τ̂ (the same constant apart).
+            let off = lmm.neg2l(&ml, false) - laplace_criterion(&lmm, &eta, &g, &ml, false);
+            for f in [0.3, 0.7, 1.5, 3.0] {
+                let t: Vec<f64> = ml.iter().map(|v| v * f).collect();
+                let above =
+                    laplace_criterion(&lmm, &eta, &g, &t, false) + off - lmm.neg2l(&t, false);
+                assert!(above > -1e-9, "seed {seed}, ×{f}: {above}");
+            }
+        }
+    }
+
+    #[test]
+    fn the_criterion_at_the_modes_is_minimised_as_a_brute_force_grid_minimises_it() {
+        // Modes held at a tenth of the linear model's (as effects the curves do not let
+        // grow): the ML and REML minimisers of the criterion at those modes against a
+        // 20,000-point grid in ln τ, and REML's term pulling upward.
+        let (n, per, p, k) = (8, 30, 2, 1);
+        let (x, z, y, groups) = problem(34, n, per, p, k, &[0.5]);
+        let ml = lmm_of(&x, &z, &y, &groups, k).estimate(&[0.1], false);
+        let (beta, eta) = pls_modes(&x, &z, &y, k, n, &ml);
+        let small: Vec<f64> = eta.iter().map(|e| 0.1 * e).collect();
+        let (lmm, g) = lmm_at(&x, &z, &y, &groups, k, &beta, &small);
+        let mut got = [0.0; 2];
+        for (j, restricted) in [false, true].into_iter().enumerate() {
+            let f = |t: f64| laplace_criterion(&lmm, &small, &g, &[t], restricted);
+            got[j] = minimise_scatter(&[0.1], |t| f(t[0]))[0];
+            let (lf, lm) = (SCATTER_FLOOR.ln(), SCATTER_MAX.ln());
+            let brute = (0..=20_000)
+                .map(|i| (lf + (lm - lf) * i as f64 / 20_000.0).exp())
+                .min_by(|a, b| f(*a).total_cmp(&f(*b)))
+                .unwrap();
+            assert!(
+                (got[j] / brute).ln().abs() < 1e-3,
+                "{restricted}: {} against {brute}",
+                got[j]
+            );
+            assert!(
+                got[j] < 0.5 * ml[0],
+                "{restricted}: {} against the linear model's {}",
+                got[j],
+                ml[0]
+            );
+        }
+        assert!(got[1] > got[0]);
+    }
+
+    #[test]
+    fn a_step_pays_when_the_likelihood_does_not_rise() {
+        for (before, after, pays) in [
+            (-100.0, -120.0, true),
+            (-100.0, -100.0, true),
+            (-100.0, -100.0 + 1e-3, true),
+            (-100.0, -100.0 + 2e-3, false),
+            (-100.0, -50.0, false),
+            (-100.0, f64::NAN, false),
+            (f64::NAN, -100.0, false),
+        ] {
+            assert_eq!(step_pays(before, after, 1e-3), pays, "{before} → {after}");
         }
     }
 }

@@ -661,6 +661,10 @@ pub struct ScatterFit {
     /// records written before it was kept.
     #[serde(default, deserialize_with = "de_vec_f64")]
     pub phi_est: Vec<f64>,
+    /// Which criterion gave the scatter (`None`: no specimen effects kept, or a record
+    /// written before it was kept).
+    #[serde(default)]
+    pub scatter_method: Option<crate::specimen::ScatterMethod>,
 }
 
 /// Where [`scatter_fit`] starts.
@@ -733,6 +737,7 @@ pub fn scatter_fit(
         neg2ll: fit.neg2ll,
         iterations: fit.iterations,
         phi_est: fit.noise.strain.iter().map(|a| a.phi).collect(),
+        scatter_method: fit.specimen.as_ref().map(|f| f.scatter_method),
     })
 }
 
@@ -1172,6 +1177,7 @@ mod tests {
             neg2ll: -123.5,
             iterations: 12,
             phi_est: vec![0.25, 0.5],
+            scatter_method: Some(crate::specimen::ScatterMethod::LaplaceAtModes),
         };
         let text = serde_json::to_string(&("guess", &f)).unwrap();
         let (start, back): (String, ScatterFit) = serde_json::from_str(&text).unwrap();
@@ -1179,6 +1185,7 @@ mod tests {
         assert_eq!((back.seed, back.iterations, back.neg2ll), (7, 12, -123.5));
         assert_eq!(back.scatter_lo95[0], 0.1);
         assert!(back.scatter_lo95[1].is_nan() && back.scatter_hi95[1].is_nan());
+        assert_eq!(back.scatter_method, f.scatter_method);
         assert_eq!(back.phi_est, vec![0.25, 0.5]);
         // A record written before φ was kept reads with none.
         let old = text.replace(",\"phi_est\":[0.25,0.5]", "");
@@ -1200,6 +1207,7 @@ mod tests {
             kinds,
             scatter: s,
             neg2ll_effects: 0.0,
+            scatter_method: Default::default(),
             dropped: vec![],
         };
         let both = fit(

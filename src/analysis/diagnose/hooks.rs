@@ -251,6 +251,9 @@ struct SpecimenRecord {
     effects_sd: Vec<Exact>,
     #[serde(with = "exact")]
     neg2ll_effects: f64,
+    /// Absent from journals written before it existed: the linear mixed model's, as then.
+    #[serde(default)]
+    scatter_method: crate::specimen::ScatterMethod,
     dropped: Vec<EffectKind>,
 }
 
@@ -306,6 +309,7 @@ impl From<&ModelFits> for FitsRecord {
                     effects: exacts(&s.effects),
                     effects_sd: exacts(&s.effects_sd),
                     neg2ll_effects: s.neg2ll_effects,
+                    scatter_method: s.scatter_method,
                     dropped: s.dropped.clone(),
                 }),
                 termination: f.termination,
@@ -364,6 +368,7 @@ impl From<FitsRecord> for ModelFits {
                     effects: plain(s.effects),
                     effects_sd: plain(s.effects_sd),
                     neg2ll_effects: s.neg2ll_effects,
+                    scatter_method: s.scatter_method,
                     dropped: s.dropped,
                 }),
                 termination: f.termination,
@@ -485,6 +490,7 @@ mod tests {
                 effects: vec![vec![-0.1, 0.2 / 3.0]],
                 effects_sd: vec![vec![0.05, 0.07]],
                 neg2ll_effects: 12.5,
+                scatter_method: crate::specimen::ScatterMethod::LaplaceAtModes,
                 dropped: vec![EffectKind::Ductility],
             }),
             termination: Termination::ConvergedStep,

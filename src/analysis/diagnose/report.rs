@@ -352,6 +352,9 @@ fn specimens_md(d: &Diagnosis, setup: &DiagnoseSetup) -> String {
             sp.scatter_hi95[j]
         );
     }
+    if sp.scatter_method != crate::specimen::ScatterMethod::LinearMixedModel {
+        s += &format!("- The scatter is {}.\n", sp.scatter_method.note());
+    }
     for t in d
         .base
         .specimen_stress_trend

@@ -733,6 +733,7 @@ pub fn specimens_json(sp: &crate::fit::FitSpecimens) -> Value {
         "fitted": sp.fit.is_some(),
         "scatter": scatter,
         "dropped": sp.fit.as_ref().map(|f| f.dropped.clone()).unwrap_or_default(),
+        "scatter_method": sp.fit.as_ref().map(|f| f.scatter_method),
         "neg2ll_without_effects": jnum(sp.plain_neg2ll),
         "replicate_curves": sp.replicate_curves,
         "replicate_sd_ln_rupture_time": sp.replicate_sd_ln_life.map(jnum),

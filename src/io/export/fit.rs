@@ -195,6 +195,9 @@ fn print_specimens(sp: &crate::fit::FitSpecimens) {
                 f.scatter_hi95[j]
             );
         }
+        if f.scatter_method != crate::specimen::ScatterMethod::LinearMixedModel {
+            println!("specimens: the scatter is {}", f.scatter_method.note());
+        }
         for k in &f.dropped {
             println!("specimens: no {k:?} scatter supported by the data (estimated at zero)");
         }
