@@ -1054,6 +1054,7 @@ fn a_nested_warm_fit_never_ends_above_the_base_optimum() {
             .collect(),
         effects: b["effects"].as_array().unwrap().iter().map(nums).collect(),
         scatter: nums(&b["scatter"]),
+        method: Default::default(),
     };
     let ml = MlOptions {
         lifetime_sd_floor: cfg.diagnose.lifetime_sd_floor,

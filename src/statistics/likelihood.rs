@@ -1075,6 +1075,8 @@ pub struct EffectStart {
     pub effects: Vec<Vec<f64>>,
     /// Per kind: the scatter.
     pub scatter: Vec<f64>,
+    /// The criterion the scatter came from: a warm start's own report is taken by it.
+    pub method: ScatterMethod,
 }
 
 impl EffectStart {
@@ -1084,6 +1086,7 @@ impl EffectStart {
             effects: vec![vec![0.0; n_curves]; kinds.len()],
             kinds,
             scatter,
+            method: ScatterMethod::LinearMixedModel,
         }
     }
 }
@@ -1120,6 +1123,7 @@ impl From<&SpecimenFit> for EffectStart {
             kinds: f.kinds.clone(),
             effects: f.effects.clone(),
             scatter: f.scatter.clone(),
+            method: f.scatter_method,
         }
     }
 }
@@ -1585,7 +1589,7 @@ pub fn ml_fit_row(
                     &u,
                     &reduced,
                     &tau,
-                    ScatterMethod::LinearMixedModel,
+                    effects.map_or(ScatterMethod::LinearMixedModel, |e| e.method),
                     settings,
                     opts,
                 )?;
