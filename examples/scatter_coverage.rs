@@ -91,12 +91,15 @@ fn main() {
         "# Scatter coverage, specimens world, scenario {scenario}, seeds {first}–{}\n\n| start | kind | sets with the scatter | covered | % (Wilson 95 %) | sets without | zero excluded |\n|---|---|---|---|---|---|---|\n",
         first + n - 1
     );
-    for (k, _) in STARTS {
-        let fits: Vec<&ScatterFit> = have
-            .iter()
+    // The fits of start `k` over the asked seeds.
+    let fits_of = |k: &str| -> Vec<&ScatterFit> {
+        have.iter()
             .filter(|((seed, st), _)| st == k && (first..first + n).contains(seed))
             .map(|(_, f)| f)
-            .collect();
+            .collect()
+    };
+    for (k, _) in STARTS {
+        let fits = fits_of(k);
         let cov = coverage_of(fits.iter().map(|f| {
             (
                 &f.scatter_true[..],
@@ -121,11 +124,7 @@ fn main() {
     }
     // Where the Laplace criterion at the modes refuted the linear mixed model's estimate.
     for (k, _) in STARTS {
-        let fits: Vec<&ScatterFit> = have
-            .iter()
-            .filter(|((seed, st), _)| st == k && (first..first + n).contains(seed))
-            .map(|(_, f)| f)
-            .collect();
+        let fits = fits_of(k);
         let laplace = fits
             .iter()
             .filter(|f| f.scatter_method == Some(creepfit::specimen::ScatterMethod::LaplaceAtModes))

@@ -57,7 +57,7 @@ use crate::model::objective::{
     CreepProblem, CurveFactors, Evaluation, Objective, ObjectiveSettings, ParamSpace,
 };
 use crate::model::{Model, Role};
-use crate::specimen::{Lmm, ScatterMethod};
+use crate::specimen::{minimise_scatter, Lmm, ScatterMethod};
 
 /// Options of [`ml_fit`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -182,7 +182,6 @@ impl SpecimenOptions {
 /// Largest |ln factor| of one specimen (a factor of 20 either way): a bound for the optimiser,
 /// far beyond any scatter a real data set shows.
 pub const EFFECT_MAX: f64 = 3.0;
-use crate::specimen::minimise_scatter;
 pub use crate::specimen::{laplace_terms, SCATTER_FLOOR, SCATTER_MAX};
 
 /// Whether a scatter estimate sits at [`SCATTER_MAX`]: the data cannot bound it (measured
@@ -772,7 +771,7 @@ pub struct SpecimenFit {
     /// The random-effects terms of −2 ln L (penalties and log-determinants).
     pub neg2ll_effects: f64,
     /// Which criterion the scatter was estimated by (the linear mixed model's, or the Laplace
-    /// criterion at the modes where that refutes it).
+    /// criterion at the modes where that model's step did not pay or it stopped short).
     pub scatter_method: crate::specimen::ScatterMethod,
     /// Kinds asked for but not fitted (their constant held fixed or absent), or dropped
     /// because their scatter went to zero.
@@ -1883,12 +1882,15 @@ fn hier_fit(
                 // (measured on Alloy 617 at 950 °C: the linear model held the coarsening
                 // scatter at its bound 3.0, where the criterion at the modes was lowest at
                 // 0.2–0.4).
-                let better = minimise_scatter(&tau, at_modes);
-                if stays && at_modes(&better) < at_modes(&tau) - SCATTER_TOL {
-                    method = ScatterMethod::LaplaceAtModes;
-                    (better, false)
-                } else {
-                    (new, settled)
+                let better = stays
+                    .then(|| minimise_scatter(&tau, at_modes))
+                    .filter(|b| at_modes(b) < at_modes(&tau) - SCATTER_TOL);
+                match better {
+                    Some(b) => {
+                        method = ScatterMethod::LaplaceAtModes;
+                        (b, false)
+                    }
+                    None => (new, settled),
                 }
             }
             ScatterMethod::LaplaceAtModes => {
@@ -1933,8 +1935,9 @@ fn hier_fit(
 /// The scatter's (ML, REML) estimates at a hierarchical fit's point from `tau` (the fit's
 /// last scatter), by the criterion `method` names: the linear mixed model `lmm` of the
 /// point's linearisation, or, where the fit found that model's steps not to pay, the Laplace
-/// criterion at the modes `eta` (Gram blocks `g`), whose ML estimate is the fit's own `tau`;
-/// and the method they came from.
+/// criterion at the modes `eta` (Gram blocks `g`), whose ML estimate is taken as `tau` (the
+/// fit's own; for a warm start's report, the start's reported scatter, which
+/// [`report_hier`] re-minimises for the likelihood anyway); and the method they came from.
 fn scatter_estimates(
     lmm: &Lmm,
     eta: &[f64],
