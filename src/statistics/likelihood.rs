@@ -1807,11 +1807,22 @@ fn hier_fit(
     let mut accepted: Option<Accepted> = None;
     let mut method = ScatterMethod::LinearMixedModel;
     let lives = curves.iter().filter(|c| c.rupture_time_h.is_some()).count();
+    // Each round after the first picks up the damping the previous one ended with. A fresh
+    // λ₀ (scaled by the largest diagonal of JᵀJ on top of Marquardt's diagonal scaling)
+    // starts at a relative damping near 1e5, whose first step, after a small change of the
+    // scatter, is shorter than xtol: the round then ended as `converged_step` after one
+    // iteration without refitting anything (traced on a generated null set with rate and
+    // ductility effects: every round after the first; the base fit ended 2.85 in −2 ln L
+    // above the optimum the carried damping reaches, and every extension's ratio grew by as
+    // much). Measured on 100 generated sets (seeds 131001–131100, from the guess): the fit
+    // ends lower in 73, by up to 22.9, higher in none.
+    let mut lambda0 = settings.lm.lambda0;
     for _ in 0..SCATTER_ROUNDS {
         let problem = LikelihoodProblem::new(inner(), noise.clone(), opts.lifetime_sd_floor)
             .with_effects(layout.clone(), tau.clone(), true);
         let lm_opts = crate::lsq::LmOptions {
             plateau: Some(PLATEAU),
+            lambda0,
             ..settings.lm
         };
         let lm = minimize_with(&problem, held, space, &x, &lo, &hi, &lm_opts);
@@ -1820,6 +1831,7 @@ fn hier_fit(
         if lm.termination == Termination::SimulationFailure {
             return Err((lm.failure.unwrap_or_default(), its, evs));
         }
+        lambda0 = carried_damping(lm.lambda, settings.lm.lambda0);
         x = lm.x;
         noise = problem.noise();
         termination = lm.termination;
@@ -1930,6 +1942,17 @@ fn hier_fit(
     fit.iterations = its;
     fit.evaluations = evs;
     Ok(fit)
+}
+
+/// The initial damping of a hierarchical round from the relative damping `last` the previous
+/// round ended with (NaN if it tried no step): `last`, but never above `fresh` (the
+/// configured λ₀) nor below 1e-12, where the damping no longer matters.
+pub fn carried_damping(last: f64, fresh: f64) -> f64 {
+    if last.is_finite() && last > 0.0 {
+        last.min(fresh).max(fresh.min(1e-12))
+    } else {
+        fresh
+    }
 }
 
 /// The scatter's (ML, REML) estimates at a hierarchical fit's point from `tau` (the fit's
@@ -2596,6 +2619,24 @@ pub fn min_penalised(
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn a_round_picks_up_the_damping_the_last_one_ended_with() {
+        use super::carried_damping;
+        // (last, fresh) → initial damping of the next round.
+        let table = [
+            (1e-5, 1e-3, 1e-5),     // carried
+            (0.5, 1e-3, 1e-3),      // never above the configured λ₀
+            (1e-20, 1e-3, 1e-12),   // nor below 1e-12
+            (1e-20, 1e-14, 1e-14),  // unless λ₀ itself is smaller
+            (f64::NAN, 1e-3, 1e-3), // no step tried: fresh
+            (0.0, 1e-3, 1e-3),
+            (f64::INFINITY, 1e-3, 1e-3),
+        ];
+        for (last, fresh, want) in table {
+            assert_eq!(carried_damping(last, fresh), want, "{last} {fresh}");
+        }
+    }
+
     /// A ruptured two-point curve at `t` °C and `s` MPa: what the factor summaries read of a
     /// curve (its temperature, stress and specimen).
     fn two_point_curve(t: f64, s: f64, specimen: Option<&str>) -> crate::data::Curve {
