@@ -197,6 +197,14 @@ pub const CHI2_1_95: f64 = 3.841_458_820_694_124;
 pub const SCATTER_TOL: f64 = 1e-3;
 /// A scatter estimate that changes by less than this (relative) has settled.
 pub const SCATTER_RTOL: f64 = 0.01;
+
+/// Whether every kind's scatter in `a` is within [`SCATTER_RTOL`] (relative, on the log
+/// scale) of `b`'s: the scatter has settled.
+pub fn scatter_settled(a: &[f64], b: &[f64]) -> bool {
+    a.iter()
+        .zip(b)
+        .all(|(x, y)| (x / y).ln().abs() < SCATTER_RTOL)
+}
 /// The plateau test of a hierarchical fit's LM ([`crate::lsq::LmOptions::plateau`]): −2 ln L
 /// (the residuals' sum of squares plus the error model's log-determinant,
 /// [`crate::lsq::LeastSquaresProblem::objective_offset`]) within 0.01 over 6 iterations.
@@ -1864,11 +1872,7 @@ fn hier_fit(
                 method = ScatterMethod::LaplaceAtModes;
                 let eta = prev.x[nt..].to_vec();
                 tau = minimise_scatter(&back, |t| laplace_terms(&eta, &prev.g, t));
-                if tau
-                    .iter()
-                    .zip(&back)
-                    .all(|(a, b)| (a / b).ln().abs() < SCATTER_RTOL)
-                {
+                if scatter_settled(&tau, &back) {
                     tau = back;
                     break;
                 }
@@ -1883,11 +1887,7 @@ fn hier_fit(
             ScatterMethod::LinearMixedModel => {
                 let new = lmm.estimate(&tau, false);
                 let settled = !(lmm.neg2l(&new, false) < lmm.neg2l(&tau, false) - SCATTER_TOL);
-                let stays = settled
-                    || new
-                        .iter()
-                        .zip(&tau)
-                        .all(|(a, b)| (a / b).ln().abs() < SCATTER_RTOL);
+                let stays = settled || scatter_settled(&new, &tau);
                 // Where the linear model would stay, the criterion at the modes must not see
                 // a descent: it lies above the Laplace −2 ln L profiled over the effects and
                 // touches it here, so a lower value elsewhere is a lower likelihood there
@@ -1911,11 +1911,7 @@ fn hier_fit(
                 (new, settled)
             }
         };
-        let settled = settled
-            || new
-                .iter()
-                .zip(&tau)
-                .all(|(a, b)| (a / b).ln().abs() < SCATTER_RTOL);
+        let settled = settled || scatter_settled(&new, &tau);
         accepted = Some(Accepted {
             neg2ll: now,
             x: x.clone(),
@@ -1981,11 +1977,7 @@ fn scatter_estimates(
             // Where the linear model stays at the scatter the modes were fitted at, the
             // criterion at the modes must not fall elsewhere ([`hier_fit`]'s check; here for
             // a report taken at a start's optimum without rounds).
-            if ml
-                .iter()
-                .zip(tau)
-                .all(|(a, b)| (a / b).ln().abs() < SCATTER_RTOL)
-            {
+            if scatter_settled(&ml, tau) {
                 let better = minimise_scatter(&ml, |t| at_modes(t, false));
                 if at_modes(&better, false) < at_modes(&ml, false) - SCATTER_TOL {
                     return by_modes(better);
@@ -2634,6 +2626,21 @@ mod tests {
         ];
         for (last, fresh, want) in table {
             assert_eq!(carried_damping(last, fresh), want, "{last} {fresh}");
+        }
+    }
+
+    #[test]
+    fn a_scatter_has_settled_when_every_kind_moved_less_than_one_percent() {
+        use super::scatter_settled;
+        let table: [(&[f64], &[f64], bool); 5] = [
+            (&[0.2], &[0.2019], true),
+            (&[0.2], &[0.2021], false),
+            (&[0.2021], &[0.2], false),
+            (&[0.2, 0.05], &[0.2019, 0.0504], true),
+            (&[0.2, 0.05], &[0.2, 0.051], false),
+        ];
+        for (a, b, want) in table {
+            assert_eq!(scatter_settled(a, b), want, "{a:?} {b:?}");
         }
     }
 
