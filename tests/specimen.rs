@@ -562,6 +562,38 @@ fn diagnose_generated(index: usize, seed: u64) -> creepfit::battery::SetResult {
     r
 }
 
+/// Generated set `name` of the specimens world (`scenario`, `seed`) written into `dir`, and its
+/// configuration loaded back as `creepfit` would.
+fn generated_set(
+    dir: &std::path::Path,
+    name: &str,
+    scenario: &str,
+    seed: u64,
+) -> (creepfit::synth::SynthSet, creepfit::config::RunConfig) {
+    let set = creepfit::synth::generate_in(
+        name,
+        scenario,
+        None,
+        seed,
+        creepfit::synth::World::Specimens,
+    )
+    .unwrap();
+    let folder = dir.join(name);
+    creepfit::synth::write_set(&set, &folder).unwrap();
+    let cfg = creepfit::config::RunConfig::load(&folder.join("config.toml")).unwrap();
+    (set, cfg)
+}
+
+/// The curves of `cfg`'s data binned as `diagnose` bins them.
+fn binned_curves(cfg: &creepfit::config::RunConfig) -> Vec<Curve> {
+    cfg.load_data()
+        .unwrap()
+        .curves
+        .iter()
+        .map(|c| creepfit::data::binned(c, cfg.diagnose.max_points))
+        .collect()
+}
+
 /// A set with specimen scatter and no hidden effect (fresh seed 95001, not used while
 /// developing): the hierarchical base model is adequate — before the specimen effects
 /// 28 of 30 such sets were `unexplained`.
@@ -657,18 +689,8 @@ fn an_effect_under_specimen_scatter_is_named() {
     let dir = tempfile::TempDir::new().unwrap();
     let seed = (95101..95121)
         .find(|&seed| {
-            let name = format!("probe-{seed}");
-            let set = creepfit::synth::generate_in(
-                &name,
-                "loading_strain",
-                None,
-                seed,
-                creepfit::synth::World::Specimens,
-            )
-            .unwrap();
-            let folder = dir.path().join(&name);
-            creepfit::synth::write_set(&set, &folder).unwrap();
-            let cfg = creepfit::config::RunConfig::load(&folder.join("config.toml")).unwrap();
+            let (set, cfg) =
+                generated_set(dir.path(), &format!("probe-{seed}"), "loading_strain", seed);
             let lambda = creepfit::battery::oracle_lambda_scatter(&cfg, &set.truth)
                 .expect("a catalogued effect in the specimens world");
             eprintln!("seed {seed}: λ (factors unknown) {lambda:.1}");
@@ -695,24 +717,8 @@ fn a_nested_extension_refitted_from_the_base_optimum_never_ends_below_it() {
     let dir = tempfile::TempDir::new().unwrap();
     let (mut checked, mut failed) = (0, 0);
     for seed in 99001..99007u64 {
-        let name = format!("set-{seed}");
-        let set = creepfit::synth::generate_in(
-            &name,
-            "none",
-            None,
-            seed,
-            creepfit::synth::World::Specimens,
-        )
-        .unwrap();
-        let folder = dir.path().join(&name);
-        creepfit::synth::write_set(&set, &folder).unwrap();
-        let cfg = creepfit::config::RunConfig::load(&folder.join("config.toml")).unwrap();
-        let data = cfg.load_data().unwrap();
-        let curves: Vec<Curve> = data
-            .curves
-            .iter()
-            .map(|c| creepfit::data::binned(c, cfg.diagnose.max_points))
-            .collect();
+        let (set, cfg) = generated_set(dir.path(), &format!("set-{seed}"), "none", seed);
+        let curves = binned_curves(&cfg);
         let setup = cfg.diagnose_setup().unwrap();
         let ml = MlOptions {
             specimen: SpecimenOptions::BOTH,
@@ -1025,13 +1031,8 @@ fn a_nested_warm_fit_never_ends_above_the_base_optimum() {
     use creepfit::likelihood::{ml_fit_from, EffectStart};
     let here = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/warm_drop");
     let cfg = creepfit::config::RunConfig::load(&here.join("config.toml")).unwrap();
-    let data = cfg.load_data().unwrap();
     let setup = cfg.diagnose_setup().unwrap();
-    let curves: Vec<Curve> = data
-        .curves
-        .iter()
-        .map(|c| creepfit::data::binned(c, cfg.diagnose.max_points))
-        .collect();
+    let curves = binned_curves(&cfg);
     let text = std::fs::read_to_string(here.join("base.json")).unwrap();
     let b: serde_json::Value = serde_json::from_str(&text).unwrap();
     let nums = |v: &serde_json::Value| -> Vec<f64> {
@@ -1114,29 +1115,11 @@ fn a_nested_warm_fit_never_ends_above_the_base_optimum() {
 /// ended up to 22.9 above (73 of 100 sets, seeds 131001–131100, by more than 0.1).
 #[test]
 fn a_hierarchical_fits_rounds_refit_after_every_scatter_step() {
-    use creepfit::config::RunConfig;
     let dir = tempfile::TempDir::new().unwrap();
     let mut gaps = vec![];
     for seed in 158001..=158012u64 {
-        let name = format!("set-{seed}");
-        let set = creepfit::synth::generate_in(
-            &name,
-            "none",
-            None,
-            seed,
-            creepfit::synth::World::Specimens,
-        )
-        .unwrap();
-        let folder = dir.path().join(&name);
-        creepfit::synth::write_set(&set, &folder).unwrap();
-        let cfg = RunConfig::load(&folder.join("config.toml")).unwrap();
-        let curves: Vec<Curve> = cfg
-            .load_data()
-            .unwrap()
-            .curves
-            .iter()
-            .map(|c| creepfit::data::binned(c, cfg.diagnose.max_points))
-            .collect();
+        let (_, cfg) = generated_set(dir.path(), &format!("set-{seed}"), "none", seed);
+        let curves = binned_curves(&cfg);
         let model = cfg.build_model().unwrap();
         let sp = cfg.space();
         let settings = FitSettings::from_config(&cfg);
