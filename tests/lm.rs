@@ -494,6 +494,38 @@ fn a_heavily_damped_step_is_not_taken_for_convergence() {
     );
 }
 
+#[test]
+fn a_step_short_only_because_of_the_damping_is_not_convergence() {
+    // Two variables whose curvatures are 1e16 apart: the initial damping, relative to the
+    // largest diagonal of JᵀJ, makes the weak variable's first step ~1e-13 long, below
+    // xtol·‖x‖. That once ended the run as `converged_step` at its start, two units from the
+    // minimum (as the rounds of a hierarchical fit ended, after a scatter step, at relative
+    // dampings near 1e5); the undamped step is not short, so the damping must give way.
+    let p = Fun {
+        n: 2,
+        m: 2,
+        f: |x: &[f64], r: &mut [f64]| {
+            r[0] = 1e8 * (x[0] - 1.0);
+            r[1] = x[1] - 2.0;
+        },
+    };
+    let rep = minimize(
+        &p,
+        &[1.0, 0.0],
+        &[-10.0; 2],
+        &[10.0; 2],
+        &LmOptions::default(),
+    );
+    assert!(rep.termination.converged(), "{:?}", rep.termination);
+    assert!(
+        (rep.x[1] - 2.0).abs() < 1e-6 && (rep.x[0] - 1.0).abs() < 1e-12,
+        "{:?} after {} iterations ({:?})",
+        rep.x,
+        rep.iterations,
+        rep.termination
+    );
+}
+
 /// Rosenbrock's residuals and a constant one, with their scale σ profiled as a likelihood
 /// profiles its reading error: r = g(x)/σ, σ re-estimated as ‖g‖/√m at every accepted point.
 /// Then ‖r‖² = m there whatever x is, and the true objective is −2 ln L = m + m ln σ² (+ a

@@ -21,7 +21,7 @@ use rayon::prelude::*;
 use crate::data::Curve;
 use crate::errmodel::{strain_fractions, ErrorModel, GrowingError};
 use crate::fit::FitSettings;
-use crate::likelihood::{raw_objective, MlFit};
+use crate::likelihood::{raw_objective, EffectStart, MlFit};
 use crate::model::objective::Evaluation;
 use crate::model::Model;
 
@@ -126,9 +126,23 @@ pub fn replicate_hier<R: Rng>(
     settings: &FitSettings,
     rng: &mut R,
 ) -> Vec<Curve> {
+    replicate_hier_drawn(curves, model, fit, reading, settings, rng).0
+}
+
+/// [`replicate_hier`] and the point the replicate was drawn at: the new specimens' effects
+/// with `fit`'s kinds and scatter (`None` without specimen effects), a known start for the
+/// replicate's refit.
+pub fn replicate_hier_drawn<R: Rng>(
+    curves: &[Curve],
+    model: &dyn Model,
+    fit: &MlFit,
+    reading: &GrowingError,
+    settings: &FitSettings,
+    rng: &mut R,
+) -> (Vec<Curve>, Option<EffectStart>) {
     let eval = fit.eval.as_ref().expect("fitted");
     let Some(sp) = &fit.specimen else {
-        return replicate_data(curves, eval, &fit.noise, reading, rng);
+        return (replicate_data(curves, eval, &fit.noise, reading, rng), None);
     };
     let n = curves.len();
     // Draw every effect first (a fixed use of the stream), kind-major.
@@ -141,6 +155,12 @@ pub fn replicate_hier<R: Rng>(
                 .collect()
         })
         .collect();
+    let drawn = EffectStart {
+        kinds: sp.kinds.clone(),
+        effects: draws.clone(),
+        scatter: sp.scatter.clone(),
+        method: sp.scatter_method,
+    };
     let mut base = fit.clone();
     base.specimen = Some(crate::likelihood::SpecimenFit {
         effects: draws,
@@ -173,7 +193,7 @@ pub fn replicate_hier<R: Rng>(
     let ev = raw_objective(model, &scaled, settings)
         .with_factors(factors)
         .evaluate(&fit.params);
-    scaled
+    let data = scaled
         .into_iter()
         .zip(&ev.curves)
         .enumerate()
@@ -197,7 +217,8 @@ pub fn replicate_hier<R: Rng>(
                 ..c
             }
         })
-        .collect()
+        .collect();
+    (data, Some(drawn))
 }
 
 /// Statistics closer than this (in units of −2 ln L) are ties: the fits converge to about

@@ -429,6 +429,28 @@ fn gauss_newton_gain(
     }
 }
 
+/// Length of the undamped (Gauss–Newton) step on the variables `held` from `x`, projected
+/// onto the box: whether a short damped step is short because of the damping. ∞ if the
+/// model cannot be solved.
+#[allow(clippy::too_many_arguments)]
+fn gauss_newton_step(
+    jtj: &DMatrix<f64>,
+    g: &DVector<f64>,
+    x: &[f64],
+    lb: &[f64],
+    ub: &[f64],
+    held: &[usize],
+    diag_max: f64,
+) -> f64 {
+    match solve_held(jtj, g, held, |_| DIAG_FLOOR * diag_max) {
+        Some((_, step)) => projected(x, &step, 1.0, held, lb, ub).norm(),
+        None => f64::INFINITY,
+    }
+}
+
+/// The factor the damping is cut by when a step was short only because of it.
+const OVERDAMPED_CUT: f64 = 1e-3;
+
 /// The gain-to-come test of [`LmOptions::gain_to_come`] on the objective at three iterations
 /// K apart (`f0`, `f1`, `f2`): the falls d₁ = f0 − f1 and d₂ = f1 − f2 shrink by q = d₂/d₁ <
 /// 0.9 and their geometric tail d₂·q/(1 − q) is at most `delta`, or nothing fell over the
@@ -759,7 +781,18 @@ fn minimize_uncounted<P: LeastSquaresProblem + ?Sized>(
             }
             let v_norm = v.norm();
             let x_norm = x.iter().map(|v| v * v).sum::<f64>().sqrt();
-            if v_norm <= opts.xtol * (x_norm + opts.xtol) {
+            let step_tol = opts.xtol * (x_norm + opts.xtol);
+            if v_norm <= step_tol {
+                // A step this short only because of the damping is not convergence: where
+                // the undamped step is not short and no step was rejected since the last
+                // accepted one, the damping is cut and the step solved again.
+                if nu == 2.0
+                    && lambda > DIAG_FLOOR * diag_max
+                    && gauss_newton_step(&jtj, &g, &x, lb, ub, &held, diag_max) > step_tol
+                {
+                    lambda = (lambda * OVERDAMPED_CUT).max(DIAG_FLOOR * diag_max);
+                    continue;
+                }
                 return done(x, f, r, iter, evaluations, Termination::ConvergedStep);
             }
             let mut predicted = lin.reduction(f, &v);
@@ -887,6 +920,14 @@ fn minimize_uncounted<P: LeastSquaresProblem + ?Sized>(
                     return done(x, f, r, iter, evaluations, Termination::ConvergedObjective);
                 }
                 if dx_norm <= opts.xtol * (x_norm + opts.xtol) {
+                    // As above: a short step of an overdamped iteration goes on, less damped.
+                    if lambda > DIAG_FLOOR * diag_max
+                        && gauss_newton_step(&jtj, &g, &x_trial, lb, ub, &held, diag_max)
+                            > opts.xtol * (x_norm + opts.xtol)
+                    {
+                        lambda = (lambda * OVERDAMPED_CUT).max(DIAG_FLOOR * diag_max);
+                        break;
+                    }
                     return done(x, f, r, iter, evaluations, Termination::ConvergedStep);
                 }
                 break;
