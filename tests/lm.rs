@@ -501,6 +501,8 @@ fn a_step_short_only_because_of_the_damping_is_not_convergence() {
     // xtol·‖x‖. That once ended the run as `converged_step` at its start, two units from the
     // minimum (as the rounds of a hierarchical fit ended, after a scatter step, at relative
     // dampings near 1e5); the undamped step is not short, so the damping must give way.
+    // Without the option the run stops where it began, as it does in the fits that were
+    // calibrated without it.
     let p = Fun {
         n: 2,
         m: 2,
@@ -509,13 +511,11 @@ fn a_step_short_only_because_of_the_damping_is_not_convergence() {
             r[1] = x[1] - 2.0;
         },
     };
-    let rep = minimize(
-        &p,
-        &[1.0, 0.0],
-        &[-10.0; 2],
-        &[10.0; 2],
-        &LmOptions::default(),
-    );
+    let opts = LmOptions {
+        cut_overdamped: true,
+        ..LmOptions::default()
+    };
+    let rep = minimize(&p, &[1.0, 0.0], &[-10.0; 2], &[10.0; 2], &opts);
     assert!(rep.termination.converged(), "{:?}", rep.termination);
     assert!(
         (rep.x[1] - 2.0).abs() < 1e-6 && (rep.x[0] - 1.0).abs() < 1e-12,
@@ -524,6 +524,15 @@ fn a_step_short_only_because_of_the_damping_is_not_convergence() {
         rep.iterations,
         rep.termination
     );
+    let off = minimize(
+        &p,
+        &[1.0, 0.0],
+        &[-10.0; 2],
+        &[10.0; 2],
+        &LmOptions::default(),
+    );
+    assert_eq!(off.termination, Termination::ConvergedStep);
+    assert_eq!(off.x[1], 0.0);
 }
 
 /// Rosenbrock's residuals and a constant one, with their scale σ profiled as a likelihood

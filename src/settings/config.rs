@@ -322,6 +322,7 @@ impl SolverConfig {
             geodesic_h: self.geodesic_h,
             plateau: None,
             gain_to_come: None,
+            cut_overdamped: false,
         }
     }
     /// Integration options (the horizon `t_end` is set per curve by its user).

@@ -1789,7 +1789,11 @@ fn hier_fit(
                 ErrorModel::estimate_white(&split_residuals(curves, &r), opts.lifetime_sd_floor);
             let problem = LikelihoodProblem::white(inner(), white_noise, opts.lifetime_sd_floor)
                 .with_effects(layout.clone(), tau.clone(), true);
-            let lm = minimize_with(&problem, held, space, &x, &lo, &hi, &settings.lm);
+            let white_opts = crate::lsq::LmOptions {
+                cut_overdamped: true,
+                ..settings.lm
+            };
+            let lm = minimize_with(&problem, held, space, &x, &lo, &hi, &white_opts);
             its += lm.iterations;
             evs += lm.evaluations;
             if lm.termination == Termination::SimulationFailure {
@@ -1835,6 +1839,7 @@ fn hier_fit(
         let lm_opts = crate::lsq::LmOptions {
             plateau: Some(PLATEAU),
             lambda0,
+            cut_overdamped: true,
             ..settings.lm
         };
         let lm = minimize_with(&problem, held, space, &x, &lo, &hi, &lm_opts);

@@ -179,6 +179,12 @@ pub struct LmOptions {
     /// at most δ over the one before (`None`: never). For refits that crawl along a flat
     /// valley, whose last iterations change the objective far below any decision.
     pub gain_to_come: Option<(usize, f64)>,
+    /// A step shorter than `xtol` only because of the damping (the undamped step is not
+    /// short, no step was rejected since the last accepted one) is not convergence: the
+    /// damping is cut by [`OVERDAMPED_CUT`] and the step solved again. On for the
+    /// hierarchical fits, whose rounds start heavily damped next to a moved optimum; off
+    /// elsewhere, where the diagnosis was calibrated without it.
+    pub cut_overdamped: bool,
 }
 
 impl Default for LmOptions {
@@ -195,6 +201,7 @@ impl Default for LmOptions {
             geodesic_h: 0.1,
             plateau: None,
             gain_to_come: None,
+            cut_overdamped: false,
         }
     }
 }
@@ -448,8 +455,9 @@ fn gauss_newton_step(
     }
 }
 
-/// The factor the damping is cut by when a step was short only because of it.
-const OVERDAMPED_CUT: f64 = 1e-3;
+/// The factor the damping is cut by when a step was short only because of it
+/// ([`LmOptions::cut_overdamped`]).
+pub const OVERDAMPED_CUT: f64 = 1e-3;
 
 /// The gain-to-come test of [`LmOptions::gain_to_come`] on the objective at three iterations
 /// K apart (`f0`, `f1`, `f2`): the falls d₁ = f0 − f1 and d₂ = f1 − f2 shrink by q = d₂/d₁ <
@@ -786,7 +794,8 @@ fn minimize_uncounted<P: LeastSquaresProblem + ?Sized>(
                 // A step this short only because of the damping is not convergence: where
                 // the undamped step is not short and no step was rejected since the last
                 // accepted one, the damping is cut and the step solved again.
-                if nu == 2.0
+                if opts.cut_overdamped
+                    && nu == 2.0
                     && lambda > DIAG_FLOOR * diag_max
                     && gauss_newton_step(&jtj, &g, &x, lb, ub, &held, diag_max) > step_tol
                 {
@@ -921,7 +930,8 @@ fn minimize_uncounted<P: LeastSquaresProblem + ?Sized>(
                 }
                 if dx_norm <= opts.xtol * (x_norm + opts.xtol) {
                     // As above: a short step of an overdamped iteration goes on, less damped.
-                    if lambda > DIAG_FLOOR * diag_max
+                    if opts.cut_overdamped
+                        && lambda > DIAG_FLOOR * diag_max
                         && gauss_newton_step(&jtj, &g, &x_trial, lb, ub, &held, diag_max)
                             > opts.xtol * (x_norm + opts.xtol)
                     {
