@@ -415,32 +415,11 @@ impl Linear<'_> {
     }
 }
 
-/// Reduction of ‖r‖² that the undamped (Gauss–Newton) linear model predicts for its step on
-/// the variables `held`, projected onto the box: what the iteration could still gain. ∞ if
-/// the model cannot be solved.
-#[allow(clippy::too_many_arguments)]
-fn gauss_newton_gain(
-    lin: &Linear,
-    jtj: &DMatrix<f64>,
-    g: &DVector<f64>,
-    f: f64,
-    x: &[f64],
-    lb: &[f64],
-    ub: &[f64],
-    held: &[usize],
-    diag_max: f64,
-) -> f64 {
-    match solve_held(jtj, g, held, |_| DIAG_FLOOR * diag_max) {
-        Some((_, step)) => lin.reduction(f, &projected(x, &step, 1.0, held, lb, ub)),
-        None => f64::INFINITY,
-    }
-}
-
-/// Length of the undamped (Gauss–Newton) step on the variables `held` from `x`, projected
-/// onto the box: whether a short damped step is short because of the damping. ∞ if the
-/// model cannot be solved.
-#[allow(clippy::too_many_arguments)]
-fn gauss_newton_step(
+/// The undamped (Gauss–Newton) step on the variables `held` from `x`, projected onto the
+/// box (`None` if the model cannot be solved): what the iteration could still gain
+/// ([`Linear::reduction`] of it), and whether a short damped step is short because of the
+/// damping (its length).
+fn gauss_newton_velocity(
     jtj: &DMatrix<f64>,
     g: &DVector<f64>,
     x: &[f64],
@@ -448,11 +427,9 @@ fn gauss_newton_step(
     ub: &[f64],
     held: &[usize],
     diag_max: f64,
-) -> f64 {
-    match solve_held(jtj, g, held, |_| DIAG_FLOOR * diag_max) {
-        Some((_, step)) => projected(x, &step, 1.0, held, lb, ub).norm(),
-        None => f64::INFINITY,
-    }
+) -> Option<DVector<f64>> {
+    solve_held(jtj, g, held, |_| DIAG_FLOOR * diag_max)
+        .map(|(_, step)| projected(x, &step, 1.0, held, lb, ub))
 }
 
 /// The factor the damping is cut by when a step was short only because of it
@@ -797,7 +774,9 @@ fn minimize_uncounted<P: LeastSquaresProblem + ?Sized>(
                 if opts.cut_overdamped
                     && nu == 2.0
                     && lambda > DIAG_FLOOR * diag_max
-                    && gauss_newton_step(&jtj, &g, &x, lb, ub, &held, diag_max) > step_tol
+                    && gauss_newton_velocity(&jtj, &g, &x, lb, ub, &held, diag_max)
+                        .map_or(f64::INFINITY, |v| v.norm())
+                        > step_tol
                 {
                     lambda = (lambda * OVERDAMPED_CUT).max(DIAG_FLOOR * diag_max);
                     continue;
@@ -910,9 +889,10 @@ fn minimize_uncounted<P: LeastSquaresProblem + ?Sized>(
             let objective_converged = trial_ok
                 && negligible(actual)
                 && negligible(predicted)
-                && negligible(gauss_newton_gain(
-                    &lin, &jtj, &g, f, &x, lb, ub, &held, diag_max,
-                ));
+                && negligible(
+                    gauss_newton_velocity(&jtj, &g, &x, lb, ub, &held, diag_max)
+                        .map_or(f64::INFINITY, |v| lin.reduction(f, &v)),
+                );
             if trial_ok && f_trial.is_finite() && actual > 0.0 && rho > 1e-4 {
                 std::mem::swap(&mut x, &mut x_trial);
                 std::mem::swap(&mut r, &mut r_trial);
@@ -932,7 +912,9 @@ fn minimize_uncounted<P: LeastSquaresProblem + ?Sized>(
                     // As above: a short step of an overdamped iteration goes on, less damped.
                     if opts.cut_overdamped
                         && lambda > DIAG_FLOOR * diag_max
-                        && gauss_newton_step(&jtj, &g, &x_trial, lb, ub, &held, diag_max)
+                        // (`x_trial` holds the point the step left, where jtj and g are.)
+                        && gauss_newton_velocity(&jtj, &g, &x_trial, lb, ub, &held, diag_max)
+                            .map_or(f64::INFINITY, |v| v.norm())
                             > opts.xtol * (x_norm + opts.xtol)
                     {
                         lambda = (lambda * OVERDAMPED_CUT).max(DIAG_FLOOR * diag_max);
