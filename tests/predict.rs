@@ -382,6 +382,15 @@ fn predict_intervals_add_their_columns() {
         summary(&out_sp)["refit"]["specimen_effects"],
         serde_json::json!(["rate"])
     );
+    // The thresholds' bootstrap calibration is in the summary: its replicates
+    // (`[profile] calibrate`, 20 by default) and the factor on the χ² thresholds (≥ 1).
+    for dir in [&out, &out_sp] {
+        let cal = &summary(dir)["interval_calibration"];
+        assert_eq!(cal["replicates"], 20, "{cal}");
+        let f = cal["prediction_factor"].as_f64().unwrap();
+        assert!(f >= 1.0 && f.is_finite(), "{cal}");
+        assert!(!cal["per_quantity"].as_array().unwrap().is_empty(), "{cal}");
+    }
     let (plain, hier) = (
         summary(&out)["refit"]["neg2ll"].as_f64().unwrap(),
         summary(&out_sp)["refit"]["neg2ll"].as_f64().unwrap(),

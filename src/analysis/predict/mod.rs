@@ -95,6 +95,9 @@ pub struct PredictRun {
     /// the refit itself.
     pub given: Option<Vec<Prediction>>,
     pub refit: Option<crate::uncertainty::predict::Refit>,
+    /// Under `--intervals`: the bootstrap calibration of the intervals' thresholds (`None`
+    /// without it).
+    pub calibration: Option<crate::uncertainty::calibrate::Calibration>,
     /// The Larson–Miller baseline, or why there is none.
     pub lmp: std::result::Result<LarsonMiller, String>,
     /// Every baseline ([`BaselineKind::ALL`]'s order), each fitted or why it is absent.
@@ -267,6 +270,7 @@ pub fn predict(
         predictions,
         given: None,
         refit: None,
+        calibration: None,
         lmp,
         baselines,
         output_names: model.output_names(),
@@ -375,6 +379,7 @@ pub fn centre_on_intervals(
     run.source = ConstantsSource::MlRefit;
     run.given = Some(given);
     run.refit = Some(iv.refit);
+    run.calibration = iv.calibration;
     run.intervals = Some(iv.conditions);
     run
 }
@@ -696,6 +701,15 @@ pub fn summary_json(cfg: &RunConfig, data: &Dataset, model: &dyn Model, run: &Pr
                 "difference": v - g,
                 "relative_difference_pct": jnum(100.0 * (v - g) / g.abs()),
             })).collect::<Vec<_>>(),
+        })),
+        "interval_calibration": run.calibration.as_ref().map(|c| json!({
+            "what": "the parametric-bootstrap calibration of the intervals' likelihood-ratio thresholds ([profile] calibrate replicates): each χ² threshold is multiplied by prediction_factor = max(1, the mean over replicates of T for the rupture times at the conditions)",
+            "replicates": c.replicates,
+            "failed": c.failed,
+            "prediction_factor": jnum(c.prediction_factor),
+            "constants_factor": jnum(c.factor),
+            "mean_t": jnum(c.mean_t),
+            "per_quantity": c.per_quantity.iter().map(|(l, m, n)| json!({"quantity": l, "mean_t": jnum(*m), "replicates": n})).collect::<Vec<_>>(),
         })),
         "predictions": run.predictions.iter().enumerate().map(|(k, p)| {
             let at = model.constants_at(params, p.condition.temperature_c);

@@ -27,7 +27,6 @@ use super::profile::quantity_se;
 use super::{Context, Reference};
 use crate::diagnose::bootstrap::replicate_rng;
 use crate::journal::{debug_hash, Exact};
-use crate::likelihood::MlFit;
 use crate::progress::Hooks;
 
 /// Random stream of the calibration bootstrap.
@@ -204,16 +203,9 @@ fn replicate(
 ) -> Option<Vec<f64>> {
     let k = constants.len() + quantities.len();
     let mut rng = replicate_rng(seed, CALIBRATION_STREAM, r);
-    let data = super::replicate(ctx, reference, &mut rng);
+    let (data, drawn) = super::replicate(ctx, reference, &mut rng);
     let c = ctx.on(&data);
-    let mut best: Option<MlFit> = None;
-    for s in std::iter::once(&reference.params).chain(&reference.basins) {
-        let f = c.fit(&c.space, s, true);
-        if f.ok() && best.as_ref().is_none_or(|b| f.neg2ll < b.neg2ll) {
-            best = Some(f);
-        }
-    }
-    let best = best?;
+    let best = super::refit_replicate(ctx, reference, &data, drawn.as_ref())?;
     // The held fits start from the replicate's own specimens' effects.
     c.start_effects_at(best.specimen.as_ref(), &best.params);
     let mut min = best.neg2ll;
@@ -234,13 +226,24 @@ fn replicate(
     // free optimum's effects, which the held constant can leave far from theirs (measured:
     // one replicate in 20 with T = 1,654 for A from both, the rest 0–11). The lowest is kept:
     // the profile is a minimum, and more starts can only bring its estimate nearer.
+    // With the drawn specimens' effects known (the replicate's truth entire), a held fit from
+    // there is tried too in that case: it starts at a point that satisfies the constraint
+    // with the effects the data were made with.
     let cold = |v: f64| ctx.hierarchical() && !(v - best.neg2ll <= CHI2_1_999);
     let fresh = ctx.on(&data);
+    let at_drawn = drawn
+        .as_ref()
+        .map(|d| ctx.on_drawn(&data, Some(d), &reference.params));
     for &j in constants {
         let v = reference.params[j];
         let a = val(held_fit(&c, j, v, &best.params, true));
         let b = val(held_fit(&c, j, v, &reference.params, true));
         let mut t = lower(a, b);
+        if cold(t) {
+            if let Some(d) = &at_drawn {
+                t = lower(t, val(held_fit(d, j, v, &reference.params, true)));
+            }
+        }
         if cold(t) {
             t = lower(t, val(held_fit(&fresh, j, v, &reference.params, false)));
         }
@@ -250,6 +253,14 @@ fn replicate(
         let a = val(constrained_fit(&c, q, g, tau, &best.params, true));
         let b = val(constrained_fit(&c, q, g, tau, &reference.params, true));
         let mut t = lower(a, b);
+        if cold(t) {
+            if let Some(d) = &at_drawn {
+                t = lower(
+                    t,
+                    val(constrained_fit(d, q, g, tau, &reference.params, true)),
+                );
+            }
+        }
         if cold(t) {
             t = lower(
                 t,

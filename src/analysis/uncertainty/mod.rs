@@ -125,6 +125,27 @@ impl<'a> Context<'a> {
         }
     }
 
+    /// The same context on a bootstrap replicate whose new specimens were drawn at the effects
+    /// `drawn`, belonging to constants `at`: its hierarchical fits start from those effects
+    /// (re-expressed for their start), a known point near the replicate's optimum. Without
+    /// effects, [`Context::on`].
+    pub fn on_drawn<'b>(
+        &self,
+        curves: &'b [Curve],
+        drawn: Option<&EffectStart>,
+        at: &[f64],
+    ) -> Context<'b>
+    where
+        'a: 'b,
+    {
+        let c = self.on(curves);
+        if let (true, Some(d)) = (self.hierarchical(), drawn) {
+            let mut w = c.effects.write().unwrap_or_else(|e| e.into_inner());
+            *w = Some((d.clone(), Some(at.to_vec())));
+        }
+        c
+    }
+
     /// The specimen effects the hierarchical fits start from (as stored).
     pub fn effect_start(&self) -> Option<EffectStart> {
         self.stored_effects().map(|e| e.0)
@@ -298,14 +319,19 @@ impl Reference {
 
 /// A parametric-bootstrap replicate of the context's curves under `reference`: with specimen
 /// effects every curve a new specimen whose factors are drawn from the fitted scatter
-/// ([`crate::diagnose::bootstrap::replicate_hier`]), else the fitted curves plus the error
-/// model's reading error and rupture-time scatter
-/// ([`crate::diagnose::bootstrap::replicate_data`]). The reading error does not grow with
-/// strain here (g = 0): the intervals' coverage was calibrated so (docs/UNCERTAINTY.md);
-/// `diagnose`'s bootstrap fits the growth ([`crate::diagnose::bootstrap::reading_error`]).
-pub fn replicate<R: rand::Rng>(ctx: &Context, reference: &Reference, rng: &mut R) -> Vec<Curve> {
+/// ([`crate::diagnose::bootstrap::replicate_hier_drawn`]; the drawn effects are returned
+/// too), else the fitted curves plus the error model's reading error and rupture-time
+/// scatter ([`crate::diagnose::bootstrap::replicate_data`]; `None`). The reading error does
+/// not grow with strain here (g = 0): the intervals' coverage was calibrated so
+/// (docs/UNCERTAINTY.md); `diagnose`'s bootstrap fits the growth
+/// ([`crate::diagnose::bootstrap::reading_error`]).
+pub fn replicate<R: rand::Rng>(
+    ctx: &Context,
+    reference: &Reference,
+    rng: &mut R,
+) -> (Vec<Curve>, Option<EffectStart>) {
     if reference.specimen.is_some() {
-        crate::diagnose::bootstrap::replicate_hier(
+        crate::diagnose::bootstrap::replicate_hier_drawn(
             ctx.curves,
             ctx.model,
             &reference.as_fit(),
@@ -314,14 +340,40 @@ pub fn replicate<R: rand::Rng>(ctx: &Context, reference: &Reference, rng: &mut R
             rng,
         )
     } else {
-        crate::diagnose::bootstrap::replicate_data(
+        let data = crate::diagnose::bootstrap::replicate_data(
             ctx.curves,
             &reference.eval,
             &reference.noise,
             &GrowingError::constant(&reference.noise.strain),
             rng,
-        )
+        );
+        (data, None)
     }
+}
+
+/// The best refit of a bootstrap replicate `data` (drawn at effects `drawn`): warm fits from
+/// the reference and its other optima with every specimen's effects at zero, and, with
+/// specimen effects, one more from the reference with the drawn effects (a refit from zero
+/// effects can stop short of the replicate's optimum: measured in `diagnose`'s null
+/// replicates, docs/SPECIMENS.md). `None` if no fit succeeded.
+pub fn refit_replicate(
+    ctx: &Context,
+    reference: &Reference,
+    data: &[Curve],
+    drawn: Option<&EffectStart>,
+) -> Option<MlFit> {
+    let c = ctx.on(data);
+    let mut fits: Vec<MlFit> = std::iter::once(&reference.params)
+        .chain(&reference.basins)
+        .map(|s| c.fit(&c.space, s, true))
+        .collect();
+    if drawn.is_some() && ctx.hierarchical() {
+        let d = ctx.on_drawn(data, drawn, &reference.params);
+        fits.push(d.fit(&d.space, &reference.params, true));
+    }
+    fits.into_iter()
+        .filter(|f| f.ok())
+        .reduce(|a, b| if b.neg2ll < a.neg2ll { b } else { a })
 }
 
 /// Starts of the multistart: `given` (if any), then `lhs` Latin-hypercube points of the box

@@ -406,16 +406,9 @@ pub fn bootstrap_predictions(
         .into_par_iter()
         .map(|k| {
             let mut rng = replicate_rng(seed, PREDICTION_STREAM, k);
-            let data = super::replicate(ctx, reference, &mut rng);
+            let (data, drawn) = super::replicate(ctx, reference, &mut rng);
             let c = ctx.on(&data);
-            let mut best: Option<crate::likelihood::MlFit> = None;
-            for s in std::iter::once(&reference.params).chain(&reference.basins) {
-                let f = c.fit(&c.space, s, true);
-                if f.ok() && best.as_ref().is_none_or(|b| f.neg2ll < b.neg2ll) {
-                    best = Some(f);
-                }
-            }
-            let Some(f) = best else {
+            let Some(f) = super::refit_replicate(ctx, reference, &data, drawn.as_ref()) else {
                 return [f64::NAN; 3];
             };
             let mut out = [f64::NAN; 3];
@@ -519,6 +512,9 @@ impl Refit {
 pub struct IntervalsRun {
     pub refit: Refit,
     pub conditions: Vec<ConditionIntervals>,
+    /// The bootstrap calibration of the intervals' thresholds (`None` with `[profile]
+    /// calibrate = 0`: plain χ² thresholds).
+    pub calibration: Option<super::calibrate::Calibration>,
 }
 
 /// The fractions of the predicted rupture time at which a band is computed: k/n for
@@ -577,7 +573,7 @@ pub fn intervals_at_observed(
             .unwrap_or_default(),
     };
     let pc = &setup.profile;
-    let th = if pc.calibrate > 0 {
+    let (th, calibration) = if pc.calibrate > 0 {
         let cons = super::report::calibration_constants(&ctx, &reference);
         let qs: Vec<(String, Quantity)> = loads
             .iter()
@@ -593,9 +589,9 @@ pub fn intervals_at_observed(
             .collect();
         let cal =
             super::calibrate::bartlett(&ctx, &reference, &cons, &qs, pc.calibrate, pc.seed, hooks)?;
-        Thresholds::chi2(cal.prediction_factor)
+        (Thresholds::chi2(cal.prediction_factor), Some(cal))
     } else {
-        Thresholds::chi2(1.0)
+        (Thresholds::chi2(1.0), None)
     };
     let fractions = band_fractions(pc.band_points);
     hooks.phase("intervals at the conditions", loads.len());
@@ -612,5 +608,9 @@ pub fn intervals_at_observed(
             Ok(c)
         })
         .collect::<crate::error::Result<_>>()?;
-    Ok(IntervalsRun { refit, conditions })
+    Ok(IntervalsRun {
+        refit,
+        conditions,
+        calibration,
+    })
 }
