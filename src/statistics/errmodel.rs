@@ -274,6 +274,17 @@ impl ErrorModel {
         strain + n_lives as f64 * (LN_2PI + 2.0 * self.lifetime_sd.ln())
     }
 
+    /// −2 ln L split by curve (each curve's strain readings) and the rupture times' part.
+    pub fn neg2ll_curves(&self, res: &Residuals) -> (Vec<f64>, f64) {
+        let curves = self
+            .strain
+            .iter()
+            .zip(&res.strain)
+            .map(|(p, e)| p.neg2ll(e))
+            .collect();
+        (curves, self.neg2ll_parts(res)[1])
+    }
+
     /// −2 ln L split as [strain, lifetime].
     pub fn neg2ll_parts(&self, res: &Residuals) -> [f64; 2] {
         let strain: f64 = self

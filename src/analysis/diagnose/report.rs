@@ -116,6 +116,7 @@ pub fn report_md(name: &str, setup: &DiagnoseSetup, d: &Diagnosis) -> String {
             },
             f(g.lifetime_bias, 3)
         );
+        s += &g_parts_md(g, d);
     }
     let several_t = d
         .base
@@ -272,6 +273,51 @@ pub fn report_md(name: &str, setup: &DiagnoseSetup, d: &Diagnosis) -> String {
 
 /// The Method paragraph's clause on the tests bootstrapped again with the start that found the
 /// data's best fit (empty when none was).
+/// Where a goodness-of-fit statistic sits: its three largest parts by curve (and the
+/// rupture times' part), each with its share of G; empty where G is 0.
+fn g_parts_md(g: &super::gof::Gof, d: &Diagnosis) -> String {
+    if !(g.statistic > 0.0) || g.curve_g.len() != d.base.curves.len() {
+        return String::new();
+    }
+    let several_t = d
+        .base
+        .curves
+        .iter()
+        .any(|c| c.temperature_c != d.base.curves[0].temperature_c);
+    let mut order: Vec<usize> = (0..g.curve_g.len()).collect();
+    order.sort_by(|&a, &b| g.curve_g[b].total_cmp(&g.curve_g[a]));
+    let total: f64 = g.curve_g.iter().sum::<f64>() + g.lifetime_g;
+    let share = |v: f64| 100.0 * v / total;
+    let top: Vec<String> = order
+        .iter()
+        .take(3)
+        .map(|&i| {
+            let c = &d.base.curves[i];
+            let t = if several_t {
+                format!("{} °C, ", c.temperature_c)
+            } else {
+                String::new()
+            };
+            let sp = c
+                .specimen
+                .as_ref()
+                .map_or(String::new(), |s| format!(" ({s})"));
+            format!(
+                "{t}{} MPa{sp} {:.1} ({:.0} %)",
+                c.stress_mpa,
+                g.curve_g[i],
+                share(g.curve_g[i])
+            )
+        })
+        .collect();
+    format!(
+        "Where G sits (each curve's part, descriptive, not a test): {}; the rupture times {:.1} ({:.0} %).\n\n",
+        top.join(", "),
+        g.lifetime_g,
+        share(g.lifetime_g)
+    )
+}
+
 fn again_md(d: &Diagnosis) -> String {
     let again: Vec<&str> = d
         .candidates
