@@ -271,8 +271,6 @@ pub fn report_md(name: &str, setup: &DiagnoseSetup, d: &Diagnosis) -> String {
     s
 }
 
-/// The Method paragraph's clause on the tests bootstrapped again with the start that found the
-/// data's best fit (empty when none was).
 /// Where a goodness-of-fit statistic sits: its three largest parts by curve (and the
 /// rupture times' part), each with its share of G; empty where G is 0.
 fn g_parts_md(g: &super::gof::Gof, d: &Diagnosis) -> String {
@@ -318,6 +316,8 @@ fn g_parts_md(g: &super::gof::Gof, d: &Diagnosis) -> String {
     )
 }
 
+/// The Method paragraph's clause on the tests bootstrapped again with the start that found the
+/// data's best fit (empty when none was).
 fn again_md(d: &Diagnosis) -> String {
     let again: Vec<&str> = d
         .candidates

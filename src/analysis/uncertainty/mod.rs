@@ -371,9 +371,7 @@ pub fn refit_replicate(
         let d = ctx.on_drawn(data, drawn, &reference.params);
         fits.push(d.fit(&d.space, &reference.params, true));
     }
-    fits.into_iter()
-        .filter(|f| f.ok())
-        .reduce(|a, b| if b.neg2ll < a.neg2ll { b } else { a })
+    fits.into_iter().reduce(MlFit::better).filter(|f| f.ok())
 }
 
 /// Starts of the multistart: `given` (if any), then `lhs` Latin-hypercube points of the box
