@@ -68,6 +68,21 @@ pub fn holm(p: &[f64], alpha: f64) -> (Vec<bool>, Vec<f64>) {
     (rejected, adjusted)
 }
 
+/// [`holm`] over the tests marked `on` only; a test not in the family is not rejected and its
+/// adjusted p-value is NaN (it is reported, not decided on).
+pub fn holm_among(p: &[f64], on: &[bool], alpha: f64) -> (Vec<bool>, Vec<f64>) {
+    let idx: Vec<usize> = (0..p.len()).filter(|&k| on[k]).collect();
+    let sub: Vec<f64> = idx.iter().map(|&k| p[k]).collect();
+    let (r, a) = holm(&sub, alpha);
+    let mut rejected = vec![false; p.len()];
+    let mut adjusted = vec![f64::NAN; p.len()];
+    for (j, &k) in idx.iter().enumerate() {
+        rejected[k] = r[j];
+        adjusted[k] = a[j];
+    }
+    (rejected, adjusted)
+}
+
 /// One extension's numbers for the decision.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ExtensionEvidence {
@@ -88,6 +103,9 @@ pub struct SelectInput {
     pub extensions: Vec<ExtensionEvidence>,
     /// Bootstrap p-values of the base model's goodness-of-fit tests.
     pub base_gof_p: Vec<f64>,
+    /// Per goodness-of-fit test: part of the family (else reported only; see
+    /// [`super::gof::decides`]).
+    pub base_gof_decides: Vec<bool>,
     /// `spread[j][k]`: 95 % quantile of |T*_j − T*_k| over the null bootstrap replicates.
     pub spread: Vec<Vec<f64>>,
 }
@@ -113,7 +131,13 @@ pub struct Selection {
 pub fn select(inp: &SelectInput) -> Selection {
     let mut p: Vec<f64> = inp.extensions.iter().map(|e| e.p_value).collect();
     p.extend(&inp.base_gof_p);
-    let (rej, adj) = holm(&p, inp.alpha);
+    let on: Vec<bool> = vec![true; inp.extensions.len()]
+        .into_iter()
+        .chain(
+            (0..inp.base_gof_p.len()).map(|g| inp.base_gof_decides.get(g).copied().unwrap_or(true)),
+        )
+        .collect();
+    let (rej, adj) = holm_among(&p, &on, inp.alpha);
     let k = inp.extensions.len();
     let rejected: Vec<bool> = (0..k)
         .map(|i| rej[i] && inp.extensions[i].aic.is_finite())
@@ -150,8 +174,8 @@ pub fn select(inp: &SelectInput) -> Selection {
 }
 
 /// Stage 2: the verdict and the cause, given the bootstrap p-values of the best extension's
-/// own goodness-of-fit tests (Holm at `alpha` over them; empty when there is no best
-/// extension).
+/// own goodness-of-fit tests that decide (Holm at `alpha` over them; empty when there is no
+/// best extension).
 pub fn verdict(sel: &Selection, cause_gof_p: &[f64], alpha: f64) -> (Verdict, Option<usize>) {
     match sel.best {
         Some(b) => {
@@ -366,6 +390,44 @@ mod tests {
     use super::*;
 
     #[test]
+    fn holm_among_a_subset_ignores_the_tests_reported_beside() {
+        // (p-values, in the family, rejected, adjusted): the family's size is the marked
+        // tests' count, so a small p-value outside it neither rejects nor makes the others'
+        // threshold stricter.
+        type Row = (Vec<f64>, Vec<bool>, Vec<bool>, Vec<f64>);
+        let rows: Vec<Row> = vec![
+            (
+                vec![0.01, 0.001, 0.02],
+                vec![true, false, true],
+                vec![true, false, true],
+                vec![0.02, f64::NAN, 0.02],
+            ),
+            (
+                vec![0.01, 0.001, 0.02],
+                vec![true, true, true],
+                vec![true, true, true],
+                vec![0.02, 0.003, 0.02],
+            ),
+            (
+                vec![0.03, 0.001, 0.04],
+                vec![true, false, true],
+                vec![false, false, false],
+                vec![0.06, f64::NAN, 0.06],
+            ),
+        ];
+        for (i, (p, on, rej, adj)) in rows.into_iter().enumerate() {
+            let (r, a) = holm_among(&p, &on, 0.05);
+            assert_eq!(r, rej, "row {i}");
+            for (x, y) in a.iter().zip(&adj) {
+                assert!(
+                    (x.is_nan() && y.is_nan()) || (x - y).abs() < 1e-12,
+                    "row {i}: {a:?} vs {adj:?}"
+                );
+            }
+        }
+    }
+
+    #[test]
     fn holm_against_hand_computed_tables() {
         // (p-values, alpha, rejected, adjusted)
         type Case<'a> = (&'a [f64], f64, &'a [bool], &'a [f64]);
@@ -435,6 +497,7 @@ mod tests {
             alpha: 0.05,
             extensions: four(),
             base_gof_p: vec![0.3, p_min],
+            base_gof_decides: vec![true, true],
             spread: vec![vec![0.0; 4]; 4],
         });
         assert!(sel.base_gof_rejected);
@@ -444,6 +507,7 @@ mod tests {
             alpha: 0.05,
             extensions: vec![ext("a", p_min, -30.0), ext("b", 0.5, 1.0)],
             base_gof_p: vec![0.3, 0.4],
+            base_gof_decides: vec![true, true],
             spread: vec![vec![0.0; 2]; 2],
         });
         assert_eq!(
@@ -588,6 +652,7 @@ mod tests {
                 alpha: 0.05,
                 extensions: e,
                 base_gof_p: vec![gof],
+                base_gof_decides: vec![true],
                 spread: spread.clone(),
             });
             let cg: Vec<f64> = if sel.best.is_some() {

@@ -687,10 +687,15 @@ pub struct GofTest {
     pub gof: gof::Gof,
     /// Bootstrap p-value.
     pub p_value: f64,
-    /// Holm-adjusted p-value (the base model's test is part of the family).
+    /// Holm-adjusted p-value (the base model's test is part of the family; NaN for a test
+    /// reported beside the decision).
     pub p_holm: Option<f64>,
     /// Replicates used.
     pub replicates: usize,
+    /// Whether the test is part of the decision ([`gof::decides`]): with specimen effects the
+    /// per-curve shape is reported only (how much the specimens differ in shape), without
+    /// them the trend is.
+    pub decides: bool,
 }
 
 /// Two rejected extensions the data cannot tell apart.
@@ -1164,9 +1169,17 @@ fn gof_bootstrap(
             )
         })
         .collect();
-    let observed: Vec<f64> = gs.iter().map(|g| g.statistic).collect();
+    let on: Vec<bool> = gof::SHAPES
+        .iter()
+        .map(|sh| gof::decides(*sh, ml.specimen.any()))
+        .collect();
+    let observed: Vec<f64> = gs
+        .iter()
+        .zip(&on)
+        .map(|(g, f)| if *f { g.statistic } else { f64::NAN })
+        .collect();
     let reading = bootstrap::reading_error(curves, fit);
-    let key = hooks::model_key(&(&spec.name, fit, basins));
+    let key = hooks::model_key(&(&spec.name, fit, basins, gof::SHAPES));
     let phase = "cause's goodness-of-fit bootstrap";
     let none = vec![false; observed.len()];
     let sampled = hooks.sequential(
@@ -1218,7 +1231,7 @@ fn gof_bootstrap(
         .enumerate()
         .map(|(k, g)| bootstrap::p_value(g.statistic, &sampled.column(k)))
         .collect();
-    let (_, adj) = decide::holm(&p, dc.alpha);
+    let (_, adj) = decide::holm_among(&p, &on, dc.alpha);
     Ok(gs
         .into_iter()
         .enumerate()
@@ -1228,6 +1241,7 @@ fn gof_bootstrap(
             p_value: p[k],
             p_holm: Some(adj[k]),
             replicates: sampled.computed[k],
+            decides: on[k],
         })
         .collect())
 }
@@ -1467,7 +1481,19 @@ pub fn diagnose_observed(
     };
     let mut observed = lr_obs.clone();
     observed.extend(gof_obs.iter().map(|g| g.statistic));
-    let key = hooks::model_key(&(&fits, &basins, &recipes));
+    // The tests of the family: every extension's, and the goodness-of-fit shapes that decide
+    // for this model. A test reported beside (NaN observed for the bootstrap's early stop) is
+    // computed on every replicate the run makes and never holds the run up.
+    let effects = ml.specimen.any();
+    let in_family: Vec<bool> = (0..n_ext + ng)
+        .map(|k| k < n_ext || gof::decides(gof::SHAPES[k - n_ext], effects))
+        .collect();
+    let observed_seq: Vec<f64> = observed
+        .iter()
+        .zip(&in_family)
+        .map(|(o, f)| if *f { *o } else { f64::NAN })
+        .collect();
+    let key = hooks::model_key(&(&fits, &basins, &recipes, gof::SHAPES));
     // An extension decided not significant (STOP_EXCEEDANCES null ratios at or above its
     // own) is not refitted in later replicates. Only without specimen effects: with them,
     // every extension's refit takes part in the replicate's cross-start, so dropping one
@@ -1479,7 +1505,7 @@ pub fn diagnose_observed(
         "null bootstrap",
         NULL_STREAM,
         &key,
-        &observed,
+        &observed_seq,
         &droppable,
         dc.bootstrap,
         |b, active| null_replicate(specs, &fits, &basins, curves, &warm, &ml, dc, b, active),
@@ -1498,7 +1524,7 @@ pub fn diagnose_observed(
         .enumerate()
         .map(|(k, o)| bootstrap::p_value(*o, &sampled.column(k)))
         .collect();
-    let (rejects, _) = decide::holm(&first_p, dc.alpha);
+    let (rejects, _) = decide::holm_among(&first_p, &in_family, dc.alpha);
     let again: Vec<bool> = (0..n_ext + ng)
         .map(|k| {
             k < n_ext
@@ -1585,6 +1611,7 @@ pub fn diagnose_observed(
             })
             .collect(),
         base_gof_p: p_gof.clone(),
+        base_gof_decides: in_family[n_ext..].to_vec(),
         spread,
     });
     // Stage 2: the best extension's own goodness of fit.
@@ -1603,7 +1630,11 @@ pub fn diagnose_observed(
         )?,
         None => vec![],
     };
-    let cause_p: Vec<f64> = cause_gof.iter().map(|g| g.p_value).collect();
+    let cause_p: Vec<f64> = cause_gof
+        .iter()
+        .filter(|g| g.decides)
+        .map(|g| g.p_value)
+        .collect();
     let (verdict, cause_idx) = decide::verdict(&sel, &cause_p, dc.alpha);
     let t_loo = Instant::now();
     phase.cause_bootstrap = t0.elapsed().as_secs_f64() - phase.fits - phase.null_bootstrap;
@@ -1681,6 +1712,7 @@ pub fn diagnose_observed(
             p_value: p_gof[g],
             p_holm: Some(sel.base_gof_adjusted[g]),
             replicates: sampled.computed[n_ext + g],
+            decides: in_family[n_ext + g],
         })
         .collect();
     let decision = decision_words(&cands, &sel, &base_gof, &cause_gof, verdict, dc);
@@ -1771,6 +1803,8 @@ pub fn shape_name(s: gof::Shape) -> &'static str {
     match s {
         gof::Shape::Common => "common",
         gof::Shape::PerCurve => "per-curve",
+        gof::Shape::CommonBeyondSpecimens => "common (beyond specimen shapes)",
+        gof::Shape::TrendBeyondSpecimens => "stress/temperature trend (beyond specimen shapes)",
     }
 }
 
@@ -1787,12 +1821,13 @@ fn decision_words(
     verdict: Verdict,
     dc: &DiagnoseConfig,
 ) -> Vec<String> {
-    let m = cands.len() + base_gof.len();
+    let n_gof = base_gof.iter().filter(|g| g.decides).count();
+    let m = cands.len() + n_gof;
     let mut out = vec![format!(
         "Family of {m} tests at α = {} (Holm): {} likelihood-ratio test(s) of an extension against the base model, and {} goodness-of-fit test(s) of the base model.",
         dc.alpha,
         cands.len(),
-        base_gof.len()
+        n_gof
     )];
     for c in cands {
         out.push(format!(
@@ -1808,7 +1843,20 @@ fn decision_words(
             }
         ));
     }
-    for g in base_gof {
+    for g in base_gof.iter().filter(|g| !g.decides) {
+        out.push(format!(
+            "base goodness of fit, {} shape (reported, not part of the family: {}): G {:.1}, bootstrap p = {:.3}",
+            shape_name(g.gof.shape),
+            if g.gof.specimen_shape_sd_pct.is_finite() {
+                "without specimen effects every curve's own shape is model error"
+            } else {
+                "with specimen effects a shape of each specimen's own is specimen scatter"
+            },
+            g.gof.statistic,
+            g.p_value
+        ));
+    }
+    for g in base_gof.iter().filter(|g| g.decides) {
         let rejected = g.p_holm.unwrap_or(1.0) <= dc.alpha && sel.base_gof_rejected;
         out.push(format!(
             "base goodness of fit, {} shape: G {:.1}, bootstrap p = {:.3}, Holm-adjusted {:.3} → {}",
@@ -1831,7 +1879,11 @@ fn decision_words(
     }
     if !cause_gof.is_empty() {
         let fails = decide::holm(
-            &cause_gof.iter().map(|g| g.p_value).collect::<Vec<_>>(),
+            &cause_gof
+                .iter()
+                .filter(|g| g.decides)
+                .map(|g| g.p_value)
+                .collect::<Vec<_>>(),
             dc.alpha,
         )
         .0
@@ -1843,10 +1895,11 @@ fn decision_words(
             cause_gof
                 .iter()
                 .map(|g| format!(
-                    "{} shape G {:.1}, p = {:.3}",
+                    "{} shape G {:.1}, p = {:.3}{}",
                     shape_name(g.gof.shape),
                     g.gof.statistic,
-                    g.p_value
+                    g.p_value,
+                    if g.decides { "" } else { " (reported only)" }
                 ))
                 .collect::<Vec<_>>()
                 .join("; "),

@@ -109,13 +109,43 @@ pub fn report_md(name: &str, setup: &DiagnoseSetup, d: &Diagnosis) -> String {
             t.p_value,
             KNOTS.iter().map(|k| format!("{k}")).collect::<Vec<_>>().join(", "),
             list(&g.shape_pct, 2),
-            if g.shape == super::gof::Shape::PerCurve {
-                " (mean over the curves)"
-            } else {
-                ""
+            match g.shape {
+                super::gof::Shape::PerCurve => " (mean over the curves)",
+                super::gof::Shape::TrendBeyondSpecimens => " (at the curves' mean ln σ and 1/T)",
+                super::gof::Shape::Common | super::gof::Shape::CommonBeyondSpecimens => "",
             },
             f(g.lifetime_bias, 3)
         );
+        if g.specimen_shape_sd_pct.is_finite() {
+            s += &format!(
+                "Each specimen's own shape beside it: sd {:.2} % of ε_f at a knot (estimated).\n\n",
+                g.specimen_shape_sd_pct
+            );
+        }
+        if g.shape == super::gof::Shape::TrendBeyondSpecimens {
+            for (what, v) in [
+                ("ln σ", &g.stress_trend_pct),
+                ("1/T", &g.temperature_trend_pct),
+            ] {
+                if v.iter().any(|x| x.is_finite()) {
+                    s += &format!(
+                        "Its change per standard deviation of {what} across the curves: {} % of ε_f.\n\n",
+                        list(v, 2)
+                    );
+                }
+            }
+        }
+        if !t.decides {
+            s += &format!(
+                "This {} test is reported, not part of the decision ({}).\n\n",
+                super::shape_name(g.shape),
+                if g.specimen_shape_sd_pct.is_finite() {
+                    "the model carries no specimen effects: every curve's own shape is tested as model error"
+                } else {
+                    "the model carries specimen effects: a shape of each specimen's own is the specimens' scatter, which the tests beyond specimen shapes look past"
+                }
+            );
+        }
         s += &g_parts_md(g, d);
     }
     let several_t = d
@@ -243,13 +273,19 @@ pub fn report_md(name: &str, setup: &DiagnoseSetup, d: &Diagnosis) -> String {
         "\n## Method\n\nEvery model is fitted by maximum likelihood under an error model with an AR(1) \
          reading error per curve and a log-normal scatter of rupture times; each extension is tested \
          against the base model by its likelihood ratio, and the base model's fit by two statistics for \
-         a misfit shape (common to the curves, and per curve) beyond the error model; the null \
+         a misfit shape beyond the error model ({}); the null \
          distributions come from {} parametric bootstrap \
          replicates under the fitted base model, every replicate refitted by every model (the base \
          from up to {} distinct optima found on the data; each extension from the replicate's base \
          optimum with the extension switched off, and slightly on where the likelihood is flat there, \
          and from its own optimum on the data; plus {} random start(s)){}{}. Holm's procedure keeps the chance of any false alarm at α = {}. A \
          significant extension is the cause only if it passes its own goodness-of-fit tests ({}).\n",
+        if d.gof.iter().any(|g| g.decides && g.gof.specimen_shape_sd_pct.is_finite()) {
+            "with specimen effects: a shape common to the curves, and one changing linearly with \
+             ln σ and 1/T, each beyond a random shape of each specimen's own"
+        } else {
+            "common to the curves, and per curve"
+        },
         d.bootstrap.max,
         d.settings.replicate_basins,
         d.settings.replicate_starts,
@@ -261,6 +297,7 @@ pub fn report_md(name: &str, setup: &DiagnoseSetup, d: &Diagnosis) -> String {
                 "here p = {}",
                 d.cause_gof
                     .iter()
+                    .filter(|g| g.decides)
                     .map(|g| format!("{:.3}", g.p_value))
                     .collect::<Vec<_>>()
                     .join(" and ")
