@@ -621,6 +621,25 @@ fn a_null_set_with_specimen_scatter_is_adequate() {
         "{md}"
     );
     assert!(md.contains("creep-rate factor"), "{md}");
+    // With specimen effects the goodness of fit that decides looks beyond each specimen's own
+    // shape; the fixed shapes are reported beside, outside the Holm family.
+    use creepfit::diagnose::gof::Shape;
+    let deciding: Vec<Shape> = d
+        .gof
+        .iter()
+        .filter(|g| g.decides)
+        .map(|g| g.gof.shape)
+        .collect();
+    assert_eq!(
+        deciding,
+        [Shape::CommonBeyondSpecimens, Shape::TrendBeyondSpecimens]
+    );
+    assert!(d
+        .gof
+        .iter()
+        .filter(|g| !g.decides)
+        .all(|g| g.p_holm.is_none_or(|p| p.is_nan())));
+    assert!(md.contains("reported, not part of the family"), "{md}");
     // The base's factors against stress (one temperature): each kind's slope of the ln
     // factors on ln σ recomputed from the fit's factors; the null set's do not follow stress.
     assert!(md.contains("factors against ln stress"), "{md}");
@@ -1206,11 +1225,11 @@ fn fits_hierarchical_polish_goes_on_while_it_gains() {
     let text = std::fs::read_to_string(root.join("configs/alloy617-900C.toml"))
         .unwrap()
         .replace("../data/", &format!("{}/data/", root.display()));
+    // The configuration's three kinds of specimen effects, under the likelihood objective.
+    assert!(text.contains("specimen_effects = [\"rate\", \"ductility\", \"coarsening\"]"));
     std::fs::write(
         &cfg,
-        format!(
-            "{text}\n[objective]\nkind = \"likelihood\"\nspecimen_effects = [\"rate\", \"ductility\", \"coarsening\"]\n"
-        ),
+        text.replace("[objective]\n", "[objective]\nkind = \"likelihood\"\n"),
     )
     .unwrap();
     let out = tmp.path().join("fit");

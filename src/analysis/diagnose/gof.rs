@@ -15,6 +15,14 @@
 //! model and the error model are right; [`crate::diagnose`] calibrates it by a parametric
 //! bootstrap instead (the fitted constants absorb part of any shape). The fitted coefficients
 //! say where the model misses: they are the common misfit shape, in % of the rupture strain.
+//!
+//! With specimen effects the question is misfit beyond specimen scatter, and real specimens
+//! differ in shape by more than the model's factors (Alloy 617: every specimen's curve misfits
+//! its own reading error by 2–4.5 times what a replicate under the model does, with signs that
+//! differ between specimens). There the shapes that decide are tested beyond a random shape of
+//! each specimen's own ([`Shape::CommonBeyondSpecimens`], [`Shape::TrendBeyondSpecimens`]): a
+//! linear mixed model of the residuals, the fixed shape against the spread τ of the specimens'
+//! own shapes, both estimated ([`decides`]).
 
 use nalgebra::{DMatrix, DVector};
 
