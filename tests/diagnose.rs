@@ -15,7 +15,9 @@
 //!   `creepfit battery`, run by `scripts/bench_battery.sh`.
 //! - Real laboratory curves (Alloy 617, `data/alloy617/`): the verdict and the cause are the
 //!   same on all points and on every 10th point, at every temperature (`-- --ignored`: eight
-//!   diagnoses of Alloy 617: 516 s on 2 cores with a battery running beside it).
+//!   diagnoses of Alloy 617; with the configurations' three kinds of specimen effects since
+//!   2026-11-30 about 80 minutes on 2 cores: 548 + 1,515 + 213 + 256 s on all points, 1,017 +
+//!   286 + 457 s and 850 °C on every 10th, each beside other work).
 //! - The contract of `diagnosis.json` on the seed's 590 °C data.
 
 use std::path::{Path, PathBuf};
@@ -129,7 +131,8 @@ fn every_tenth(dir: &Path) -> PathBuf {
     p
 }
 
-/// All four temperatures (8 diagnoses; 516 s on 2 cores with a battery running beside it):
+/// All four temperatures (8 diagnoses; about 80 minutes on 2 cores with three kinds of
+/// specimen effects, module comment):
 /// `cargo test --release --test diagnose -- --ignored` (out of CI's budget;
 /// scripts/bench_battery.sh runs it).
 #[test]

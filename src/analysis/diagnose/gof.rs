@@ -282,9 +282,31 @@ pub fn statistic(
     match shape {
         Shape::Common | Shape::PerCurve => fixed(curves, res, noise, lifetime_sd_floor, shape).0,
         Shape::CommonBeyondSpecimens | Shape::TrendBeyondSpecimens => {
-            beyond_specimens(curves, res, noise, lifetime_sd_floor, shape)
+            let (_, reading) = fixed(curves, res, noise, lifetime_sd_floor, Shape::PerCurve);
+            beyond_specimens(curves, res, noise, &reading, lifetime_sd_floor, shape)
         }
     }
+}
+
+/// G for every shape of [`SHAPES`], in that order: [`statistic`] of each, with the per-curve
+/// alternative (whose reading error the shapes beyond specimen shapes hold) fitted once.
+pub fn all(
+    curves: &[Curve],
+    res: &Residuals,
+    noise: &ErrorModel,
+    lifetime_sd_floor: f64,
+) -> Vec<Gof> {
+    let (per, reading) = fixed(curves, res, noise, lifetime_sd_floor, Shape::PerCurve);
+    SHAPES
+        .iter()
+        .map(|&sh| match sh {
+            Shape::PerCurve => per.clone(),
+            Shape::Common => fixed(curves, res, noise, lifetime_sd_floor, sh).0,
+            Shape::CommonBeyondSpecimens | Shape::TrendBeyondSpecimens => {
+                beyond_specimens(curves, res, noise, &reading, lifetime_sd_floor, sh)
+            }
+        })
+        .collect()
 }
 
 /// A fixed shape's G, and the alternative's error model.
@@ -422,7 +444,7 @@ fn at_tau(cs: &CurveStats, tau2: f64) -> AtTau {
 
 /// G of a fixed shape (common, or common with linear trends in ln σ and 1/T) beyond a random
 /// shape of each specimen's own. Reading error: each curve's AR(1) as estimated with its own
-/// shape removed (the per-curve alternative's), held under both hypotheses, so that neither a
+/// shape removed (`reading`, the per-curve alternative's), held under both hypotheses, so that neither a
 /// smooth misfit nor a specimen's own shape counts as noise. τ and the rupture-time scatter
 /// are estimated under each hypothesis; the fixed coefficients by generalised least squares.
 /// −2 ln L of curve i, with c_i its fixed shape at the knots:
@@ -431,11 +453,11 @@ fn beyond_specimens(
     curves: &[Curve],
     res: &Residuals,
     noise: &ErrorModel,
+    reading: &ErrorModel,
     lifetime_sd_floor: f64,
     shape: Shape,
 ) -> Gof {
     let nk = KNOTS.len();
-    let (_, reading) = fixed(curves, res, noise, lifetime_sd_floor, Shape::PerCurve);
     // The per-curve alternative fitted up to KNOTS.len() columns to each curve's n readings:
     // its innovation variance is scaled by n/(n − k) (the degrees-of-freedom correction of a
     // regression's residual variance), else every reading would look more precise than it is.
@@ -763,6 +785,13 @@ mod tests {
                 "{shape:?}: {sum} vs {}",
                 g.statistic
             );
+        }
+        // `all` gives each shape's `statistic`, the per-curve alternative fitted once.
+        let every = all(&curves, &res, &noise, 0.01);
+        for (shape, g) in SHAPES.iter().zip(&every) {
+            // (compared as text: NaN fields are equal there)
+            let one = statistic(&curves, &res, &noise, 0.01, *shape);
+            assert_eq!(format!("{g:?}"), format!("{one:?}"));
         }
         // The per-curve alternative gives the misfit curve most of G.
         let g = statistic(&curves, &res, &noise, 0.01, Shape::PerCurve);

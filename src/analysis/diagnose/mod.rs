@@ -1072,15 +1072,14 @@ fn null_replicate(
             .filter(|f| f.ok())
             .map_or(f64::NAN, |f| b0.neg2ll - f.neg2ll);
     }
-    for (g, shape) in gof::SHAPES.iter().enumerate() {
-        out[n_ext + g] = gof::statistic(
-            &data,
-            b0.residuals.as_ref().expect("fitted"),
-            &b0.noise,
-            ml.lifetime_sd_floor,
-            *shape,
-        )
-        .statistic;
+    let gs = gof::all(
+        &data,
+        b0.residuals.as_ref().expect("fitted"),
+        &b0.noise,
+        ml.lifetime_sd_floor,
+    );
+    for (g, x) in gs.iter().enumerate() {
+        out[n_ext + g] = x.statistic;
     }
     out[n_ext + ng] = 0.0;
     out.push(b0.neg2ll);
@@ -1157,18 +1156,12 @@ fn gof_bootstrap(
     dc: &DiagnoseConfig,
     hooks: &Hooks,
 ) -> Result<Vec<GofTest>> {
-    let gs: Vec<gof::Gof> = gof::SHAPES
-        .iter()
-        .map(|sh| {
-            gof::statistic(
-                curves,
-                fit.residuals.as_ref().expect("fitted"),
-                &fit.noise,
-                ml.lifetime_sd_floor,
-                *sh,
-            )
-        })
-        .collect();
+    let gs: Vec<gof::Gof> = gof::all(
+        curves,
+        fit.residuals.as_ref().expect("fitted"),
+        &fit.noise,
+        ml.lifetime_sd_floor,
+    );
     let on: Vec<bool> = gof::SHAPES
         .iter()
         .map(|sh| gof::decides(*sh, ml.specimen.any()))
@@ -1209,21 +1202,18 @@ fn gof_bootstrap(
                 .map(|sp| EffectStart::fresh(sp.kinds.clone(), sp.scatter.clone(), curves.len()));
             let (f, _) = fit_best(spec, &data, &st, basins.len(), fresh.as_ref(), settings, ml);
             let f = with_drawn_start(f, spec, &data, &fit.params, drawn.as_ref(), settings, ml);
-            gof::SHAPES
+            match f.as_ref() {
+                Some(f) => gof::all(
+                    &data,
+                    f.residuals.as_ref().expect("fitted"),
+                    &f.noise,
+                    ml.lifetime_sd_floor,
+                )
                 .iter()
-                .map(|sh| {
-                    f.as_ref().map_or(f64::NAN, |f| {
-                        gof::statistic(
-                            &data,
-                            f.residuals.as_ref().expect("fitted"),
-                            &f.noise,
-                            ml.lifetime_sd_floor,
-                            *sh,
-                        )
-                        .statistic
-                    })
-                })
-                .collect()
+                .map(|g| g.statistic)
+                .collect(),
+                None => vec![f64::NAN; gof::SHAPES.len()],
+            }
         },
     )?;
     let p: Vec<f64> = gs
@@ -1453,18 +1443,12 @@ pub fn diagnose_observed(
                 .map_or(f64::NAN, |f| base_fit.neg2ll - f.neg2ll)
         })
         .collect();
-    let gof_obs: Vec<gof::Gof> = gof::SHAPES
-        .iter()
-        .map(|sh| {
-            gof::statistic(
-                curves,
-                base_fit.residuals.as_ref().expect("fitted"),
-                &base_fit.noise,
-                ml.lifetime_sd_floor,
-                *sh,
-            )
-        })
-        .collect();
+    let gof_obs: Vec<gof::Gof> = gof::all(
+        curves,
+        base_fit.residuals.as_ref().expect("fitted"),
+        &base_fit.noise,
+        ml.lifetime_sd_floor,
+    );
     let ng = gof_obs.len();
 
     // 3. Null bootstrap under the base model. Refits start next to their optimum, where
