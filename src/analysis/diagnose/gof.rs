@@ -58,6 +58,16 @@ pub enum Shape {
     TrendBeyondSpecimens,
 }
 
+impl Shape {
+    /// Whether the shape is tested beyond a random shape of each specimen's own.
+    pub fn beyond_specimens(self) -> bool {
+        matches!(
+            self,
+            Shape::CommonBeyondSpecimens | Shape::TrendBeyondSpecimens
+        )
+    }
+}
+
 /// Every shape, in the order `diagnose` computes them.
 pub const SHAPES: [Shape; 4] = [
     Shape::Common,
@@ -72,10 +82,7 @@ pub const SHAPES: [Shape; 4] = [
 /// effects the question is misfit beyond specimen scatter (issue 20): the shapes tested beyond
 /// a random shape of each specimen's own decide, and the others are reported beside.
 pub fn decides(shape: Shape, specimen_effects: bool) -> bool {
-    match shape {
-        Shape::Common | Shape::PerCurve => !specimen_effects,
-        Shape::CommonBeyondSpecimens | Shape::TrendBeyondSpecimens => specimen_effects,
-    }
+    shape.beyond_specimens() == specimen_effects
 }
 
 /// The statistic and the misfit shape behind it.
@@ -138,7 +145,7 @@ enum Col {
     Life,
 }
 
-/// Each curve's covariates of [`Shape::Trend`], standardised across the curves: ln σ and 1/T
+/// Each curve's covariates of [`Shape::TrendBeyondSpecimens`], standardised across the curves: ln σ and 1/T
 /// (0 for a covariate that does not vary: its columns then vanish).
 fn covariates(curves: &[Curve]) -> Vec<[f64; 2]> {
     let raw: Vec<[f64; 2]> = curves
@@ -240,16 +247,7 @@ fn whitened(
 /// Least-squares coefficients of `r` on the columns of `x` (pseudo-inverse when singular).
 fn solve(x: &DMatrix<f64>, r: &DVector<f64>) -> DVector<f64> {
     let (xtr, xtx) = crate::lsq::normal_products(x, r.as_slice());
-    match xtx.clone().cholesky() {
-        Some(ch) => ch.solve(&xtr),
-        None => {
-            let pinv = xtx
-                .clone()
-                .pseudo_inverse(1e-12 * xtx.diagonal().max())
-                .unwrap_or_else(|_| DMatrix::zeros(x.ncols(), x.ncols()));
-            pinv * xtr
-        }
-    }
+    solve_normal(&xtx, &xtr)
 }
 
 /// `res` less the common shape `X b`.

@@ -693,8 +693,8 @@ pub struct GofTest {
     /// Replicates used.
     pub replicates: usize,
     /// Whether the test is part of the decision ([`gof::decides`]): with specimen effects the
-    /// per-curve shape is reported only (how much the specimens differ in shape), without
-    /// them the trend is.
+    /// fixed common and per-curve shapes are reported only (the per-curve one says how much
+    /// the specimens differ in shape), without them the shapes beyond specimen shapes are.
     pub decides: bool,
 }
 
@@ -1831,7 +1831,7 @@ fn decision_words(
         out.push(format!(
             "base goodness of fit, {} shape (reported, not part of the family: {}): G {:.1}, bootstrap p = {:.3}",
             shape_name(g.gof.shape),
-            if g.gof.specimen_shape_sd_pct.is_finite() {
+            if g.gof.shape.beyond_specimens() {
                 "without specimen effects every curve's own shape is model error"
             } else {
                 "with specimen effects a shape of each specimen's own is specimen scatter"

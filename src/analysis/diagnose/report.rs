@@ -116,7 +116,7 @@ pub fn report_md(name: &str, setup: &DiagnoseSetup, d: &Diagnosis) -> String {
             },
             f(g.lifetime_bias, 3)
         );
-        if g.specimen_shape_sd_pct.is_finite() {
+        if g.shape.beyond_specimens() {
             s += &format!(
                 "Each specimen's own shape beside it: sd {:.2} % of ε_f at a knot (estimated).\n\n",
                 g.specimen_shape_sd_pct
@@ -139,7 +139,7 @@ pub fn report_md(name: &str, setup: &DiagnoseSetup, d: &Diagnosis) -> String {
             s += &format!(
                 "This {} test is reported, not part of the decision ({}).\n\n",
                 super::shape_name(g.shape),
-                if g.specimen_shape_sd_pct.is_finite() {
+                if g.shape.beyond_specimens() {
                     "the model carries no specimen effects: every curve's own shape is tested as model error"
                 } else {
                     "the model carries specimen effects: a shape of each specimen's own is the specimens' scatter, which the tests beyond specimen shapes look past"
@@ -280,7 +280,7 @@ pub fn report_md(name: &str, setup: &DiagnoseSetup, d: &Diagnosis) -> String {
          optimum with the extension switched off, and slightly on where the likelihood is flat there, \
          and from its own optimum on the data; plus {} random start(s)){}{}. Holm's procedure keeps the chance of any false alarm at α = {}. A \
          significant extension is the cause only if it passes its own goodness-of-fit tests ({}).\n",
-        if d.gof.iter().any(|g| g.decides && g.gof.specimen_shape_sd_pct.is_finite()) {
+        if d.gof.iter().any(|g| g.decides && g.gof.shape.beyond_specimens()) {
             "with specimen effects: a shape common to the curves, and one changing linearly with \
              ln σ and 1/T, each beyond a random shape of each specimen's own"
         } else {
