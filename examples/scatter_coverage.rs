@@ -1,8 +1,9 @@
 //! Coverage of the specimen scatter's 95 % interval on generated data (issue 20: "the scatter
 //! estimate covers its truth in 90–98 % of sets"), on hundreds of sets rather than a
 //! battery's few: `cargo run --release --example scatter_coverage -- OUT FIRST_SEED N
-//! [SCENARIO]` fits N sets of the `specimens` world (scenario `none` unless given) with
-//! [`creepfit::battery::scatter_fit`] — the base model, both kinds of specimen effects, from
+//! [SCENARIO [WORLD]]` fits N sets of the `specimens` world (or WORLD: `shapes`; scenario
+//! `none` unless given) with [`creepfit::battery::scatter_fit`] — the base model, the
+//! specimen effects of the set's configuration (rate and ductility; in `shapes` coarsening too), from
 //! the data's initial guess and from the true constants — and writes one JSON line per set
 //! and start to OUT/fits.jsonl as each set ends (an interrupted run resumes with the seeds it
 //! has not finished), then OUT/summary.md: per start and kind, how often the interval covers
@@ -23,13 +24,21 @@ const STARTS: [(&str, ScatterStart); 2] = [
 fn main() {
     let a: Vec<String> = std::env::args().skip(1).collect();
     if a.len() < 3 {
-        eprintln!("usage: scatter_coverage OUT FIRST_SEED N [SCENARIO]");
+        eprintln!("usage: scatter_coverage OUT FIRST_SEED N [SCENARIO [WORLD]]");
         std::process::exit(2);
     }
     let out = PathBuf::from(&a[0]);
     let first: u64 = a[1].parse().expect("FIRST_SEED");
     let n: u64 = a[2].parse().expect("N");
     let scenario = a.get(3).cloned().unwrap_or_else(|| "none".into());
+    let world = match a.get(4).map(String::as_str) {
+        None | Some("specimens") => creepfit::synth::World::Specimens,
+        Some("shapes") => creepfit::synth::World::Shapes,
+        Some(w) => {
+            eprintln!("WORLD: specimens or shapes, not {w}");
+            std::process::exit(2);
+        }
+    };
     std::fs::create_dir_all(&out).expect("OUT");
     let path = out.join("fits.jsonl");
     // Finished sets: both starts on record (a line cut by an interruption is dropped).
@@ -71,7 +80,7 @@ fn main() {
             let rows: Vec<(String, ScatterFit)> = STARTS
                 .iter()
                 .map(|(k, st)| {
-                    let f = scatter_fit(&out, seed, &scenario, *st).expect("set");
+                    let f = scatter_fit(&out, seed, &scenario, *st, world).expect("set");
                     (k.to_string(), f)
                 })
                 .collect();
@@ -88,7 +97,7 @@ fn main() {
         have.insert((f.seed, start), f);
     }
     let mut s = format!(
-        "# Scatter coverage, specimens world, scenario {scenario}, seeds {first}–{}\n\n| start | kind | sets with the scatter | covered | % (Wilson 95 %) | sets without | zero excluded |\n|---|---|---|---|---|---|---|\n",
+        "# Scatter coverage, {world:?} world, scenario {scenario}, seeds {first}–{}\n\n| start | kind | sets with the scatter | covered | % (Wilson 95 %) | sets without | zero excluded |\n|---|---|---|---|---|---|---|\n",
         first + n - 1
     );
     // The fits of start `k` over the asked seeds.

@@ -152,8 +152,9 @@ pub enum Command {
         /// mid_life_step, strain_softening, rupture_damage.
         #[arg(long)]
         scenario: Option<String>,
-        /// The laboratory: identical specimens, or specimens with their own creep rate and
-        /// ductility, replicates and a reading error growing with strain.
+        /// The laboratory: identical specimens; specimens with their own creep rate and
+        /// ductility, replicates and a reading error growing with strain; or those with their
+        /// own onset of tertiary creep too (`shapes`).
         #[arg(long, value_enum, default_value_t = crate::synth::World::Identical)]
         world: crate::synth::World,
     },

@@ -84,12 +84,12 @@ pub struct SetResult {
     /// The world the set comes from.
     #[serde(default)]
     pub world: World,
-    /// True scatter of the specimens' ln creep-rate and ln ductility factors (specimens
-    /// world).
+    /// True scatter of the specimens' ln creep-rate and ln ductility factors (worlds with
+    /// specimens), and of their ln coarsening factors (world `shapes`).
     #[serde(default)]
     pub scatter_true: Vec<f64>,
-    /// The base model's estimated scatter per kind (rate, ductility; 0 where the fit carries
-    /// none) and its 95 % interval.
+    /// The base model's estimated scatter per kind (rate, ductility, and coarsening where the
+    /// fit carries it; 0 where the fit carries none) and its 95 % interval.
     #[serde(default, deserialize_with = "de_vec_f64")]
     pub scatter_est: Vec<f64>,
     #[serde(default, deserialize_with = "de_vec_f64")]
@@ -136,7 +136,7 @@ impl SetResult {
     /// [`SetResult::lambda_scatter`] where the set has one (specimens, a catalogued effect),
     /// else [`SetResult::lambda`].
     pub fn power_lambda(&self) -> f64 {
-        if self.world == World::Specimens
+        if self.world.has_specimens()
             && crate::model::ext::CATALOGUE.contains(&self.scenario.as_str())
         {
             self.lambda_scatter
@@ -237,16 +237,23 @@ pub fn oracle_lambda(cfg: &RunConfig, truth: &Truth) -> f64 {
                 .position(|c| c.role == r)
                 .expect("the base model has its rate and ductility constants")
         };
+        let mut index = vec![
+            role(crate::model::Role::Rate),
+            role(crate::model::Role::InverseDuctility),
+        ];
+        if !sp.coarsening_effects.is_empty() {
+            index.push(role(crate::model::Role::Softening));
+        }
         crate::model::objective::CurveFactors {
-            index: vec![
-                role(crate::model::Role::Rate),
-                role(crate::model::Role::InverseDuctility),
-            ],
-            factors: sp
-                .rate_effects
-                .iter()
-                .zip(&sp.ductility_effects)
-                .map(|(e, z)| vec![e.exp(), (-z).exp()])
+            index,
+            factors: (0..sp.rate_effects.len())
+                .map(|i| {
+                    let mut f = vec![sp.rate_effects[i].exp(), (-sp.ductility_effects[i]).exp()];
+                    if let Some(k) = sp.coarsening_effects.get(i) {
+                        f.push(k.exp());
+                    }
+                    f
+                })
                 .collect(),
         }
     });
@@ -301,6 +308,11 @@ pub fn oracle_lambda_scatter(cfg: &RunConfig, truth: &Truth) -> Option<f64> {
             EffectKind::Ductility,
             sp.ductility_sd,
             &sp.ductility_effects,
+        ),
+        (
+            EffectKind::Coarsening,
+            sp.coarsening_sd,
+            &sp.coarsening_effects,
         ),
     ] {
         if sd > 0.0 {
@@ -420,7 +432,7 @@ pub fn run_one_diagnosed(
         })?;
         diagnosis = Some(d.clone());
         if let Some(sp) = &t.specimens {
-            r.scatter_true = vec![sp.rate_sd, sp.ductility_sd];
+            r.scatter_true = sp.scatter_true();
         }
         (r.scatter_est, r.scatter_lo95, r.scatter_hi95) = scatter_by_kind(d.base.specimen.as_ref());
         Ok(())
@@ -602,9 +614,10 @@ fn scatter_coverage(ok: &[&SetResult]) -> Vec<ScatterCoverage> {
 pub fn coverage_of<'a>(
     sets: impl Iterator<Item = (&'a [f64], &'a [f64], &'a [f64])> + Clone,
 ) -> Vec<ScatterCoverage> {
-    ["rate", "ductility"]
+    ["rate", "ductility", "coarsening"]
         .iter()
         .enumerate()
+        .filter(|(k, _)| *k < 2 || sets.clone().any(|(tr, _, _)| tr.len() > *k))
         .map(|(k, kind)| {
             let mut c = ScatterCoverage {
                 kind: kind.to_string(),
@@ -638,10 +651,12 @@ pub fn coverage_of<'a>(
 pub struct ScatterFit {
     /// The set's seed.
     pub seed: u64,
-    /// True sd of the ln rate and ln ductility factors (0: none).
+    /// True sd of the ln rate and ln ductility factors, and of the ln coarsening factors in
+    /// world `shapes` (0: none).
     #[serde(deserialize_with = "de_vec_f64")]
     pub scatter_true: Vec<f64>,
-    /// Estimated sd per kind (rate, ductility; 0 where the fit dropped the kind).
+    /// Estimated sd per kind (rate, ductility, coarsening where fitted; 0 where the fit
+    /// dropped the kind).
     #[serde(deserialize_with = "de_vec_f64")]
     pub scatter_est: Vec<f64>,
     /// Lower end of the 95 % REML profile interval per kind (NaN: kind dropped; `null` in
@@ -676,8 +691,9 @@ pub enum ScatterStart {
     Truth,
 }
 
-/// Generate set `seed` of the specimens world (`scenario`) into `dir/sets/set-<seed>/`, fit
-/// the base model with both kinds of specimen effects from `start`, and compute the REML
+/// Generate set `seed` of `world` (a world with specimens; `scenario`) into
+/// `dir/sets/set-<seed>/`, fit the base model with the specimen effects its configuration
+/// names (`specimens`: rate and ductility; `shapes`: and coarsening) from `start`, and compute the REML
 /// profile intervals of the scatter ([`crate::likelihood::scatter_intervals`]): the
 /// interval's coverage over many sets is [`coverage_of`] of the results. Far cheaper than a
 /// battery (about 0.2 s a set against a diagnosis's minute), so the coverage can be
@@ -687,10 +703,11 @@ pub fn scatter_fit(
     seed: u64,
     scenario: &str,
     start: ScatterStart,
+    world: World,
 ) -> Result<ScatterFit> {
-    use crate::likelihood::{ml_fit, scatter_intervals, MlOptions, SpecimenOptions};
+    use crate::likelihood::{ml_fit, scatter_intervals, MlOptions};
     let name = format!("set-{seed}");
-    let set = generate_in(&name, scenario, None, seed, World::Specimens)?;
+    let set = generate_in(&name, scenario, None, seed, world)?;
     let folder = dir.join("sets").join(&name);
     write_set(&set, &folder)?;
     let sp = set.truth.specimens.as_ref().ok_or_else(|| {
@@ -709,7 +726,7 @@ pub fn scatter_fit(
     let space = cfg.space();
     let settings = FitSettings::from_config(&cfg);
     let opts = MlOptions {
-        specimen: SpecimenOptions::BOTH,
+        specimen: cfg.objective.specimen_effects.resolve(&curves).0,
         ..MlOptions::default()
     };
     let x0 = match start {
@@ -730,7 +747,7 @@ pub fn scatter_fit(
     let (scatter_est, scatter_lo95, scatter_hi95) = scatter_by_kind(fit.specimen.as_ref());
     Ok(ScatterFit {
         seed,
-        scatter_true: vec![sp.rate_sd, sp.ductility_sd],
+        scatter_true: sp.scatter_true(),
         scatter_est,
         scatter_lo95,
         scatter_hi95,
@@ -741,12 +758,24 @@ pub fn scatter_fit(
     })
 }
 
-/// A fit's scatter estimate and 95 % interval per kind (rate, ductility): 0 where the fit
-/// does not carry the kind, and NaN ends (the interval of a kind the fit dropped is not
-/// known).
+/// A fit's scatter estimate and 95 % interval per kind (rate, ductility, and coarsening where
+/// the fit carries it): 0 where the fit does not carry the kind, and NaN ends (the interval
+/// of a kind the fit dropped is not known).
 fn scatter_by_kind(sp: Option<&crate::likelihood::SpecimenFit>) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
     let (mut est, mut lo, mut hi) = (vec![], vec![], vec![]);
-    for kind in [EffectKind::Rate, EffectKind::Ductility] {
+    let third = sp.is_some_and(|f| {
+        f.kinds.contains(&EffectKind::Coarsening) || f.dropped.contains(&EffectKind::Coarsening)
+    });
+    let kinds: &[EffectKind] = if third {
+        &[
+            EffectKind::Rate,
+            EffectKind::Ductility,
+            EffectKind::Coarsening,
+        ]
+    } else {
+        &[EffectKind::Rate, EffectKind::Ductility]
+    };
+    for &kind in kinds {
         let got = sp.and_then(|f| {
             f.kinds
                 .iter()

@@ -191,6 +191,20 @@ pub enum World {
     /// strain (sd × (1 + g ε/ε_f), g up to 2). Drawn from a stream of its own, so that the
     /// rest of a set (family, stresses, sampling, noise) is the identical world's.
     Specimens,
+    /// The specimens world, and each specimen also its own onset of tertiary creep: a
+    /// log-normal factor on the coarsening rate (KHD: Kc, sd 15–50 %), as Alloy 617's
+    /// specimens differ in shape. The rate, ductility, replicates and error growth are the
+    /// specimens world's for the same seed (drawn first from the same stream); the sets'
+    /// configurations fit all three kinds of specimen effects, as the shipped Alloy 617
+    /// configurations do.
+    Shapes,
+}
+
+impl World {
+    /// Whether the world's specimens differ (a `specimen` column, factors in the truth).
+    pub fn has_specimens(self) -> bool {
+        self != World::Identical
+    }
 }
 
 /// The specimens of a set in the [`World::Specimens`] world.
@@ -204,10 +218,27 @@ pub struct SpecimenTruth {
     pub rate_effects: Vec<f64>,
     /// Per curve: its ln ductility factor (rupture strain × e^ζ).
     pub ductility_effects: Vec<f64>,
+    /// sd of the ln coarsening-rate factor (0: none; world `shapes` only).
+    #[serde(default)]
+    pub coarsening_sd: f64,
+    /// Per curve: its ln coarsening-rate factor (Kc × e^κ; empty without).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub coarsening_effects: Vec<f64>,
     /// Per curve: the specimen label written to the files.
     pub labels: Vec<String>,
     /// Growth of the reading error with strain: sd × (1 + g ε/ε_f).
     pub error_growth: f64,
+}
+
+impl SpecimenTruth {
+    /// The true scatter per kind: rate, ductility, and coarsening in world `shapes`.
+    pub fn scatter_true(&self) -> Vec<f64> {
+        let mut v = vec![self.rate_sd, self.ductility_sd];
+        if !self.coarsening_effects.is_empty() {
+            v.push(self.coarsening_sd);
+        }
+        v
+    }
 }
 
 /// Separates the specimen world's random stream from the set's own.
@@ -249,7 +280,7 @@ pub struct Truth {
     /// The world the set comes from.
     #[serde(default)]
     pub world: World,
-    /// The specimens (world `specimens` only).
+    /// The specimens (worlds `specimens` and `shapes`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub specimens: Option<SpecimenTruth>,
 }
@@ -398,8 +429,9 @@ pub fn generate_in(
 }
 
 /// The specimens of a set of `stresses` in the specimens world, from their own stream:
-/// replicated stresses, labels, effects, the error growth.
-fn draw_specimens(stresses: &[f64], seed: u64) -> (Vec<f64>, SpecimenTruth) {
+/// replicated stresses, labels, effects, the error growth; in world `shapes` then the
+/// coarsening factors, drawn last so that everything before is the specimens world's.
+fn draw_specimens(stresses: &[f64], seed: u64, world: World) -> (Vec<f64>, SpecimenTruth) {
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ SPECIMEN_STREAM);
     let rate_sd = 0.1 + 0.2 * rng.gen::<f64>();
     let ductility_sd = if rng.gen::<bool>() { 0.08 } else { 0.0 };
@@ -423,6 +455,12 @@ fn draw_specimens(stresses: &[f64], seed: u64) -> (Vec<f64>, SpecimenTruth) {
         .map(|_| ductility_sd * normal(&mut rng))
         .collect();
     let error_growth = 2.0 * rng.gen::<f64>();
+    let (coarsening_sd, coarsening_effects) = if world == World::Shapes {
+        let sd = 0.15 + 0.35 * rng.gen::<f64>();
+        (sd, tests.iter().map(|_| sd * normal(&mut rng)).collect())
+    } else {
+        (0.0, vec![])
+    };
     (
         tests,
         SpecimenTruth {
@@ -430,6 +468,8 @@ fn draw_specimens(stresses: &[f64], seed: u64) -> (Vec<f64>, SpecimenTruth) {
             ductility_sd,
             rate_effects,
             ductility_effects,
+            coarsening_sd,
+            coarsening_effects,
             labels,
             error_growth,
         },
@@ -458,8 +498,8 @@ fn generate_inner(
         .collect();
     let (tests, specimens) = match world {
         World::Identical => (stresses.clone(), None),
-        World::Specimens => {
-            let (t, sp) = draw_specimens(&stresses, seed);
+        World::Specimens | World::Shapes => {
+            let (t, sp) = draw_specimens(&stresses, seed, world);
             (t, Some(sp))
         }
     };
@@ -518,12 +558,15 @@ fn generate_inner(
     // Simulate every curve densely to its rupture.
     let mut dense: Vec<(f64, Vec<f64>, Vec<f64>)> = Vec::new();
     // The constants of test k: the population's with its specimen's factors (A × e^η,
-    // C / e^ζ).
+    // C / e^ζ, Kc × e^κ).
     let test_params = |k: usize| -> Vec<f64> {
         let mut p = params.clone();
         if let Some(sp) = &specimens {
             p[0] *= sp.rate_effects[k].exp();
             p[5] /= sp.ductility_effects[k].exp();
+            if let Some(kappa) = sp.coarsening_effects.get(k) {
+                p[4] *= kappa.exp();
+            }
         }
         p
     };
@@ -661,6 +704,9 @@ fn generate_inner(
             names[j],
             if logs[j] { ", scale = \"log\"" } else { "" }
         );
+    }
+    if world == World::Shapes {
+        config += "\n[objective]\nspecimen_effects = [\"rate\", \"ductility\", \"coarsening\"]\n";
     }
     Ok(SynthSet {
         truth,
@@ -869,5 +915,68 @@ mod tests {
             assert!((3..=5).contains(&t.stresses.len()));
             assert!(t.noise_sd.iter().all(|s| (4e-5..=3.7e-4).contains(s)));
         }
+    }
+
+    /// World `shapes` is the specimens world of the same seed (tests, labels, rate and
+    /// ductility factors, error growth) with a coarsening factor per specimen on Kc: the
+    /// curves' lives change with it, and its configuration fits all three kinds.
+    #[test]
+    fn the_shapes_world_is_the_specimens_world_with_own_coarsening_rates() {
+        for seed in [3101_u64, 3102, 3103] {
+            let a = generate_in("t", "none", None, seed, World::Specimens).unwrap();
+            let b = generate_in("t", "none", None, seed, World::Shapes).unwrap();
+            let (sa, sb) = (
+                a.truth.specimens.clone().unwrap(),
+                b.truth.specimens.clone().unwrap(),
+            );
+            assert_eq!(a.truth.stresses, b.truth.stresses);
+            assert_eq!(
+                (&sa.labels, &sa.rate_effects, &sa.ductility_effects),
+                (&sb.labels, &sb.rate_effects, &sb.ductility_effects)
+            );
+            assert_eq!(sa.error_growth, sb.error_growth);
+            assert!(sa.coarsening_effects.is_empty() && sa.coarsening_sd == 0.0);
+            assert_eq!(sb.coarsening_effects.len(), sb.labels.len());
+            assert!((0.15..=0.5).contains(&sb.coarsening_sd));
+            assert_eq!(sb.scatter_true().len(), 3);
+            assert_eq!(sa.scatter_true().len(), 2);
+            // Kc × e^κ: a faster coarsening shortens the life (KHD), a slower one lengthens it.
+            for k in 0..sb.labels.len() {
+                let ratio = b.truth.true_rupture_h[k] / a.truth.true_rupture_h[k];
+                let kappa = sb.coarsening_effects[k];
+                assert!(
+                    (ratio - 1.0) * kappa < 0.0 || kappa.abs() < 1e-3,
+                    "seed {seed} specimen {k}: κ {kappa}, life ratio {ratio}"
+                );
+            }
+            assert!(b
+                .config_toml
+                .contains("specimen_effects = [\"rate\", \"ductility\", \"coarsening\"]"));
+            assert!(!a.config_toml.contains("specimen_effects"));
+        }
+    }
+
+    /// The coarsening factors are drawn N(0, sd²): over many sets, the mean of (κ/sd)² is 1
+    /// within its sampling error (χ² with n degrees of freedom: sd of the mean √(2/n)) and
+    /// the mean of κ/sd is 0 (sd 1/√n).
+    #[test]
+    fn coarsening_factors_have_the_stated_scatter() {
+        let (mut n, mut s1, mut s2) = (0.0, 0.0, 0.0);
+        for seed in 0..400_u64 {
+            let stresses = [100.0, 110.0, 120.0, 130.0];
+            let (_, sp) = draw_specimens(&stresses, 7_000 + seed, World::Shapes);
+            for k in &sp.coarsening_effects {
+                let z = k / sp.coarsening_sd;
+                n += 1.0;
+                s1 += z;
+                s2 += z * z;
+            }
+        }
+        let (m1, m2) = (s1 / n, s2 / n);
+        assert!(m1.abs() < 4.0 / n.sqrt(), "mean {m1} over {n}");
+        assert!(
+            (m2 - 1.0).abs() < 4.0 * (2.0 / n).sqrt(),
+            "mean square {m2} over {n}"
+        );
     }
 }
