@@ -1,9 +1,10 @@
 //! Coverage of the specimen scatter's 95 % interval on generated data (issue 20: "the scatter
 //! estimate covers its truth in 90–98 % of sets"), on hundreds of sets rather than a
 //! battery's few: `cargo run --release --example scatter_coverage -- OUT FIRST_SEED N
-//! [SCENARIO [WORLD]]` fits N sets of the `specimens` world (or WORLD: `shapes`; scenario
-//! `none` unless given) with [`creepfit::battery::scatter_fit`] — the base model, the
-//! specimen effects of the set's configuration (rate and ductility; in `shapes` coarsening too), from
+//! [SCENARIO [WORLD [KINDS]]]` fits N sets of the `specimens` world (or WORLD: `shapes`;
+//! scenario `none` unless given) with [`creepfit::battery::scatter_fit`] — the base model, the
+//! specimen effects of the set's configuration (rate and ductility; in `shapes` coarsening
+//! too) or KINDS (comma-separated, e.g. `rate,ductility,coarsening`), from
 //! the data's initial guess and from the true constants — and writes one JSON line per set
 //! and start to OUT/fits.jsonl as each set ends (an interrupted run resumes with the seeds it
 //! has not finished), then OUT/summary.md: per start and kind, how often the interval covers
@@ -24,7 +25,7 @@ const STARTS: [(&str, ScatterStart); 2] = [
 fn main() {
     let a: Vec<String> = std::env::args().skip(1).collect();
     if a.len() < 3 {
-        eprintln!("usage: scatter_coverage OUT FIRST_SEED N [SCENARIO [WORLD]]");
+        eprintln!("usage: scatter_coverage OUT FIRST_SEED N [SCENARIO [WORLD [KINDS]]]");
         std::process::exit(2);
     }
     let out = PathBuf::from(&a[0]);
@@ -39,6 +40,11 @@ fn main() {
             std::process::exit(2);
         }
     };
+    let kinds = a.get(5).map(|k| creepfit::likelihood::SpecimenOptions {
+        rate: k.split(',').any(|x| x == "rate"),
+        ductility: k.split(',').any(|x| x == "ductility"),
+        coarsening: k.split(',').any(|x| x == "coarsening"),
+    });
     std::fs::create_dir_all(&out).expect("OUT");
     let path = out.join("fits.jsonl");
     // Finished sets: both starts on record (a line cut by an interruption is dropped).
@@ -80,7 +86,7 @@ fn main() {
             let rows: Vec<(String, ScatterFit)> = STARTS
                 .iter()
                 .map(|(k, st)| {
-                    let f = scatter_fit(&out, seed, &scenario, *st, world).expect("set");
+                    let f = scatter_fit(&out, seed, &scenario, *st, world, kinds).expect("set");
                     (k.to_string(), f)
                 })
                 .collect();
@@ -97,7 +103,8 @@ fn main() {
         have.insert((f.seed, start), f);
     }
     let mut s = format!(
-        "# Scatter coverage, {world:?} world, scenario {scenario}, seeds {first}–{}\n\n| start | kind | sets with the scatter | covered | % (Wilson 95 %) | sets without | zero excluded |\n|---|---|---|---|---|---|---|\n",
+        "# Scatter coverage, {world:?} world, kinds {}, scenario {scenario}, seeds {first}–{}\n\n| start | kind | sets with the scatter | covered | % (Wilson 95 %) | sets without | zero excluded |\n|---|---|---|---|---|---|---|\n",
+        a.get(5).map_or("of the configuration", String::as_str),
         first + n - 1
     );
     // The fits of start `k` over the asked seeds.

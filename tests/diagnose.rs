@@ -37,6 +37,7 @@ fn battery_of_6_generated_sets() {
         6,
         creepfit::synth::World::Identical,
         None,
+        None,
         &TestProgress::new("battery_of_6_generated_sets"),
     )
     .unwrap();

@@ -1027,6 +1027,21 @@ fn battery_is_locked_and_keeps_its_identity() {
     has(&e, &["battery.json", "scenario"]);
     let e = fails(&["battery", "--sets", "1", "--scenario", "nonn", o]);
     has(&e, &["--scenario", "nonn", "known: none, constant_load"]);
+    // So is one that measures another configuration's specimen effects, and an unknown kind
+    // is refused by name.
+    let e = fails(&[
+        "battery",
+        "--sets",
+        "1",
+        "--seed",
+        "50001",
+        "--specimen-effects",
+        "rate,coarsening",
+        o,
+    ]);
+    has(&e, &["battery.json", "specimen_effects", "coarsening"]);
+    let e = fails(&["battery", "--specimen-effects", "rate,shape", o]);
+    has(&e, &["--specimen-effects", "shape"]);
     assert_eq!(json(&out.join("battery.json")), id, "nothing changed");
 }
 

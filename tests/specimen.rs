@@ -518,6 +518,7 @@ fn the_scatter_interval_covers_its_truth_at_its_level_over_many_sets() {
                 "none",
                 ScatterStart::Guess,
                 creepfit::synth::World::Specimens,
+                None,
             )
             .unwrap()
         })

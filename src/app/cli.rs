@@ -180,6 +180,12 @@ pub enum Command {
         /// mid_life_step). `--scenario none` measures the false-alarm rate alone.
         #[arg(long)]
         scenario: Option<String>,
+        /// Specimen effects of every set's likelihood analyses (comma-separated kinds:
+        /// rate, ductility, coarsening), written into each set's configuration: the battery
+        /// then measures that configuration's calibration (default: the world's own,
+        /// `auto` in `specimens`, all three in `shapes`).
+        #[arg(long, value_enum, value_delimiter = ',')]
+        specimen_effects: Option<Vec<crate::likelihood::EffectKind>>,
         /// No progress bar and no line per set.
         #[arg(long, short)]
         quiet: bool,
@@ -447,9 +453,18 @@ pub fn run(cli: Cli) -> Result<()> {
             threads,
             world,
             scenario,
+            specimen_effects,
             quiet,
         } => commands::with_threads(threads, || {
-            commands::battery(&out, sets, seed, world, scenario.as_deref(), quiet)
+            commands::battery(
+                &out,
+                sets,
+                seed,
+                world,
+                scenario.as_deref(),
+                specimen_effects.as_deref(),
+                quiet,
+            )
         }),
     }
 }

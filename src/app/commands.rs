@@ -316,6 +316,7 @@ pub fn battery(
     seed: u64,
     world: crate::synth::World,
     scenario: Option<&str>,
+    effects: Option<&[crate::likelihood::EffectKind]>,
     quiet: bool,
 ) -> Result<()> {
     if let Some(sc) = scenario {
@@ -335,13 +336,17 @@ pub fn battery(
     if let Some(sc) = scenario {
         id["scenario"] = sc.into();
     }
+    if let Some(k) = effects {
+        id["specimen_effects"] = serde_json::json!(k);
+    }
     crate::identity::bind_folder(out, BATTERY_IDENTITY, "results.jsonl", &id)?;
     let folder = RunFolder::take_over(lock, "battery", &|f| {
         f == BATTERY_IDENTITY || f == "results.jsonl" || f.starts_with("sets/")
     })?;
     crate::output::record(&out.join(BATTERY_IDENTITY));
     let bars = Bars::new(quiet);
-    let results = crate::battery::run_battery_observed(out, seed, sets, world, scenario, &bars);
+    let results =
+        crate::battery::run_battery_observed(out, seed, sets, world, scenario, effects, &bars);
     bars.clear();
     export::battery::record_written(out);
     let outcome = results.and_then(|r| export::battery::write(out, &r, seed));

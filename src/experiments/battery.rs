@@ -366,6 +366,18 @@ pub fn run_one_diagnosed(
     seed: u64,
     world: World,
 ) -> (SetResult, Option<crate::diagnose::Diagnosis>) {
+    run_one_diagnosed_with(dir, scenario, seed, world, None)
+}
+
+/// [`run_one_diagnosed`] with the set's `[objective] specimen_effects` set to `effects` when
+/// given (the configuration whose calibration a battery measures; else the world's own).
+pub fn run_one_diagnosed_with(
+    dir: &Path,
+    scenario: &str,
+    seed: u64,
+    world: World,
+    effects: Option<&[EffectKind]>,
+) -> (SetResult, Option<crate::diagnose::Diagnosis>) {
     let mut diagnosis = None;
     let name = format!("set-{seed}");
     let mut r = SetResult {
@@ -396,7 +408,10 @@ pub fn run_one_diagnosed(
     };
     let folder = dir.join("sets").join(&name);
     let res = (|| -> Result<()> {
-        let set = generate_in(&name, scenario, None, seed, world)?;
+        let mut set = generate_in(&name, scenario, None, seed, world)?;
+        if let Some(k) = effects {
+            set.config_toml = crate::synth::with_specimen_effects(&set.config_toml, k);
+        }
         write_set(&set, &folder)?;
         let t = &set.truth;
         r.family = t.family.clone();
@@ -471,6 +486,7 @@ pub fn run_battery(
         n,
         world,
         scenario,
+        None,
         &crate::progress::Bars::new(!progress),
     )
 }
@@ -483,6 +499,7 @@ pub fn run_battery_observed(
     n: usize,
     world: World,
     scenario: Option<&str>,
+    effects: Option<&[EffectKind]>,
     observer: &dyn crate::progress::Observer,
 ) -> Result<Vec<SetResult>> {
     if let Some(sc) = scenario {
@@ -504,7 +521,7 @@ pub fn run_battery_observed(
         .par_iter()
         .map(|&(i, seed)| {
             let sc = scenario.unwrap_or_else(|| scenario_of(i));
-            let r = run_one_diagnosed(dir, sc, seed, world).0;
+            let r = run_one_diagnosed_with(dir, sc, seed, world, effects).0;
             let line = serde_json::to_string(&r).expect("plain values") + "\n";
             {
                 let mut f = file.lock().expect("results lock");
@@ -693,7 +710,8 @@ pub enum ScatterStart {
 
 /// Generate set `seed` of `world` (a world with specimens; `scenario`) into
 /// `dir/sets/set-<seed>/`, fit the base model with the specimen effects its configuration
-/// names (`specimens`: rate and ductility; `shapes`: and coarsening) from `start`, and compute the REML
+/// names (`specimens`: rate and ductility; `shapes`: and coarsening), or `kinds` when given,
+/// from `start`, and compute the REML
 /// profile intervals of the scatter ([`crate::likelihood::scatter_intervals`]): the
 /// interval's coverage over many sets is [`coverage_of`] of the results. Far cheaper than a
 /// battery (about 0.2 s a set against a diagnosis's minute), so the coverage can be
@@ -704,6 +722,7 @@ pub fn scatter_fit(
     scenario: &str,
     start: ScatterStart,
     world: World,
+    kinds: Option<crate::likelihood::SpecimenOptions>,
 ) -> Result<ScatterFit> {
     use crate::likelihood::{ml_fit, scatter_intervals, MlOptions};
     let name = format!("set-{seed}");
@@ -726,7 +745,7 @@ pub fn scatter_fit(
     let space = cfg.space();
     let settings = FitSettings::from_config(&cfg);
     let opts = MlOptions {
-        specimen: cfg.objective.specimen_effects.resolve(&curves).0,
+        specimen: kinds.unwrap_or_else(|| cfg.objective.specimen_effects.resolve(&curves).0),
         ..MlOptions::default()
     };
     let x0 = match start {
@@ -745,9 +764,12 @@ pub fn scatter_fit(
     let mut fit = ml_fit(model.as_ref(), &curves, &space, &x0, &settings, &opts);
     scatter_intervals(&mut fit, model.as_ref(), &curves, &space, &settings, &opts);
     let (scatter_est, scatter_lo95, scatter_hi95) = scatter_by_kind(fit.specimen.as_ref());
+    // A kind fitted that the world does not draw has true scatter 0 (counted as absent).
+    let mut scatter_true = sp.scatter_true();
+    scatter_true.resize(scatter_est.len().max(scatter_true.len()), 0.0);
     Ok(ScatterFit {
         seed,
-        scatter_true: sp.scatter_true(),
+        scatter_true,
         scatter_est,
         scatter_lo95,
         scatter_hi95,

@@ -84,8 +84,11 @@ impl Default for MlOptions {
 
 /// A kind of specimen effect: a specimen's own creep rate, its own ductility, or its own
 /// coarsening (tertiary softening) rate.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize, clap::ValueEnum,
+)]
 #[serde(rename_all = "snake_case")]
+#[value(rename_all = "snake_case")]
 pub enum EffectKind {
     /// Creep-rate factor e^η on the rate constant.
     Rate,

@@ -716,6 +716,33 @@ fn generate_inner(
     })
 }
 
+/// `config` (a generated set's `config.toml`) with `[objective] specimen_effects` set to
+/// `kinds`: the line replaced where the configuration has one, else the table added.
+pub fn with_specimen_effects(config: &str, kinds: &[crate::likelihood::EffectKind]) -> String {
+    let list = kinds
+        .iter()
+        .map(|k| format!("\"{}\"", k.name()))
+        .collect::<Vec<_>>()
+        .join(", ");
+    let line = format!("specimen_effects = [{list}]");
+    if config.lines().any(|l| l.starts_with("specimen_effects")) {
+        config
+            .lines()
+            .map(|l| {
+                if l.starts_with("specimen_effects") {
+                    line.clone()
+                } else {
+                    l.to_string()
+                }
+            })
+            .collect::<Vec<_>>()
+            .join("\n")
+            + "\n"
+    } else {
+        format!("{config}\n[objective]\n{line}\n")
+    }
+}
+
 /// Shortest round-trip text of a number.
 fn fmt(v: f64) -> String {
     format!("{v}")
@@ -953,6 +980,30 @@ mod tests {
                 .config_toml
                 .contains("specimen_effects = [\"rate\", \"ductility\", \"coarsening\"]"));
             assert!(!a.config_toml.contains("specimen_effects"));
+        }
+    }
+
+    /// The battery's `--specimen-effects` in a set's configuration: added as a table, or
+    /// replacing the line of world `shapes`; read back as those kinds.
+    #[test]
+    fn specimen_effects_are_set_in_a_generated_configuration() {
+        use crate::likelihood::EffectKind::{Coarsening, Ductility, Rate};
+        for world in [World::Specimens, World::Shapes] {
+            let set = generate_in("t", "none", None, 3101, world).unwrap();
+            for kinds in [vec![Rate], vec![Rate, Ductility, Coarsening], vec![]] {
+                let text = with_specimen_effects(&set.config_toml, &kinds);
+                let cfg = crate::config::RunConfig::from_str_with(
+                    &text,
+                    std::path::Path::new("t.toml"),
+                    &Default::default(),
+                )
+                .unwrap();
+                assert_eq!(
+                    cfg.objective.specimen_effects,
+                    crate::config::SpecimenEffects::Kinds(kinds.clone()),
+                    "{world:?}: {text}"
+                );
+            }
         }
     }
 
