@@ -828,6 +828,23 @@ fn a_hidden_effect_under_specimen_scatter_is_named_in_a_small_family() {
     let own: Vec<_> = d.cause_gof.iter().filter(|g| g.decides).collect();
     assert!(!own.is_empty());
     assert!(own.iter().all(|g| g.gof.shape.beyond_specimens()));
+    // With an extension significant, the caution states the specimens' own shapes exactly
+    // when the base's goodness of fit beyond specimen shapes estimates them.
+    let tau = d
+        .gof
+        .iter()
+        .filter(|g| g.gof.shape.beyond_specimens())
+        .map(|g| g.gof.specimen_shape_sd_pct)
+        .fold(f64::NAN, f64::max);
+    eprintln!("τ̂ {tau} %; caution {:?}", d.caution);
+    assert_eq!(
+        d.caution
+            .as_deref()
+            .is_some_and(|c| c.contains("differ in shape beyond their fitted factors")),
+        tau > 0.0,
+        "τ̂ {tau}: {:?}",
+        d.caution
+    );
 }
 
 /// A nested extension refitted from the base model's hierarchical optimum (its added

@@ -1738,6 +1738,15 @@ pub fn diagnose_observed(
                 .filter_map(|c| c.termination.map(|t| (c.name.clone(), t)))
                 .collect::<Vec<_>>(),
         ),
+        decide::specimen_shapes_caution(
+            cands.iter().any(|c| c.significant),
+            base_gof
+                .iter()
+                .filter(|g| g.gof.shape.beyond_specimens())
+                .map(|g| g.gof.specimen_shape_sd_pct)
+                .filter(|v| v.is_finite())
+                .fold(f64::NAN, f64::max),
+        ),
     ]
     .into_iter()
     .flatten()
