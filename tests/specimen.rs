@@ -801,8 +801,8 @@ fn a_hidden_effect_under_specimen_scatter_is_named_in_a_small_family() {
     std::fs::write(&cfg_path, text).unwrap();
     let cfg = creepfit::config::RunConfig::load(&cfg_path).unwrap();
     let data = cfg.load_data().unwrap();
-    let d =
-        creepfit::diagnose::diagnose(&cfg.diagnose_setup().unwrap(), &data, &cfg.diagnose).unwrap();
+    let setup = cfg.diagnose_setup().unwrap();
+    let d = creepfit::diagnose::diagnose(&setup, &data, &cfg.diagnose).unwrap();
     eprintln!(
         "set-95102 (small family): {:?} {:?}; {}",
         d.verdict,
@@ -837,6 +837,24 @@ fn a_hidden_effect_under_specimen_scatter_is_named_in_a_small_family() {
         .map(|g| g.gof.specimen_shape_sd_pct)
         .fold(f64::NAN, f64::max);
     eprintln!("τ̂ {tau} %; caution {:?}", d.caution);
+    // The null replicates' new specimens were given the data's specimens' own shapes,
+    // resampled at the spread of the common shape's mixed model.
+    let common = d
+        .gof
+        .iter()
+        .find(|g| g.gof.shape == creepfit::diagnose::gof::Shape::CommonBeyondSpecimens)
+        .map(|g| g.gof.specimen_shape_sd_pct)
+        .expect("tested beyond specimen shapes");
+    assert!(
+        (d.bootstrap.specimen_shape_sd_pct - common).abs() < 1e-9 * common.max(1.0),
+        "null's shapes {} % against τ̂ {common} %",
+        d.bootstrap.specimen_shape_sd_pct
+    );
+    assert_eq!(
+        creepfit::diagnose::report::report_md("set-95102", &setup, &d)
+            .contains("a shape of its own"),
+        common > 0.0
+    );
     assert_eq!(
         d.caution
             .as_deref()

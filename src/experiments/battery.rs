@@ -32,7 +32,7 @@ use crate::fit::FitSettings;
 use crate::likelihood::EffectKind;
 use crate::likelihood::{min_penalised_ss, min_whitened_ss};
 use crate::model::build;
-use crate::synth::{generate_in, scenario_of, write_set, Truth, World};
+use crate::synth::{generate_in, scenario_of, write_set, SpecimenTruth, Truth, World};
 
 /// Oracle noncentrality at or above which an effect counts as detectable.
 pub const DETECTABLE_LAMBDA: f64 = 25.0;
@@ -446,10 +446,10 @@ pub fn run_one_diagnosed_with(
             serde_json::to_writer(&mut *w, &d).map_err(std::io::Error::from)
         })?;
         diagnosis = Some(d.clone());
-        if let Some(sp) = &t.specimens {
-            r.scatter_true = sp.scatter_true();
-        }
         (r.scatter_est, r.scatter_lo95, r.scatter_hi95) = scatter_by_kind(d.base.specimen.as_ref());
+        if let Some(sp) = &t.specimens {
+            r.scatter_true = true_by_kind(sp, r.scatter_est.len());
+        }
         Ok(())
     })();
     if let Err(e) = res {
@@ -614,6 +614,16 @@ pub struct ScatterCoverage {
     pub absent_sets: usize,
 }
 
+/// The true scatter per kind of a set's specimens, as long as the `fitted` kinds' estimates
+/// at least: a kind fitted that the world does not draw has true scatter 0, so its coverage
+/// row counts it absent (a scatter found there is spurious), in a battery and in
+/// [`scatter_fit`] alike.
+fn true_by_kind(sp: &SpecimenTruth, fitted: usize) -> Vec<f64> {
+    let mut v = sp.scatter_true();
+    v.resize(fitted.max(v.len()), 0.0);
+    v
+}
+
 /// [`ScatterCoverage`] per kind over the diagnosed specimens-world sets of `ok`.
 fn scatter_coverage(ok: &[&SetResult]) -> Vec<ScatterCoverage> {
     coverage_of(ok.iter().map(|r| {
@@ -764,9 +774,7 @@ pub fn scatter_fit(
     let mut fit = ml_fit(model.as_ref(), &curves, &space, &x0, &settings, &opts);
     scatter_intervals(&mut fit, model.as_ref(), &curves, &space, &settings, &opts);
     let (scatter_est, scatter_lo95, scatter_hi95) = scatter_by_kind(fit.specimen.as_ref());
-    // A kind fitted that the world does not draw has true scatter 0 (counted as absent).
-    let mut scatter_true = sp.scatter_true();
-    scatter_true.resize(scatter_est.len().max(scatter_true.len()), 0.0);
+    let scatter_true = true_by_kind(sp, scatter_est.len());
     Ok(ScatterFit {
         seed,
         scatter_true,
@@ -1247,6 +1255,42 @@ mod tests {
 
     /// Each kind's estimate and interval in the fixed order rate, ductility, whatever order
     /// the fit carries them in: 0 and NaN ends for a kind the fit lacks, and for no fit.
+    #[test]
+    fn a_kind_fitted_that_the_world_does_not_draw_is_true_zero() {
+        let specimens = SpecimenTruth {
+            rate_sd: 0.2,
+            ductility_sd: 0.08,
+            ..SpecimenTruth::default()
+        };
+        let shapes = SpecimenTruth {
+            coarsening_sd: 0.3,
+            coarsening_effects: vec![0.1, -0.2],
+            ..specimens.clone()
+        };
+        // (truth, kinds fitted, true scatter by kind)
+        let rows: [(&SpecimenTruth, usize, Vec<f64>); 4] = [
+            (&specimens, 2, vec![0.2, 0.08]),
+            (&specimens, 3, vec![0.2, 0.08, 0.0]),
+            (&shapes, 3, vec![0.2, 0.08, 0.3]),
+            (&shapes, 2, vec![0.2, 0.08, 0.3]),
+        ];
+        for (truth, fitted, want) in rows {
+            assert_eq!(true_by_kind(truth, fitted), want, "{fitted} fitted");
+        }
+        // So a specimens-world battery that fits coarsening gets a coarsening row, all absent.
+        let t = true_by_kind(&specimens, 3);
+        let cov = coverage_of(std::iter::once((
+            &t[..],
+            &[0.1, 0.0, 0.0][..],
+            &[0.3, 0.2, 0.1][..],
+        )));
+        let row = cov
+            .iter()
+            .find(|c| c.kind == "coarsening")
+            .expect("a coarsening row");
+        assert_eq!((row.true_sets, row.absent_sets, row.spurious), (0, 1, 0));
+    }
+
     #[test]
     fn scatter_by_kind_puts_rate_first_and_marks_a_missing_kind() {
         use crate::likelihood::SpecimenFit;

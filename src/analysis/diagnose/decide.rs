@@ -279,24 +279,26 @@ pub fn unconverged_fits_caution(fits: &[(String, crate::lsq::Termination)]) -> O
 /// The caution a diagnosis carries when an extension is significant while the base model's
 /// specimens differ in shape beyond their fitted factors (`shape_sd_pct`: the largest τ̂ of
 /// the goodness of fit beyond specimen shapes, % of ε_f at a knot; NaN without specimen
-/// effects). The likelihood ratios' null replicates draw new specimens that differ by the
-/// fitted factors only, so an extension that bends each curve can gain on the data by the
-/// specimens' own shapes: measured on generated null sets whose specimens differ in their
-/// coarsening rate, fitted with rate and ductility effects only (docs/SPECIMENS.md), 3 of 6
-/// named a tertiary extension, all three with τ̂ 1.0–2.4 %, while every null set fitted with
-/// the kinds its specimens carry had τ̂ ≤ 0.34 % (45 diagnoses). The size is stated, not
-/// judged: no threshold.
+/// effects). The likelihood ratios' null replicates give their new specimens the data's
+/// specimens' own shapes, resampled ([`super::bootstrap::SpecimenShapes`]), but a shape comes
+/// with a kind of specimen effect the fit may not carry (a specimen whose tertiary stage
+/// starts early also ruptures early), and an extension can still gain by that: measured on
+/// generated null sets whose specimens differ in their coarsening rate, fitted with rate and
+/// ductility effects only (docs/SPECIMENS.md), 3 of 6 named a tertiary extension with τ̂
+/// 1.0–2.4 % while the null drew no shapes; with the shapes resampled 1 of those 3 still did.
+/// Every null set fitted with the kinds its specimens carry had τ̂ ≤ 0.34 % (45 diagnoses).
+/// The size is stated, not judged: no threshold.
 pub fn specimen_shapes_caution(any_significant: bool, shape_sd_pct: f64) -> Option<String> {
     (any_significant && shape_sd_pct > 0.0).then(|| {
         format!(
             "the specimens differ in shape beyond their fitted factors (τ̂ {shape_sd_pct:.2} % \
-             of ε_f at a knot, the goodness of fit beyond specimen shapes), while the \
-             likelihood ratios' null replicates draw specimens that differ by those factors \
-             only: a significant extension may be taking up the specimens' own shapes \
-             (generated null sets whose specimens differ in coarsening rate, fitted without \
-             it, named a tertiary extension in 3 of 6 at τ̂ 1.0–2.4 %); fitting the kind of \
-             specimen effect they differ by ([objective] specimen_effects, e.g. coarsening) \
-             can tell"
+             of ε_f at a knot, the goodness of fit beyond specimen shapes); the likelihood \
+             ratios' null replicates resample those shapes, but not the kind of specimen \
+             effect behind them, so a significant extension may still be taking up the \
+             specimens' own shapes (generated null sets whose specimens differ in coarsening \
+             rate, fitted without it: 1 of 3 that named an extension still did with the \
+             shapes resampled); fitting the kind of specimen effect they differ by \
+             ([objective] specimen_effects, e.g. coarsening) can tell"
         )
     })
 }

@@ -109,6 +109,12 @@ pub struct Gof {
     /// The shapes beyond specimens only (else NaN): the alternative's estimate of τ, the
     /// standard deviation of each specimen's own shape at a knot, % of the rupture strain.
     pub specimen_shape_sd_pct: f64,
+    /// The shapes beyond specimens only (else empty): each curve's own shape beyond the fixed
+    /// one under the alternative, its best linear unbiased prediction at each knot (a
+    /// fraction of the curve's rupture strain; 0 at a knot without data). What a parametric
+    /// bootstrap resamples as the specimens' own shapes ([`super::bootstrap::SpecimenShapes`]).
+    #[serde(skip)]
+    pub specimen_shapes: Vec<Vec<f64>>,
     /// Each curve's part of G (the data's curve order): its strain readings' −2 ln L under the
     /// null's error model less that under the alternative's; with `lifetime_g` they sum to G
     /// (before G's floor at 0). Descriptive, not a test: where the misfit sits.
@@ -369,6 +375,7 @@ fn fixed(
         stress_trend_pct: vec![],
         temperature_trend_pct: vec![],
         specimen_shape_sd_pct: f64::NAN,
+        specimen_shapes: vec![],
         curve_g,
         lifetime_g,
     };
@@ -609,6 +616,7 @@ fn beyond_specimens(
         stress_trend_pct: if q > 1 { group(1) } else { vec![] },
         temperature_trend_pct: if q > 2 { group(2) } else { vec![] },
         specimen_shape_sd_pct: 100.0 * tau1.sqrt(),
+        specimen_shapes: blups(&stats, &w, &beta, tau1, nk),
         curve_g: parts0.iter().zip(&parts1).map(|(a, b)| a - b).collect(),
         lifetime_g: life_part(&left0, sd0) - life_part(&left1, sd1),
     }
@@ -625,6 +633,38 @@ fn curve_parts(per: &[AtTau], w: &[Vec<f64>], beta: &DVector<f64>, nk: usize) ->
                 c.axpy(*wg, &beta.rows(g * nk, nk), 1.0);
             }
             t.base - 2.0 * c.dot(&t.h) + c.dot(&(&t.p * &c))
+        })
+        .collect()
+}
+
+/// Each curve's own shape at the knots given its whitened data (`stats`), the fixed shape
+/// (`beta` with the curve's weights `w`) and τ²: the posterior mean of u ~ N(0, τ²I) under
+/// r̃ = X̃(c + u) + ε̃, ε̃ ~ N(0, I): û = τ²(I + τ²M)⁻¹(g − Mc) (zero at τ = 0).
+fn blups(
+    stats: &[CurveStats],
+    w: &[Vec<f64>],
+    beta: &DVector<f64>,
+    tau2: f64,
+    nk: usize,
+) -> Vec<Vec<f64>> {
+    stats
+        .iter()
+        .zip(w)
+        .map(|(cs, wi)| {
+            if tau2 <= 0.0 {
+                return vec![0.0; nk];
+            }
+            let mut c = DVector::<f64>::zeros(nk);
+            for (g, wg) in wi.iter().enumerate() {
+                c.axpy(*wg, &beta.rows(g * nk, nk), 1.0);
+            }
+            let i_tm = DMatrix::<f64>::identity(nk, nk) + &cs.m * tau2;
+            let rhs = (&cs.g - &cs.m * &c) * tau2;
+            let u = i_tm
+                .cholesky()
+                .expect("I + τ²M is positive definite")
+                .solve(&rhs);
+            u.iter().copied().collect()
         })
         .collect()
 }

@@ -48,6 +48,7 @@ use crate::model::ext;
 use crate::model::guess::initial_guess;
 use crate::model::objective::mean_abs;
 use crate::sampling::latin_hypercube;
+use bootstrap::SpecimenShapes;
 pub use decide::Verdict;
 use decide::{ExtensionEvidence, SelectInput};
 pub use hooks::Hooks;
@@ -718,6 +719,11 @@ pub struct BootstrapInfo {
     pub max: usize,
     /// Sampling stopped early: every test was clearly not significant.
     pub stopped_early: bool,
+    /// The spread of the specimens' own shapes the replicates' new specimens were given,
+    /// resampled from the data's specimens ([`bootstrap::SpecimenShapes`]): root mean square
+    /// at a knot, % of the rupture strain (τ̂ of the goodness of fit beyond specimen shapes);
+    /// 0 when they differ by their fitted factors only (no specimen effects, or τ̂ = 0).
+    pub specimen_shape_sd_pct: f64,
     /// Replicates whose base refit failed from every start.
     pub failed_base_refits: usize,
     /// Per extension: replicates whose refit failed (they count against rejection).
@@ -923,12 +929,14 @@ fn candidate(spec: &Spec, curves: &[Curve], fit: Option<&MlFit>, failed: usize) 
 /// Null replicate `b`'s data under the base fit `base` (its own random stream, which is
 /// returned for the replicate's random starts): [`null_replicate`] and [`null_again`] must
 /// draw the same data.
+#[allow(clippy::too_many_arguments)]
 fn null_data(
     specs: &[Spec],
     base: &MlFit,
     curves: &[Curve],
     settings: &FitSettings,
     dc: &DiagnoseConfig,
+    shapes: &SpecimenShapes,
     b: usize,
 ) -> (Vec<Curve>, ChaCha8Rng, Option<EffectStart>) {
     let mut rng = bootstrap::replicate_rng(dc.seed, NULL_STREAM, b);
@@ -938,6 +946,7 @@ fn null_data(
         base,
         &bootstrap::reading_error(curves, base),
         settings,
+        shapes,
         &mut rng,
     );
     (data, rng, drawn)
@@ -992,11 +1001,12 @@ fn null_replicate(
     settings: &FitSettings,
     ml: &MlOptions,
     dc: &DiagnoseConfig,
+    shapes: &SpecimenShapes,
     b: usize,
     active: &[bool],
 ) -> Vec<f64> {
     let base = fits[0].as_ref().expect("base fitted");
-    let (data, mut rng, drawn) = null_data(specs, base, curves, settings, dc, b);
+    let (data, mut rng, drawn) = null_data(specs, base, curves, settings, dc, shapes, b);
     let n_ext = specs.len() - 1;
     let mut starts = basins[0].clone();
     for _ in 0..dc.replicate_starts {
@@ -1110,6 +1120,7 @@ fn null_again(
     settings: &FitSettings,
     ml: &MlOptions,
     dc: &DiagnoseConfig,
+    shapes: &SpecimenShapes,
     b: usize,
     again: &[bool],
 ) -> Vec<f64> {
@@ -1121,7 +1132,7 @@ fn null_again(
         return out; // the base refit failed there
     }
     let (b0_ll, b0_params) = (first[n_ext + ng + 1], &first[n_ext + ng + 2..]);
-    let (data, _, _) = null_data(specs, base, curves, settings, dc, b);
+    let (data, _, _) = null_data(specs, base, curves, settings, dc, shapes, b);
     let base_names = specs[0].names();
     for k in (0..n_ext).filter(|&k| again[k]) {
         let spec = &specs[k + 1];
@@ -1142,6 +1153,25 @@ fn null_again(
     }
     out[n_ext + ng] = 0.0;
     out
+}
+
+/// The specimens' own shapes a parametric bootstrap gives its new specimens
+/// ([`bootstrap::SpecimenShapes`]), from the goodness of fit `gs` of the fitted model: with
+/// specimen effects those of [`gof::Shape::CommonBeyondSpecimens`]'s alternative — how the
+/// specimens differ in shape beyond any misfit they share, so that a misfit shared by every
+/// specimen (a model's error) is not drawn as the specimens' own — and none without specimen
+/// effects (a specimen is then the population, and its shape the model's error). Without
+/// them the likelihood ratios' null drew specimens that differ by the fitted factors only,
+/// and an extension that bends each specimen's tertiary stage gained on the data by their
+/// own shapes and on no replicate (session 52: 3 false alarms in 6 null sets whose specimens
+/// differ in coarsening rate).
+fn null_shapes(gs: &[gof::Gof], effects: bool) -> SpecimenShapes {
+    if !effects {
+        return SpecimenShapes::none();
+    }
+    gs.iter()
+        .find(|g| g.shape == gof::Shape::CommonBeyondSpecimens)
+        .map_or_else(SpecimenShapes::none, SpecimenShapes::from_gof)
 }
 
 /// Goodness-of-fit bootstrap of one fitted model: replicates under it, refitted by it.
@@ -1172,7 +1202,8 @@ fn gof_bootstrap(
         .map(|(g, f)| if *f { g.statistic } else { f64::NAN })
         .collect();
     let reading = bootstrap::reading_error(curves, fit);
-    let key = hooks::model_key(&(&spec.name, fit, basins, gof::SHAPES));
+    let shapes = null_shapes(&gs, ml.specimen.any());
+    let key = hooks::model_key(&(&spec.name, fit, basins, gof::SHAPES, &shapes.pool));
     let phase = "cause's goodness-of-fit bootstrap";
     let none = vec![false; observed.len()];
     let sampled = hooks.sequential(
@@ -1190,6 +1221,7 @@ fn gof_bootstrap(
                 fit,
                 &reading,
                 settings,
+                &shapes,
                 &mut rng,
             );
             let mut st = basins.to_vec();
@@ -1477,7 +1509,9 @@ pub fn diagnose_observed(
         .zip(&in_family)
         .map(|(o, f)| if *f { *o } else { f64::NAN })
         .collect();
-    let key = hooks::model_key(&(&fits, &basins, &recipes, gof::SHAPES));
+    // The null's specimens differ in shape as much as the data's do beyond what they share.
+    let shapes = null_shapes(&gof_obs, effects);
+    let key = hooks::model_key(&(&fits, &basins, &recipes, gof::SHAPES, &shapes.pool));
     // An extension decided not significant (STOP_EXCEEDANCES null ratios at or above its
     // own) is not refitted in later replicates. Only without specimen effects: with them,
     // every extension's refit takes part in the replicate's cross-start, so dropping one
@@ -1492,7 +1526,11 @@ pub fn diagnose_observed(
         &observed_seq,
         &droppable,
         dc.bootstrap,
-        |b, active| null_replicate(specs, &fits, &basins, curves, &warm, &ml, dc, b, active),
+        |b, active| {
+            null_replicate(
+                specs, &fits, &basins, curves, &warm, &ml, dc, &shapes, b, active,
+            )
+        },
     )?;
     // The tests that reject there (Holm, the whole family), bootstrapped again on the same
     // replicates with the fresh start that found the data's best fit ([`Recipe`]) added to
@@ -1545,6 +1583,7 @@ pub fn diagnose_observed(
                     &warm,
                     &ml,
                     dc,
+                    &shapes,
                     b,
                     &redo,
                 )
@@ -1767,6 +1806,7 @@ pub fn diagnose_observed(
             replicates: reps.len(),
             max: dc.bootstrap,
             stopped_early: sampled.stopped_early,
+            specimen_shape_sd_pct: shapes.sd_pct(),
             failed_base_refits,
             failed_extension_refits,
             null_statistics: failed_per_test

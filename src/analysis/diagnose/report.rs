@@ -275,7 +275,7 @@ pub fn report_md(name: &str, setup: &DiagnoseSetup, d: &Diagnosis) -> String {
          against the base model by its likelihood ratio, and the base model's fit by two statistics for \
          a misfit shape beyond the error model ({}); the null \
          distributions come from {} parametric bootstrap \
-         replicates under the fitted base model, every replicate refitted by every model (the base \
+         replicates under the fitted base model{}, every replicate refitted by every model (the base \
          from up to {} distinct optima found on the data; each extension from the replicate's base \
          optimum with the extension switched off, and slightly on where the likelihood is flat there, \
          and from its own optimum on the data; plus {} random start(s)){}{}. Holm's procedure keeps the chance of any false alarm at α = {}. A \
@@ -287,6 +287,7 @@ pub fn report_md(name: &str, setup: &DiagnoseSetup, d: &Diagnosis) -> String {
             "common to the curves, and per curve"
         },
         d.bootstrap.max,
+        shapes_md(d),
         d.settings.replicate_basins,
         d.settings.replicate_starts,
         dropped_md(d),
@@ -306,6 +307,21 @@ pub fn report_md(name: &str, setup: &DiagnoseSetup, d: &Diagnosis) -> String {
         }
     );
     s
+}
+
+/// What the null replicates' new specimens were given besides their factors: the data's
+/// specimens' own shapes, resampled (empty without).
+fn shapes_md(d: &Diagnosis) -> String {
+    if d.bootstrap.specimen_shape_sd_pct > 0.0 {
+        format!(
+            " (each new specimen with factors drawn from the fitted scatter and a shape of its \
+             own, one of the data's specimens' shapes beyond the shape they share, resampled: \
+             {:.2} % of ε_f at a knot)",
+            d.bootstrap.specimen_shape_sd_pct
+        )
+    } else {
+        String::new()
+    }
 }
 
 /// Where a goodness-of-fit statistic sits: its three largest parts by curve (and the

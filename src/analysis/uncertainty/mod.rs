@@ -337,6 +337,7 @@ pub fn replicate<R: rand::Rng>(
             &reference.as_fit(),
             &GrowingError::constant(&reference.noise.strain),
             &ctx.settings,
+            &crate::diagnose::bootstrap::SpecimenShapes::none(),
             rng,
         )
     } else {
