@@ -149,6 +149,21 @@ pub fn shape_at(c: &Curve, coefs: &[f64]) -> Vec<f64> {
         .collect()
 }
 
+/// Root mean square of knot coefficients over the knots with data (a knot without data has a
+/// prediction of exactly 0); 0 when there are none.
+fn rms_with_data(shapes: &[Vec<f64>]) -> f64 {
+    let (ss, n) = shapes
+        .iter()
+        .flatten()
+        .filter(|v| **v != 0.0)
+        .fold((0.0, 0usize), |(s, n), v| (s + v * v, n + 1));
+    if n == 0 {
+        0.0
+    } else {
+        (ss / n as f64).sqrt()
+    }
+}
+
 /// The specimens' own shapes a hierarchical bootstrap gives its new specimens: the data's
 /// specimens' shapes beyond the shape they share (the best linear unbiased predictions of the
 /// goodness of fit's mixed model, [`super::gof::Shape::CommonBeyondSpecimens`]), rescaled so
@@ -174,18 +189,11 @@ impl SpecimenShapes {
     /// predictions scaled to mean square τ̂² over the knots with data; none when τ̂ = 0.
     pub fn from_gof(g: &super::gof::Gof) -> SpecimenShapes {
         let tau = g.specimen_shape_sd_pct / 100.0;
-        let used: Vec<f64> = g
-            .specimen_shapes
-            .iter()
-            .flatten()
-            .copied()
-            .filter(|v| *v != 0.0)
-            .collect();
-        if !(tau > 0.0) || used.is_empty() {
+        let rms = rms_with_data(&g.specimen_shapes);
+        if !(tau > 0.0) || rms == 0.0 {
             return SpecimenShapes::none();
         }
-        let ms = used.iter().map(|v| v * v).sum::<f64>() / used.len() as f64;
-        let scale = tau / ms.sqrt();
+        let scale = tau / rms;
         SpecimenShapes {
             pool: g
                 .specimen_shapes
@@ -198,17 +206,7 @@ impl SpecimenShapes {
     /// The pool's root mean square over the knots with data, % of the rupture strain (τ̂;
     /// 0 without shapes).
     pub fn sd_pct(&self) -> f64 {
-        let used: Vec<f64> = self
-            .pool
-            .iter()
-            .flatten()
-            .copied()
-            .filter(|v| *v != 0.0)
-            .collect();
-        if used.is_empty() {
-            return 0.0;
-        }
-        100.0 * (used.iter().map(|v| v * v).sum::<f64>() / used.len() as f64).sqrt()
+        100.0 * rms_with_data(&self.pool)
     }
 
     /// Whether there is no shape to draw.
