@@ -214,11 +214,14 @@ impl SpecimenShapes {
         self.pool.is_empty()
     }
 
-    /// A new specimen's shape at real curve `c`'s readings (strain): one of the pool, drawn
-    /// uniformly (one draw from `rng`).
+    /// A new specimen's shape at real curve `c`'s readings, as strain to add to the model's
+    /// prediction (measured − predicted): one of the pool, drawn uniformly (one draw from
+    /// `rng`). The pool holds misfits in the residuals' sign (predicted − measured), so a
+    /// specimen whose tertiary stage came early (measured above the prediction late in life)
+    /// gives new specimens whose readings lie above it there too.
     pub fn draw<R: Rng>(&self, c: &Curve, rng: &mut R) -> Vec<f64> {
         let j = rng.gen_range(0..self.pool.len());
-        shape_at(c, &self.pool[j])
+        shape_at(c, &self.pool[j]).into_iter().map(|v| -v).collect()
     }
 }
 
@@ -600,7 +603,8 @@ mod tests {
         let mut rng = ChaCha8Rng::seed_from_u64(53_022);
         let mut hits = [0usize; 30];
         for _ in 0..600 {
-            let u = sh.draw(&curves[3], &mut rng);
+            // In the readings' sign: measured − predicted, the residuals' negative.
+            let u: Vec<f64> = sh.draw(&curves[3], &mut rng).iter().map(|v| -v).collect();
             let j = (0..30)
                 .find(|&j| shape_at(&curves[3], &sh.pool[j]) == u)
                 .expect("a drawn shape is one of the pool's");
