@@ -111,42 +111,17 @@ pub fn replicate_data<R: Rng>(
         .collect()
 }
 
-/// A replicate of `curves` under a fitted hierarchical model (`fit`, with specimen effects):
-/// every curve a NEW specimen, its effects drawn from the fitted scatter; each curve's
-/// measured times scaled by the ratio of the new specimen's predicted life to the fitted life
-/// of the real one (so a shorter-lived specimen is logged over its own shorter life, as the
-/// real one was over its own); the model's predictions there plus AR(1) reading error, and
-/// the rupture time scattered on the log scale by the fitted lifetime scatter; and each new
-/// specimen's own shape drawn from `shapes` (none when it is empty). Without specimen effects
-/// in `fit` this is [`replicate_data`] (a specimen is then the population, and `shapes` is
-/// not used).
-pub fn replicate_hier<R: Rng>(
-    curves: &[Curve],
-    model: &dyn Model,
-    fit: &MlFit,
-    reading: &GrowingError,
-    settings: &FitSettings,
-    shapes: &SpecimenShapes,
-    rng: &mut R,
-) -> Vec<Curve> {
-    replicate_hier_drawn(curves, model, fit, reading, settings, shapes, rng).0
-}
-
 /// Strain at each of curve `c`'s readings of a shape given at the goodness of fit's knots
 /// ([`super::gof::KNOTS`], in fractions of `c`'s life) in units of `c`'s rupture strain: the
-/// hat functions' interpolation, as the goodness of fit's design has it.
+/// goodness of fit's design columns ([`super::gof::knot_column`]) weighted by `coefs`.
 pub fn shape_at(c: &Curve, coefs: &[f64]) -> Vec<f64> {
-    let life = c.life_h();
-    c.times_h
-        .iter()
-        .map(|t| {
-            coefs
-                .iter()
-                .enumerate()
-                .map(|(k, v)| super::gof::hat(k, t / life) * v * c.rupture_strain)
-                .sum()
-        })
-        .collect()
+    let mut out = vec![0.0; c.times_h.len()];
+    for (k, v) in coefs.iter().enumerate() {
+        for (o, h) in out.iter_mut().zip(super::gof::knot_column(c, k)) {
+            *o += h * v;
+        }
+    }
+    out
 }
 
 /// Root mean square of knot coefficients over the knots with data (a knot without data has a
@@ -225,10 +200,20 @@ impl SpecimenShapes {
     }
 }
 
-/// [`replicate_hier`] and the point the replicate was drawn at: the new specimens' effects
-/// with `fit`'s kinds and scatter (`None` without specimen effects), a known start for the
-/// replicate's refit. The shapes are drawn last, curve by curve after its rupture time, so
-/// without shapes the stream's use (and the replicate) is that of a model without them.
+/// A replicate of `curves` under a fitted hierarchical model (`fit`, with specimen effects):
+/// every curve a NEW specimen, its effects drawn from the fitted scatter; each curve's
+/// measured times scaled by the ratio of the new specimen's predicted life to the fitted life
+/// of the real one (so a shorter-lived specimen is logged over its own shorter life, as the
+/// real one was over its own); the model's predictions there plus AR(1) reading error, and
+/// the rupture time scattered on the log scale by the fitted lifetime scatter; and each new
+/// specimen's own shape drawn from `shapes` (none when it is empty). Without specimen effects
+/// in `fit` this is [`replicate_data`] (a specimen is then the population, and `shapes` is
+/// not used).
+///
+/// Returns the point the replicate was drawn at too: the new specimens' effects with `fit`'s
+/// kinds and scatter (`None` without specimen effects), a known start for the replicate's
+/// refit. The shapes are drawn last, curve by curve after its rupture time, so without shapes
+/// the stream's use (and the replicate) is that of a model without them.
 pub fn replicate_hier_drawn<R: Rng>(
     curves: &[Curve],
     model: &dyn Model,

@@ -123,6 +123,16 @@ pub struct Gof {
     pub lifetime_g: f64,
 }
 
+/// Knot `k`'s column of the goodness of fit's design on curve `c`: at each reading the hat
+/// function at its fraction of the curve's life, in units of the curve's rupture strain (the
+/// strain a shape of coefficient 1 at that knot adds there).
+pub fn knot_column(c: &Curve, k: usize) -> impl Iterator<Item = f64> + '_ {
+    let life = c.life_h();
+    c.times_h
+        .iter()
+        .map(move |t| hat(k, t / life) * c.rupture_strain)
+}
+
 /// Hat function `k` of [`KNOTS`] at life fraction `tau` (clamped to [0, 1]).
 pub fn hat(k: usize, tau: f64) -> f64 {
     let t = tau.clamp(0.0, 1.0);
@@ -192,7 +202,6 @@ fn design(curves: &[Curve], res: &Residuals, shape: Shape) -> (DMatrix<f64>, Vec
     let mut off = 0;
     for (i, c) in curves.iter().enumerate() {
         let n = c.times_h.len();
-        let life = c.life_h();
         for (p, col) in cols.iter().enumerate() {
             let (k, w) = match *col {
                 Col::Knot(k) => (Some(k), 1.0),
@@ -201,8 +210,8 @@ fn design(curves: &[Curve], res: &Residuals, shape: Shape) -> (DMatrix<f64>, Vec
             };
             match k {
                 Some(k) if w != 0.0 => {
-                    for j in 0..n {
-                        x[(off + j, p)] = w * hat(k, c.times_h[j] / life) * c.rupture_strain;
+                    for (j, v) in knot_column(c, k).enumerate() {
+                        x[(off + j, p)] = w * v;
                     }
                 }
                 None if res.lifetime[i].is_some() => x[(off + n, p)] = w,
@@ -406,12 +415,11 @@ struct CurveStats {
 
 fn curve_stats(c: &Curve, e: &[f64], p: &crate::errmodel::Ar1) -> CurveStats {
     let (n, nk) = (c.times_h.len(), KNOTS.len());
-    let life = c.life_h();
     let mut x = DMatrix::<f64>::zeros(n, nk);
     for k in 0..nk {
         let col = &mut x.as_mut_slice()[k * n..(k + 1) * n];
-        for (j, v) in col.iter_mut().enumerate() {
-            *v = hat(k, c.times_h[j] / life) * c.rupture_strain;
+        for (v, h) in col.iter_mut().zip(knot_column(c, k)) {
+            *v = h;
         }
         p.whiten(col);
     }
