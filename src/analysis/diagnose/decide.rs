@@ -303,8 +303,93 @@ pub fn specimen_shapes_caution(any_significant: bool, shape_sd_pct: f64) -> Opti
     })
 }
 
+/// The caution a diagnosis carries when the base fit's specimen factors may stand for a
+/// dependence the model misses: fitted without replicates (no two specimens share a
+/// temperature and stress, so a specimen's factor cannot be told from the stress dependence of
+/// the constants; `auto` fits none there, a configuration that names kinds fits them anyway),
+/// or with some factor at its bound ±[`crate::likelihood::EFFECT_MAX`] in ln. `kinds` names
+/// each kind, `effects` its ln factor per specimen. Measured on Alloy 617 at 900 °C (seven
+/// specimens, seven stresses, three kinds, docs/SPECIMENS.md): on every 10th point the rate
+/// factors ran from +3 to −3 with stress and the verdict named strain_softening, on all points
+/// they did not and it was `adequate`.
+pub fn specimen_factors_caution(
+    replicates: bool,
+    kinds: &[&str],
+    effects: &[Vec<f64>],
+) -> Option<String> {
+    let bound = crate::likelihood::EFFECT_MAX;
+    let at_bound: Vec<String> = kinds
+        .iter()
+        .zip(effects)
+        .filter_map(|(k, e)| {
+            let n = e.iter().filter(|v| v.abs() >= bound - 1e-9).count();
+            (n > 0).then(|| format!("{n} of {} specimens' {k} factors", e.len()))
+        })
+        .collect();
+    let mut parts = Vec::new();
+    if !replicates && !kinds.is_empty() {
+        parts.push(
+            "no two specimens share a temperature and stress, so the specimens' fitted \
+             factors cannot be told from the stress dependence of the constants: they may \
+             take up a stress dependence the model misses, and the verdict may change with \
+             how the fit splits the two (fitting none, `specimen_effects = \"auto\"`, is the \
+             model these data can identify)"
+                .to_string(),
+        );
+    }
+    if !at_bound.is_empty() {
+        parts.push(format!(
+            "{} are at their bound (ln factor ±{bound}, a factor of {:.0}): the factors stand \
+             for more than specimen scatter there",
+            at_bound.join(" and "),
+            bound.exp()
+        ));
+    }
+    (!parts.is_empty()).then(|| parts.join("; "))
+}
+
 #[cfg(test)]
 mod tests {
+
+    /// (replicates, effects per kind, caution expected, text it must hold) as a table.
+    #[test]
+    fn a_caution_when_specimen_factors_lack_replicates_or_reach_their_bound() {
+        let b = crate::likelihood::EFFECT_MAX;
+        let cases: &[(bool, Vec<Vec<f64>>, bool, &str)] = &[
+            (true, vec![vec![0.2, -0.1, 0.4]], false, ""),
+            (true, vec![], false, ""),
+            (false, vec![], false, ""),
+            (false, vec![vec![0.2, -0.1, 0.4]], true, "no two specimens"),
+            (
+                true,
+                vec![vec![b, -0.1, -b]],
+                true,
+                "2 of 3 specimens' k0 factors",
+            ),
+            (
+                true,
+                vec![vec![0.1, 0.2], vec![-b, 0.0]],
+                true,
+                "1 of 2 specimens' k1",
+            ),
+            (true, vec![vec![b - 0.01, 0.0]], false, ""),
+        ];
+        for (rep, eff, want, text) in cases {
+            let names: Vec<String> = (0..eff.len()).map(|k| format!("k{k}")).collect();
+            let kinds: Vec<&str> = names.iter().map(String::as_str).collect();
+            let c = super::specimen_factors_caution(*rep, &kinds, eff);
+            assert_eq!(c.is_some(), *want, "{rep} {eff:?}: {c:?}");
+            if let Some(c) = c {
+                assert!(c.contains(text), "{c}");
+            }
+        }
+        let both = super::specimen_factors_caution(false, &["rate"], &[vec![b, 0.0]]).unwrap();
+        assert!(
+            both.contains("no two specimens") && both.contains("at their bound"),
+            "{both}"
+        );
+    }
+
     /// (significant extension, τ̂ %, caution expected) as a table.
     #[test]
     fn a_caution_when_an_extension_is_significant_and_specimens_differ_in_shape() {

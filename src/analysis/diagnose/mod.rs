@@ -1777,6 +1777,14 @@ pub fn diagnose_observed(
                 .filter_map(|c| c.termination.map(|t| (c.name.clone(), t)))
                 .collect::<Vec<_>>(),
         ),
+        base.specimen.as_ref().and_then(|sp| {
+            let kinds: Vec<&str> = sp.kinds.iter().map(|k| k.describe()).collect();
+            decide::specimen_factors_caution(
+                crate::specimen::has_replicates(curves),
+                &kinds,
+                &sp.effects,
+            )
+        }),
         decide::specimen_shapes_caution(
             cands.iter().any(|c| c.significant),
             base_gof
