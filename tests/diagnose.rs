@@ -15,9 +15,10 @@
 //!   `creepfit battery`, run by `scripts/bench_battery.sh`.
 //! - Real laboratory curves (Alloy 617, `data/alloy617/`): the verdict and the cause are the
 //!   same on all points and on every 10th point, at every temperature (`-- --ignored`: eight
-//!   diagnoses of Alloy 617; with the configurations' three kinds of specimen effects since
-//!   2026-11-30 about 80 minutes on 2 cores: 548 + 1,515 + 213 + 256 s on all points, 1,017 +
-//!   286 + 457 s and 850 °C on every 10th, each beside other work).
+//!   diagnoses of Alloy 617; with the configurations' `auto` specimen effects since
+//!   2026-12-02 about 40 minutes on 2 cores: 563 + 448 + 55 + 142 s on all points, 420 + 347 +
+//!   53 + 142 s on every 10th, beside other work; with the three kinds shipped before, the
+//!   verdicts differed at 900 and 950 °C).
 //! - The contract of `diagnosis.json` on the seed's 590 °C data.
 
 use std::path::{Path, PathBuf};
@@ -132,8 +133,7 @@ fn every_tenth(dir: &Path) -> PathBuf {
     p
 }
 
-/// All four temperatures (8 diagnoses; about 80 minutes on 2 cores with three kinds of
-/// specimen effects, module comment):
+/// All four temperatures (8 diagnoses; about 40 minutes on 2 cores, module comment):
 /// `cargo test --release --test diagnose -- --ignored` (out of CI's budget;
 /// scripts/bench_battery.sh runs it).
 #[test]
