@@ -1785,11 +1785,13 @@ pub fn diagnose_observed(
                 &sp.effects,
             )
         }),
+        // Only with specimen effects: without them the shapes beyond specimen shapes are
+        // reported beside, the null draws no shapes, and the caution's words would not hold.
         decide::specimen_shapes_caution(
             cands.iter().any(|c| c.significant),
             base_gof
                 .iter()
-                .filter(|g| g.gof.shape.beyond_specimens())
+                .filter(|g| effects && g.gof.shape.beyond_specimens())
                 .map(|g| g.gof.specimen_shape_sd_pct)
                 .filter(|v| v.is_finite())
                 .fold(f64::NAN, f64::max),
