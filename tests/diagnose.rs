@@ -16,8 +16,8 @@
 //! - Real laboratory curves (Alloy 617, `data/alloy617/`): the verdict and the cause are the
 //!   same on all points and on every 10th point, at every temperature (`-- --ignored`: eight
 //!   diagnoses of Alloy 617; with the configurations' `auto` specimen effects since
-//!   2026-12-02 about 40 minutes on 2 cores: 563 + 448 + 55 + 142 s on all points, 420 + 347 +
-//!   53 + 142 s on every 10th, beside other work; with the three kinds shipped before, the
+//!   2026-12-02 about 30 minutes on 2 cores: 563 + 448 + 53 + 75 s on all points, 420 + 347 +
+//!   52 + 61 s on every 10th, beside other work; with the three kinds shipped before, the
 //!   verdicts differed at 900 and 950 °C).
 //! - The contract of `diagnosis.json` on the seed's 590 °C data.
 
@@ -133,7 +133,7 @@ fn every_tenth(dir: &Path) -> PathBuf {
     p
 }
 
-/// All four temperatures (8 diagnoses; about 40 minutes on 2 cores, module comment):
+/// All four temperatures (8 diagnoses; about 30 minutes on 2 cores, module comment):
 /// `cargo test --release --test diagnose -- --ignored` (out of CI's budget;
 /// scripts/bench_battery.sh runs it).
 #[test]
