@@ -7,8 +7,8 @@ use creepfit::data::{estimate_min_rate, Curve};
 use creepfit::errmodel::{Ar1, ErrorModel};
 use creepfit::fit::FitSettings;
 use creepfit::likelihood::{
-    laplace_at, ml_fit, raw_objective, scatter_intervals, split_residuals, EffectKind,
-    EffectLayout, MlOptions, SpecimenOptions,
+    laplace_at, ml_fit, raw_objective, restricted_design, scatter_intervals, split_residuals,
+    EffectKind, EffectLayout, MlOptions, SpecimenOptions,
 };
 use creepfit::lsq::LmOptions;
 use creepfit::model::objective::{CurveFactors, JacobianMethod, ParamSpace};
@@ -1136,7 +1136,7 @@ fn the_bootstrap_draws_reading_error_that_grows_like_the_datas() {
             &opts,
         );
         assert!(fit.ok());
-        let reading = reading_error(&curves, &fit);
+        let reading = reading_error(&curves, model.as_ref(), &space(), &fit, &settings());
         // The likelihood-ratio test of g = 0 on the fit's residuals (boundary: ½χ²₀ + ½χ²₁,
         // so 3.84 is its 2.5 % point).
         let res = &fit.residuals.as_ref().unwrap().strain;
@@ -1144,8 +1144,13 @@ fn the_bootstrap_draws_reading_error_that_grows_like_the_datas() {
             .iter()
             .map(|c| strain_fractions(&c.strains))
             .collect();
+        let design = restricted_design(model.as_ref(), &curves, &space(), &fit, &settings())
+            .expect("the fit's Jacobian");
+        assert_eq!(
+            GrowingError::estimate_restricted(res, &x, &design).growth,
+            reading.growth
+        );
         let best = GrowingError::estimate(res, &x);
-        assert_eq!(best.growth, reading.growth);
         let zero = GrowingError::estimate(res, &vec![vec![0.0; 50]; curves.len()]);
         let lr = zero.neg2ll(res, &x) - best.neg2ll(res, &x);
         eprintln!("g = {g}: estimated {:.3}, LR {lr:.1}", reading.growth);

@@ -49,7 +49,7 @@ use std::sync::Mutex;
 use nalgebra::DMatrix;
 
 use crate::data::Curve;
-use crate::errmodel::{ErrorModel, Residuals};
+use crate::errmodel::{ErrorModel, Residuals, RestrictedDesign};
 use crate::lsq::{minimize, EvalFailure, LeastSquaresProblem, Termination};
 use crate::model::objective::FitSettings;
 use crate::model::objective::LifetimeTerm;
@@ -2441,6 +2441,95 @@ pub fn marginal_information(
     let i = a - &b * dinv * b.transpose();
     let i = (&i + i.transpose()) * 0.5;
     i.iter().all(|v| v.is_finite()).then_some(i)
+}
+
+/// The Jacobian of `fit`'s residuals in its parameters (free constants in the unit box of
+/// `space`, then its specimen effects), as [`RestrictedDesign`] wants it for the growth of the
+/// reading error: each curve's strain rows raw (strain as a fraction), the rupture-time and
+/// penalty rows whitened under the fit's error model. `None` where the fit kept no residuals,
+/// a kind of its effects cannot act in `space`, or the Jacobian cannot be evaluated.
+pub fn restricted_design(
+    model: &dyn Model,
+    curves: &[Curve],
+    space: &ParamSpace,
+    fit: &MlFit,
+    settings: &FitSettings,
+) -> Option<RestrictedDesign> {
+    fit.residuals.as_ref()?;
+    if fit.noise.strain.len() != curves.len() || fit.params.len() != space.len() {
+        return None;
+    }
+    let inner = CreepProblem {
+        objective: raw_objective(model, curves, settings),
+        space: space.clone(),
+        jacobian: settings.jacobian,
+    };
+    let mut x = space.to_unit(&fit.params);
+    let mut problem = LikelihoodProblem::fixed(inner, fit.noise.clone());
+    let mut layout = None;
+    if let Some(sp) = &fit.specimen {
+        let (l, dropped) = EffectLayout::new(model, curves, space, &sp.kinds);
+        let l = l?;
+        if !dropped.is_empty() {
+            return None;
+        }
+        let mut tau = Vec::with_capacity(l.kinds.len());
+        for &(kind, _, _) in &l.kinds {
+            let k = sp.kinds.iter().position(|q| *q == kind)?;
+            x.extend_from_slice(&sp.effects[k]);
+            tau.push(sp.scatter[k].max(SCATTER_FLOOR));
+        }
+        problem = problem.with_effects(l.clone(), tau, true);
+        layout = Some(l);
+    }
+    let m = problem.n_residuals();
+    let q = problem.n_params();
+    let mut rr = vec![0.0; m];
+    let mut jac = DMatrix::<f64>::zeros(m, q);
+    problem
+        .residuals_and_jacobian(&x, &mut rr, &mut jac)?
+        .ok()?;
+    if jac.iter().any(|v| !v.is_finite()) {
+        return None;
+    }
+    let nt = space.n_free();
+    let mut fixed = DMatrix::<f64>::zeros(q, q);
+    let mut add_row = |row: usize| {
+        for a in 0..q {
+            let ja = jac[(row, a)];
+            if ja == 0.0 {
+                continue;
+            }
+            for b in 0..q {
+                fixed[(a, b)] += ja * jac[(row, b)];
+            }
+        }
+    };
+    let mut blocks = Vec::with_capacity(curves.len());
+    let mut off = 0;
+    for (i, c) in curves.iter().enumerate() {
+        let n = c.times_h.len();
+        let mut cols: Vec<usize> = (0..nt).collect();
+        if let Some(l) = &layout {
+            cols.extend((0..l.kinds.len()).map(|k| nt + k * l.n_curves + i));
+        }
+        let mut block = DMatrix::<f64>::zeros(n, cols.len());
+        for (a, &col) in cols.iter().enumerate() {
+            let mut v: Vec<f64> = (0..n).map(|j| jac[(off + j, col)]).collect();
+            fit.noise.strain[i].unwhiten_strided(&mut v, n, 1);
+            block.column_mut(a).copy_from_slice(&v);
+        }
+        blocks.push((block, cols));
+        add_row(off + n);
+        off += n + 1;
+    }
+    for row in off..m {
+        add_row(row);
+    }
+    Some(RestrictedDesign {
+        curves: blocks,
+        fixed,
+    })
 }
 
 /// The whitened residuals and Jacobian of the hierarchical problem at `x` under the error

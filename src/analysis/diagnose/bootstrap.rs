@@ -21,8 +21,8 @@ use rayon::prelude::*;
 use crate::data::Curve;
 use crate::errmodel::{strain_fractions, ErrorModel, GrowingError};
 use crate::fit::FitSettings;
-use crate::likelihood::{raw_objective, EffectStart, MlFit};
-use crate::model::objective::Evaluation;
+use crate::likelihood::{raw_objective, restricted_design, EffectStart, MlFit};
+use crate::model::objective::{Evaluation, ParamSpace};
 use crate::model::Model;
 
 /// Replicates per batch (fixed, for thread-count invariance).
@@ -39,10 +39,17 @@ pub fn replicate_rng(seed: u64, purpose: u64, b: usize) -> ChaCha8Rng {
 }
 
 /// The reading error a bootstrap under `fit` draws: `fit`'s AR(1) per curve, growing with
-/// strain ([`GrowingError`]) when the likelihood of its residuals says so, its growth and
-/// AR(1)s then estimated together from them; when the best growth is zero (or `fit` kept no
-/// residuals), `fit`'s own AR(1)s unchanged.
-pub fn reading_error(curves: &[Curve], fit: &MlFit) -> GrowingError {
+/// strain ([`GrowingError`]) when the restricted likelihood of its residuals says so
+/// ([`GrowingError::estimate_restricted`], the fit's Jacobian from `model` in `space`), its
+/// growth and AR(1)s then estimated together from them; when the best growth is zero (or
+/// `fit` kept no residuals), `fit`'s own AR(1)s unchanged.
+pub fn reading_error(
+    curves: &[Curve],
+    model: &dyn Model,
+    space: &ParamSpace,
+    fit: &MlFit,
+    settings: &FitSettings,
+) -> GrowingError {
     let constant = GrowingError::constant(&fit.noise.strain);
     let Some(res) = fit.residuals.as_ref() else {
         return constant;
@@ -54,7 +61,10 @@ pub fn reading_error(curves: &[Curve], fit: &MlFit) -> GrowingError {
     if res.strain.iter().zip(&x).any(|(e, x)| e.len() != x.len()) {
         return constant;
     }
-    let est = GrowingError::estimate(&res.strain, &x);
+    let est = match restricted_design(model, curves, space, fit, settings) {
+        Some(d) => GrowingError::estimate_restricted(&res.strain, &x, &d),
+        None => GrowingError::estimate(&res.strain, &x),
+    };
     if est.growth > 0.0 {
         est
     } else {

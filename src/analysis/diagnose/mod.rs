@@ -38,6 +38,7 @@ pub use crate::config::DiagnoseConfig;
 use crate::config::DiagnoseSetup;
 use crate::data::binned;
 use crate::data::{Curve, Dataset};
+use crate::errmodel::GrowingError;
 use crate::error::{Error, Result};
 use crate::fit::FitSettings;
 use crate::likelihood::{
@@ -829,9 +830,16 @@ pub struct PhaseWork {
     pub loo: LmCounts,
 }
 
-fn noise_summary(curves: &[Curve], f: &MlFit) -> NoiseSummary {
+fn noise_summary(spec: &Spec, curves: &[Curve], f: &MlFit, settings: &FitSettings) -> NoiseSummary {
     NoiseSummary {
-        reading_error_growth: bootstrap::reading_error(curves, f).growth,
+        reading_error_growth: bootstrap::reading_error(
+            curves,
+            spec.model.as_ref(),
+            &spec.space,
+            f,
+            settings,
+        )
+        .growth,
         strain_sd_pct: f
             .noise
             .strain
@@ -861,7 +869,13 @@ fn signatures(curves: &[Curve], f: &MlFit) -> Vec<CurveSignature> {
         .collect()
 }
 
-fn candidate(spec: &Spec, curves: &[Curve], fit: Option<&MlFit>, failed: usize) -> Candidate {
+fn candidate(
+    spec: &Spec,
+    curves: &[Curve],
+    fit: Option<&MlFit>,
+    failed: usize,
+    settings: &FitSettings,
+) -> Candidate {
     let k = spec.space.n_free();
     let mut c = Candidate {
         name: spec.name.clone(),
@@ -914,7 +928,7 @@ fn candidate(spec: &Spec, curves: &[Curve], fit: Option<&MlFit>, failed: usize) 
         if let Some(ev) = &f.eval {
             c.lifetime_errs_pct = ev.lifetime_errors_pct(curves);
         }
-        c.noise = Some(noise_summary(curves, f));
+        c.noise = Some(noise_summary(spec, curves, f, settings));
         c.specimen = f.specimen.clone();
         c.specimen_stress_trend = f
             .specimen
@@ -937,6 +951,7 @@ fn null_data(
     settings: &FitSettings,
     dc: &DiagnoseConfig,
     shapes: &SpecimenShapes,
+    reading: &GrowingError,
     b: usize,
 ) -> (Vec<Curve>, ChaCha8Rng, Option<EffectStart>) {
     let mut rng = bootstrap::replicate_rng(dc.seed, NULL_STREAM, b);
@@ -944,7 +959,7 @@ fn null_data(
         curves,
         specs[0].model.as_ref(),
         base,
-        &bootstrap::reading_error(curves, base),
+        reading,
         settings,
         shapes,
         &mut rng,
@@ -1002,11 +1017,12 @@ fn null_replicate(
     ml: &MlOptions,
     dc: &DiagnoseConfig,
     shapes: &SpecimenShapes,
+    reading: &GrowingError,
     b: usize,
     active: &[bool],
 ) -> Vec<f64> {
     let base = fits[0].as_ref().expect("base fitted");
-    let (data, mut rng, drawn) = null_data(specs, base, curves, settings, dc, shapes, b);
+    let (data, mut rng, drawn) = null_data(specs, base, curves, settings, dc, shapes, reading, b);
     let n_ext = specs.len() - 1;
     let mut starts = basins[0].clone();
     for _ in 0..dc.replicate_starts {
@@ -1121,6 +1137,7 @@ fn null_again(
     ml: &MlOptions,
     dc: &DiagnoseConfig,
     shapes: &SpecimenShapes,
+    reading: &GrowingError,
     b: usize,
     again: &[bool],
 ) -> Vec<f64> {
@@ -1132,7 +1149,7 @@ fn null_again(
         return out; // the base refit failed there
     }
     let (b0_ll, b0_params) = (first[n_ext + ng + 1], &first[n_ext + ng + 2..]);
-    let (data, _, _) = null_data(specs, base, curves, settings, dc, shapes, b);
+    let (data, _, _) = null_data(specs, base, curves, settings, dc, shapes, reading, b);
     let base_names = specs[0].names();
     for k in (0..n_ext).filter(|&k| again[k]) {
         let spec = &specs[k + 1];
@@ -1201,7 +1218,7 @@ fn gof_bootstrap(
         .zip(&on)
         .map(|(g, f)| if *f { g.statistic } else { f64::NAN })
         .collect();
-    let reading = bootstrap::reading_error(curves, fit);
+    let reading = bootstrap::reading_error(curves, spec.model.as_ref(), &spec.space, fit, settings);
     let shapes = null_shapes(&gs, ml.specimen.any());
     let key = hooks::model_key(&(&spec.name, fit, basins, gof::SHAPES, &shapes.pool));
     let phase = "cause's goodness-of-fit bootstrap";
@@ -1511,6 +1528,14 @@ pub fn diagnose_observed(
         .collect();
     // The null's specimens differ in shape as much as the data's do beyond what they share.
     let shapes = null_shapes(&gof_obs, effects);
+    // The null's reading error, estimated once from the base fit (every replicate draws it).
+    let reading = bootstrap::reading_error(
+        curves,
+        specs[0].model.as_ref(),
+        &specs[0].space,
+        fits[0].as_ref().expect("base fitted"),
+        &warm,
+    );
     let key = hooks::model_key(&(&fits, &basins, &recipes, gof::SHAPES, &shapes.pool));
     // An extension decided not significant (STOP_EXCEEDANCES null ratios at or above its
     // own) is not refitted in later replicates. With specimen effects a replicate's
@@ -1528,7 +1553,7 @@ pub fn diagnose_observed(
         dc.bootstrap,
         |b, active| {
             null_replicate(
-                specs, &fits, &basins, curves, &warm, &ml, dc, &shapes, b, active,
+                specs, &fits, &basins, curves, &warm, &ml, dc, &shapes, &reading, b, active,
             )
         },
     )?;
@@ -1584,6 +1609,7 @@ pub fn diagnose_observed(
                     &ml,
                     dc,
                     &shapes,
+                    &reading,
                     b,
                     &redo,
                 )
@@ -1622,7 +1648,7 @@ pub fn diagnose_observed(
         .iter()
         .zip(&fits)
         .zip(&failed_starts)
-        .map(|((s, f), &n)| candidate(s, curves, f.as_ref(), n))
+        .map(|((s, f), &n)| candidate(s, curves, f.as_ref(), n, &warm))
         .collect();
     let sel = decide::select(&SelectInput {
         alpha: dc.alpha,
@@ -2040,7 +2066,13 @@ mod tests {
         let cfg = seed_config("");
         let data = cfg.load_data().unwrap();
         let sp = cfg.diagnose_setup().unwrap().variants;
-        let c = candidate(&sp[1], &data.curves, None, 17);
+        let c = candidate(
+            &sp[1],
+            &data.curves,
+            None,
+            17,
+            &FitSettings::from_config(&cfg),
+        );
         assert_eq!(c.status, FitStatus::Failed);
         assert_eq!(c.failed_starts, 17);
         assert!(c.objective.is_nan() && c.aic.is_nan());
