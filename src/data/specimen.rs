@@ -31,11 +31,15 @@ pub const SCATTER_MAX: f64 = 3.0;
 /// which specimen scatter cannot be told from the constants' stress and temperature
 /// dependence.
 pub fn has_replicates(curves: &[crate::data::Curve]) -> bool {
-    curves.iter().enumerate().any(|(i, a)| {
-        curves[i + 1..]
-            .iter()
-            .any(|b| a.temperature_c == b.temperature_c && a.stress_mpa == b.stress_mpa)
-    })
+    shares_a_condition(curves.iter().map(|c| (c.temperature_c, c.stress_mpa)))
+}
+
+/// Whether two of the tests' conditions (temperature °C, stress MPa) are the same.
+pub fn shares_a_condition(conditions: impl Iterator<Item = (f64, f64)>) -> bool {
+    let c: Vec<(f64, f64)> = conditions.collect();
+    c.iter()
+        .enumerate()
+        .any(|(i, a)| c[i + 1..].iter().any(|b| a == b))
 }
 
 /// Most kinds of specimen effect a curve carries (rate, ductility, coarsening).
@@ -523,6 +527,19 @@ mod tests {
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
     use rand_distr::{Distribution, StandardNormal};
+
+    #[test]
+    fn replicates_are_two_tests_at_one_temperature_and_stress() {
+        for (conds, want) in [
+            (vec![], false),
+            (vec![(900.0, 30.0)], false),
+            (vec![(900.0, 30.0), (900.0, 35.0), (950.0, 30.0)], false),
+            (vec![(900.0, 30.0), (950.0, 30.0), (900.0, 30.0)], true),
+            (vec![(750.0, 100.0), (750.0, 100.0)], true),
+        ] {
+            assert_eq!(shares_a_condition(conds.iter().copied()), want, "{conds:?}");
+        }
+    }
 
     /// −2 ln L of the linear mixed model from its dense marginal covariance V = I + Z D Zᵀ,
     /// with β profiled out (restricted: plus ln det XᵀV⁻¹X).

@@ -418,12 +418,12 @@ fn specimens_md(d: &Diagnosis, setup: &DiagnoseSetup) -> String {
     use crate::likelihood::EffectKind;
     let mut s = String::from("\n## Specimens\n\n");
     let Some(sp) = &d.base.specimen else {
-        let cs = &d.base.curves;
-        let replicates = cs.iter().enumerate().any(|(i, a)| {
-            cs[i + 1..]
+        let replicates = crate::specimen::shares_a_condition(
+            d.base
+                .curves
                 .iter()
-                .any(|b| a.temperature_c == b.temperature_c && a.stress_mpa == b.stress_mpa)
-        });
+                .map(|c| (c.temperature_c, c.stress_mpa)),
+        );
         let auto = setup.specimen_effects
             == crate::config::SpecimenEffects::Auto(crate::config::AutoWord::Auto);
         let why = if auto && !replicates {
