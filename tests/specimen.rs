@@ -1184,6 +1184,86 @@ fn the_bootstrap_draws_reading_error_that_grows_like_the_datas() {
     assert!(got[0] < 3.84 && got[1] > 3.84, "{got:?}");
 }
 
+/// The Jacobian `likelihood::restricted_design` hands the growth's restricted likelihood
+/// (`errmodel::GrowingError::estimate_restricted`) is that of the fit's raw strain residuals
+/// (strain as a fraction) in its parameters: every entry of every curve's block against a
+/// central difference of the residuals, in the free constants (unit box) and in the curve's
+/// own specimen effects. Four specimens (two stresses, each tested twice) with rate and
+/// ductility factors, fitted with both kinds of effect.
+#[test]
+fn the_restricted_design_is_the_jacobian_of_the_raw_strain_residuals() {
+    let model = registry("khd").unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(20261202);
+    let curves: Vec<Curve> = [
+        (170.0, 0.2, 0.05),
+        (170.0, -0.15, -0.05),
+        (200.0, 0.1, 0.0),
+        (200.0, -0.1, 0.03),
+    ]
+    .iter()
+    .map(|&(s, eta, zeta)| specimen(model.as_ref(), s, eta, zeta, 30, 2e-4, &mut rng))
+    .collect();
+    let sp_opts = MlOptions {
+        specimen: SpecimenOptions::BOTH,
+        ..MlOptions::default()
+    };
+    let fit = ml_fit(
+        model.as_ref(),
+        &curves,
+        &space(),
+        &TRUTH,
+        &settings(),
+        &sp_opts,
+    );
+    assert!(fit.ok());
+    let sp = fit.specimen.as_ref().expect("specimen effects fitted");
+    let design = restricted_design(model.as_ref(), &curves, &space(), &fit, &settings())
+        .expect("the fit's Jacobian");
+    let (layout, _) = EffectLayout::new(model.as_ref(), &curves, &space(), &sp.kinds);
+    let layout = layout.unwrap();
+    let nt = layout.n_theta;
+    let mut x = space().to_unit(&fit.params);
+    for &(kind, _, _) in &layout.kinds {
+        let k = sp.kinds.iter().position(|q| *q == kind).unwrap();
+        x.extend_from_slice(&sp.effects[k]);
+    }
+    let strain = |x: &[f64]| -> Vec<Vec<f64>> {
+        let mut params = space().fixed.clone();
+        space().from_unit(&x[..nt], &mut params);
+        let obj = raw_objective(model.as_ref(), &curves, &settings())
+            .with_factors(Some(layout.factors(&x[nt..])));
+        let mut r = vec![0.0; obj.n_residuals()];
+        obj.residuals(&params, &mut r).unwrap();
+        split_residuals(&curves, &r).strain
+    };
+    assert_eq!(design.curves.len(), curves.len());
+    assert_eq!(design.fixed.nrows(), x.len());
+    let h = 1e-6;
+    let mut checked = 0;
+    for (i, (block, cols)) in design.curves.iter().enumerate() {
+        // The free constants, then this curve's own effects (one a kind).
+        assert_eq!(cols.len(), nt + layout.kinds.len());
+        assert_eq!(block.nrows(), curves[i].times_h.len());
+        for (a, &col) in cols.iter().enumerate() {
+            let (mut xp, mut xm) = (x.clone(), x.clone());
+            xp[col] += h;
+            xm[col] -= h;
+            let (rp, rm) = (strain(&xp), strain(&xm));
+            let scale = block.column(a).amax().max(1e-12);
+            for j in 0..block.nrows() {
+                let fd = (rp[i][j] - rm[i][j]) / (2.0 * h);
+                assert!(
+                    (block[(j, a)] - fd).abs() <= 1e-4 * scale,
+                    "curve {i}, column {col}, reading {j}: {} against {fd}",
+                    block[(j, a)]
+                );
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked > 100);
+}
+
 /// A nested extension refitted from the base's hierarchical optimum with the extension
 /// switched off starts at the base's likelihood and must not end above it. Measured on a
 /// generated set (seed 100002, `tests/data/warm_drop/`, hidden constant load λ 239, six
