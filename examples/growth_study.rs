@@ -4,8 +4,10 @@
 //! effects (curves reduced to `[diagnose] max_points`, as `diagnose` does) and prints per set:
 //! the generator's growth g (per unit of ε/ε_f, which a plot edge's cut makes larger than the
 //! estimator's unit, strain as a fraction of the curve's largest), the growth estimated from
-//! the true reading errors (data − truth, all readings, the estimator's units), from the fit's
-//! residuals by maximum likelihood (plain) and the one `diagnose` draws (restricted).
+//! the true reading errors (data − truth, all readings, the estimator's units), the same on the
+//! binned curves (`oracle_binned`: what the fit's residuals estimate), from the fit's residuals
+//! by maximum likelihood (plain) and the one `diagnose` draws (restricted). `MAX_POINTS=N`
+//! bins to N points instead of the configuration's.
 use creepfit::config::RunConfig;
 use creepfit::errmodel::{strain_fractions, GrowingError};
 use creepfit::fit::FitSettings;
@@ -30,8 +32,13 @@ fn main() {
             let g = t.specimens.as_ref().expect("specimens").error_growth;
             // The true reading errors, in the set's curve order (one curve per test, the
             // truth's order: matched by the first reading's time and the curve's length).
+            let max_points: usize = std::env::var("MAX_POINTS")
+                .ok()
+                .and_then(|v| v.parse().ok())
+                .unwrap_or(cfg.diagnose.max_points);
             let mut e_true = vec![];
             let mut x_true = vec![];
+            let (mut e_binned, mut x_binned) = (vec![], vec![]);
             for c in &data.curves {
                 let k = (0..t.times_h.len())
                     .find(|&k| {
@@ -48,12 +55,31 @@ fn main() {
                     .collect();
                 e_true.push(e);
                 x_true.push(strain_fractions(&c.strains));
+                // The same on the curve `diagnose` sees: binning is linear in the readings,
+                // so the binned curve's errors are the binned truth minus the binned data.
+                let b = creepfit::data::binned(c, max_points);
+                let bt = creepfit::data::binned(
+                    &creepfit::data::Curve {
+                        strains: t.true_strain[k].clone(),
+                        ..c.clone()
+                    },
+                    max_points,
+                );
+                e_binned.push(
+                    bt.strains
+                        .iter()
+                        .zip(&b.strains)
+                        .map(|(a, m)| a - m)
+                        .collect(),
+                );
+                x_binned.push(strain_fractions(&b.strains));
             }
             let g_oracle = GrowingError::estimate(&e_true, &x_true).growth;
+            let g_oracle_binned = GrowingError::estimate(&e_binned, &x_binned).growth;
             let curves: Vec<_> = data
                 .curves
                 .iter()
-                .map(|c| creepfit::data::binned(c, cfg.diagnose.max_points))
+                .map(|c| creepfit::data::binned(c, max_points))
                 .collect();
             let model = cfg.build_model().expect("model");
             let space = cfg.space();
@@ -84,8 +110,8 @@ fn main() {
             )
             .growth;
             format!(
-                "{s} {:?} cut {:?} g {:.3} oracle {:.3} plain {:.3} fit {:.3}",
-                t.sampling, t.strain_cut, g, g_oracle, g_plain, g_fit
+                "{s} {:?} cut {:?} g {:.3} oracle {:.3} oracle_binned {:.3} plain {:.3} fit {:.3}",
+                t.sampling, t.strain_cut, g, g_oracle, g_oracle_binned, g_plain, g_fit
             )
         })
         .collect();
