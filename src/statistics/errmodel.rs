@@ -404,7 +404,7 @@ impl GrowingError {
         x: &[Vec<f64>],
         design: &RestrictedDesign,
     ) -> GrowingError {
-        if !design.matches(e) {
+        if !design.matches(e, x) {
             return Self::estimate(e, x);
         }
         let q = design.fixed.nrows();
@@ -423,6 +423,8 @@ impl GrowingError {
                     }
                     ar[i].whiten(col);
                 }
+                // Its Gram matrix, summed in this order (the estimates of the measurements in
+                // docs/SPECIMENS.md; `lsq::gram`'s blocked sums move flat optima by up to 0.01).
                 for a in 0..k {
                     for b in 0..=a {
                         let v: f64 = (0..n)
@@ -513,15 +515,23 @@ pub struct RestrictedDesign {
 }
 
 impl RestrictedDesign {
-    /// Whether the design fits residuals `e` (one block a curve, a row a residual, columns
-    /// within the parameters).
-    fn matches(&self, e: &[Vec<f64>]) -> bool {
+    /// Whether the design fits residuals `e` and strain fractions `x` (one block a curve, a
+    /// row a residual, columns within the parameters).
+    fn matches(&self, e: &[Vec<f64>], x: &[Vec<f64>]) -> bool {
         let q = self.fixed.nrows();
         self.fixed.ncols() == q
             && self.curves.len() == e.len()
-            && self.curves.iter().zip(e).all(|((b, cols), e)| {
-                b.nrows() == e.len() && b.ncols() == cols.len() && cols.iter().all(|&c| c < q)
-            })
+            && x.len() == e.len()
+            && self
+                .curves
+                .iter()
+                .zip(e.iter().zip(x))
+                .all(|((b, cols), (e, x))| {
+                    b.nrows() == e.len()
+                        && x.len() == e.len()
+                        && b.ncols() == cols.len()
+                        && cols.iter().all(|&c| c < q)
+                })
     }
 }
 
