@@ -1286,3 +1286,43 @@ fn a_fit_that_fitted_nothing_is_marked() {
     .unwrap();
     assert!(s["caution"].is_null(), "{}", s["caution"]);
 }
+
+/// A likelihood fit whose reading error took the misfit for correlated noise says so
+/// (`fit::absorbed_noise_caution`): Alloy 617 at 850 °C, all points, no specimen effects, φ
+/// 1.00 on every one of its 13 curves (measured 2026-12-02). The seed's 560 °C likelihood fit
+/// has it on 1 of 3 curves and carries no caution.
+#[test]
+fn a_likelihood_fit_whose_error_model_took_the_misfit_is_marked() {
+    let dir = TempDir::new().unwrap();
+    let text = std::fs::read_to_string(root().join("configs/alloy617-850C.toml"))
+        .unwrap()
+        .replace("../data/", &format!("{}/data/", root().display()))
+        .replace(
+            "specimen_effects = \"auto\"",
+            "specimen_effects = []\nkind = \"likelihood\"",
+        );
+    assert!(text.contains("kind = \"likelihood\""));
+    let cfg = dir.path().join("a617.toml");
+    std::fs::write(&cfg, text).unwrap();
+    let out = dir.path().join("fit");
+    let stdout = ok(&["fit", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let caution = s["caution"].as_str().expect("a caution");
+    has(
+        caution,
+        &["φ ≥ 0.99 on 13 of 13 curves", "correlated noise"],
+    );
+    has(&stdout, &["caution: the likelihood's reading error"]);
+    let cfg = config_560(
+        dir.path(),
+        "lik560.toml",
+        "",
+        &[("[objective]\n", "[objective]\nkind = \"likelihood\"\n")],
+    );
+    let out = dir.path().join("fit560");
+    ok(&["fit", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert!(s["caution"].is_null(), "{}", s["caution"]);
+}

@@ -26,6 +26,21 @@ use crate::scalar_min::{grid_golden, GridGolden};
 /// Largest |φ| an estimate may take: beyond it the process is a random walk in all but name
 /// and the likelihood's −ln(1 − φ²) term dominates.
 pub const PHI_MAX: f64 = 0.995;
+/// AR(1) correlation of a curve's reading error at or above which the error model is read as
+/// holding a smooth misfit (the estimate's bound is [`PHI_MAX`], 0.995): between the binned
+/// points of a curve, reading error this correlated is a slowly drifting offset, which is
+/// what a missed loading strain or primary stage looks like.
+pub const PHI_ABSORBS: f64 = 0.99;
+
+/// How many curves' reading errors (`phi`, one per curve) are correlated to
+/// [`PHI_ABSORBS`] or more, when that is at least half of them; `None` otherwise or without
+/// curves. The rule of `diagnose`'s and `fit`'s cautions that the error model may have taken
+/// a smooth misfit for correlated noise.
+pub fn absorbing_curves(phi: &[f64]) -> Option<usize> {
+    let k = phi.iter().filter(|p| **p >= PHI_ABSORBS).count();
+    (!phi.is_empty() && 2 * k >= phi.len()).then_some(k)
+}
+
 /// Smallest innovation scale (strain fraction): a numerical floor for noise-free curves.
 pub const SIGMA_FLOOR: f64 = 1e-9;
 /// Default floor of the rupture-time scatter (ln scale): 1 %, the reproducibility of a

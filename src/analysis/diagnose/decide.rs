@@ -190,11 +190,7 @@ pub fn verdict(sel: &Selection, cause_gof_p: &[f64], alpha: f64) -> (Verdict, Op
     }
 }
 
-/// AR(1) correlation of a curve's reading error at or above which the error model is read as
-/// holding a smooth misfit (the estimate's bound is [`crate::errmodel::PHI_MAX`], 0.995):
-/// between the ≤ 60 binned points of a curve, reading error this correlated is a slowly
-/// drifting offset, which is what a missed loading strain or primary stage looks like.
-pub const PHI_ABSORBS: f64 = 0.99;
+pub use crate::errmodel::PHI_ABSORBS;
 
 /// The caution a diagnosis carries when the base fit's reading error is correlated to
 /// [`PHI_ABSORBS`] or more on at least half of its curves (`phi`, one per curve): the
@@ -204,10 +200,7 @@ pub const PHI_ABSORBS: f64 = 0.99;
 /// loading strain under specimen scatter, seed 95102, oracle λ 1592): φ 0.99–1.00 on all 6
 /// curves, marginal sd 0.23–0.32 % strain against the truth's 0.028 %, verdict `adequate`.
 pub fn absorbed_misfit_caution(phi: &[f64], sd_pct: &[f64]) -> Option<String> {
-    let k = phi.iter().filter(|p| **p >= PHI_ABSORBS).count();
-    if phi.is_empty() || 2 * k < phi.len() {
-        return None;
-    }
+    let k = crate::errmodel::absorbing_curves(phi)?;
     let max_sd = sd_pct
         .iter()
         .zip(phi)

@@ -602,10 +602,32 @@ pub fn fit_summary(cfg: &RunConfig, run: &FitRun, curves: &[Curve]) -> Value {
             })
         })
         .collect();
+    let error_model = error_model_json(cfg, run, curves);
+    // Every caution that applies, in one sentence each.
+    let mut cautions: Vec<String> = crate::fit::no_fit_caution(&best.lifetime_err_pct)
+        .into_iter()
+        .collect();
+    if cfg.objective.kind == crate::model::objective::ObjectiveKind::Likelihood {
+        let per_curve = |key: &str| -> Vec<f64> {
+            error_model["curves"]
+                .as_array()
+                .map(|v| {
+                    v.iter()
+                        .map(|c| c[key].as_f64().unwrap_or(f64::NAN))
+                        .collect()
+                })
+                .unwrap_or_default()
+        };
+        cautions.extend(crate::fit::absorbed_noise_caution(
+            &per_curve("ar1_phi"),
+            &per_curve("residual_sd_pct"),
+        ));
+    }
+    let caution = (!cautions.is_empty()).then(|| cautions.join("; "));
     let mut summary = json!({
         "model": run.model.name(),
         "extensions": cfg.extensions,
-        "error_model": error_model_json(cfg, run, curves),
+        "error_model": error_model,
         "run_id": crate::identity::hash_value(&crate::config::identity(cfg)),
         "data_hash": cfg.data_hash,
         "objective": jnum(best.eval.objective),
@@ -617,7 +639,7 @@ pub fn fit_summary(cfg: &RunConfig, run: &FitRun, curves: &[Curve]) -> Value {
         "wall_s": run.wall_s,
         "fit_wall_s": best.wall_s,
         "termination": best.lm.termination.as_str(),
-        "caution": crate::fit::no_fit_caution(&best.lifetime_err_pct),
+        "caution": caution,
         "constants": consts(&best.params),
         "pinned_at_bounds": pinned,
         "mean_lifetime_err_pct": jnum(best.mean_lifetime_err()),
