@@ -1206,6 +1206,8 @@ impl From<LocalFitRecord> for LocalFit {
 
 #[cfg(test)]
 mod tests {
+    use super::*;
+
     #[test]
     fn a_likelihood_fit_whose_reading_error_took_the_misfit_says_so() {
         // (φ per curve, caution?): at least half of the curves at φ ≥ 0.99.
@@ -1225,8 +1227,6 @@ mod tests {
         // The largest sd among the absorbing curves, not the white one's.
         assert!(text.contains("up to 0.400 %"), "{text}");
     }
-
-    use super::*;
 
     #[test]
     fn the_nested_space_holds_the_extensions_switched_off() {
