@@ -347,13 +347,7 @@ pub const NO_FIT_FACTOR: f64 = 10.0;
 /// Measured: Alloy 617 at 850 °C on all points (`kind = "likelihood"`, specimen effects), φ
 /// 1.00 on all 13 curves and a predicted life at 70 MPa of 3 h against 237 h measured.
 pub fn absorbed_noise_caution(phi: &[f64], sd_pct: &[f64]) -> Option<String> {
-    let k = crate::errmodel::absorbing_curves(phi)?;
-    let max_sd = sd_pct
-        .iter()
-        .zip(phi)
-        .filter(|(_, p)| **p >= crate::errmodel::PHI_ABSORBS)
-        .map(|(s, _)| *s)
-        .fold(0.0, f64::max);
+    let (k, max_sd) = crate::errmodel::absorbing_curves(phi, sd_pct)?;
     Some(format!(
         "the likelihood's reading error is correlated to φ ≥ {} on {k} of {} curves \
          (marginal sd up to {max_sd:.3} % strain): the error model has taken a smooth misfit \

@@ -33,12 +33,22 @@ pub const PHI_MAX: f64 = 0.995;
 pub const PHI_ABSORBS: f64 = 0.99;
 
 /// How many curves' reading errors (`phi`, one per curve) are correlated to
-/// [`PHI_ABSORBS`] or more, when that is at least half of them; `None` otherwise or without
+/// [`PHI_ABSORBS`] or more, when that is at least half of them, with the largest marginal sd
+/// among those curves (`sd`, one per curve, in the caller's unit); `None` otherwise or without
 /// curves. The rule of `diagnose`'s and `fit`'s cautions that the error model may have taken
 /// a smooth misfit for correlated noise.
-pub fn absorbing_curves(phi: &[f64]) -> Option<usize> {
+pub fn absorbing_curves(phi: &[f64], sd: &[f64]) -> Option<(usize, f64)> {
     let k = phi.iter().filter(|p| **p >= PHI_ABSORBS).count();
-    (!phi.is_empty() && 2 * k >= phi.len()).then_some(k)
+    if phi.is_empty() || 2 * k < phi.len() {
+        return None;
+    }
+    let max_sd = sd
+        .iter()
+        .zip(phi)
+        .filter(|(_, p)| **p >= PHI_ABSORBS)
+        .map(|(s, _)| *s)
+        .fold(0.0, f64::max);
+    Some((k, max_sd))
 }
 
 /// Smallest innovation scale (strain fraction): a numerical floor for noise-free curves.

@@ -200,13 +200,7 @@ pub use crate::errmodel::PHI_ABSORBS;
 /// loading strain under specimen scatter, seed 95102, oracle λ 1592): φ 0.99–1.00 on all 6
 /// curves, marginal sd 0.23–0.32 % strain against the truth's 0.028 %, verdict `adequate`.
 pub fn absorbed_misfit_caution(phi: &[f64], sd_pct: &[f64]) -> Option<String> {
-    let k = crate::errmodel::absorbing_curves(phi)?;
-    let max_sd = sd_pct
-        .iter()
-        .zip(phi)
-        .filter(|(_, p)| **p >= PHI_ABSORBS)
-        .map(|(s, _)| *s)
-        .fold(0.0, f64::max);
+    let (k, max_sd) = crate::errmodel::absorbing_curves(phi, sd_pct)?;
     Some(format!(
         "the base fit's reading error is correlated to φ ≥ {PHI_ABSORBS} on {k} of {} curves \
          (marginal sd up to {max_sd:.3} % strain): the error model may have taken a smooth \
