@@ -886,6 +886,7 @@ pub fn run_fit_observed(
                 lifetime_sd_floor: settings.lifetime_sd_floor,
                 white_first: false,
                 specimen: kinds,
+                hold_scatter: None,
             };
             let t1 = Instant::now();
             // Every hierarchical fit carried on from its end with every problem scaled

@@ -488,6 +488,10 @@ pub enum ScatterMethod {
     /// where the linear model's promise of gains from larger or smaller effects is not what
     /// the curves, refitted, deliver.
     LaplaceAtModes,
+    /// The linear mixed model's restricted likelihood with a within-temperature trend of the
+    /// effects with ln σ as a fixed effect (`[objective] specimen_scatter =
+    /// "beyond_stress_trend"`): the scatter of the specimens beyond what follows stress.
+    BeyondStressTrend,
 }
 
 impl ScatterMethod {
@@ -497,6 +501,9 @@ impl ScatterMethod {
             ScatterMethod::LinearMixedModel => "",
             ScatterMethod::LaplaceAtModes => {
                 "estimated by the Laplace criterion at the fitted effects (the linear mixed model of the fit's linearisation stopped where that criterion still fell, or its step did not pay)"
+            }
+            ScatterMethod::BeyondStressTrend => {
+                "estimated by restricted likelihood from how the specimens' factors differ beyond a straight line in ln σ at each temperature ([objective] specimen_scatter = \"beyond_stress_trend\"): a trend of the factors with stress is not counted as scatter, and costs the fit its penalty at this scatter"
             }
         }
     }

@@ -755,7 +755,7 @@ pub fn scatter_fit(
     let space = cfg.space();
     let settings = FitSettings::from_config(&cfg);
     let opts = MlOptions {
-        specimen: kinds.unwrap_or_else(|| cfg.objective.specimen_effects.resolve(&curves).0),
+        specimen: kinds.unwrap_or_else(|| cfg.objective.specimen_options(&curves).0),
         ..MlOptions::default()
     };
     let x0 = match start {

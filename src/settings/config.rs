@@ -114,6 +114,37 @@ pub struct ObjectiveConfig {
     /// `["rate", "ductility"]`, `["rate", "ductility", "coarsening"]`, `[]`) asks for exactly
     /// those (`coarsening`: a factor on the softening constant Kc, only by name).
     pub specimen_effects: SpecimenEffects,
+    /// How the specimens' scatter is estimated. `"likelihood"` (default): by maximum
+    /// likelihood over all the specimens' factors. `"beyond_stress_trend"`: by restricted
+    /// likelihood from how the factors differ beyond a straight line in ln σ at each
+    /// temperature, and `diagnose` compares every model at the base model's scatter, so that
+    /// an effect that follows stress shows as misfit of the base instead of as a larger
+    /// scatter (docs/SPECIMENS.md, "The scatter beyond the stress trend").
+    pub specimen_scatter: SpecimenScatter,
+}
+
+/// `[objective] specimen_scatter`: how the scatter between specimens is estimated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SpecimenScatter {
+    /// Maximum likelihood over all the factors.
+    #[default]
+    Likelihood,
+    /// Restricted likelihood beyond a within-temperature trend with ln σ; every model of a
+    /// diagnosis at the base's scatter.
+    BeyondStressTrend,
+}
+
+impl ObjectiveConfig {
+    /// The specimen effects for `curves` with the configured scatter estimate, and a note for
+    /// the user when `auto` left them out.
+    pub fn specimen_options(
+        &self,
+        curves: &[crate::data::Curve],
+    ) -> (crate::likelihood::SpecimenOptions, Option<String>) {
+        let (o, note) = self.specimen_effects.resolve(curves);
+        (o.with_scatter(self.specimen_scatter), note)
+    }
 }
 
 /// `[objective] specimen_effects`: `"auto"` or a list of kinds.
@@ -157,6 +188,7 @@ impl SpecimenEffects {
                     rate: k.contains(&EffectKind::Rate),
                     ductility: k.contains(&EffectKind::Ductility),
                     coarsening: k.contains(&EffectKind::Coarsening),
+                    beyond_trend: false,
                 },
                 None,
             ),
@@ -175,6 +207,7 @@ impl Default for ObjectiveConfig {
             lifetime_term: LifetimeTerm::Late,
             omega_f: 1.0 / 3.0,
             specimen_effects: SpecimenEffects::Auto(AutoWord::Auto),
+            specimen_scatter: SpecimenScatter::Likelihood,
         }
     }
 }
@@ -742,6 +775,8 @@ pub struct DiagnoseSetup {
     pub settings: FitSettings,
     /// Which specimen effects the likelihood carries (resolved on the curves diagnosed).
     pub specimen_effects: SpecimenEffects,
+    /// How their scatter is estimated.
+    pub specimen_scatter: SpecimenScatter,
     /// The configured model's extensions.
     pub extensions: Vec<String>,
 }
@@ -1459,7 +1494,7 @@ impl RunConfig {
     pub fn calibration(&self, data: &Dataset) -> Result<Calibration> {
         let given_start = self.starts_all_given();
         let (specimen_effects, specimen_note) =
-            self.objective.specimen_effects.resolve(&data.curves);
+            self.objective.specimen_options(&data.curves);
         Ok(Calibration {
             model: self.build_model()?,
             space: self.space(),
@@ -1506,7 +1541,8 @@ impl RunConfig {
                 // AR(1) fits (`uncertainty::constrained::ml_fit_scaled`), with them each
                 // far start has its white stage and each warm one none (`Context::fit_row`).
                 white_first: false,
-                specimen: self.objective.specimen_effects.resolve(&data.curves).0,
+                specimen: self.objective.specimen_options(&data.curves).0,
+                hold_scatter: None,
             },
             profile: self.profile.clone(),
         }
@@ -1534,6 +1570,7 @@ impl RunConfig {
             bare: self.bare_variant()?,
             settings: FitSettings::from_config(self),
             specimen_effects: self.objective.specimen_effects.clone(),
+            specimen_scatter: self.objective.specimen_scatter,
             extensions: self.extensions.clone(),
         })
     }
@@ -2092,6 +2129,7 @@ rtol = 1e-8
                     rate: true,
                     ductility: false,
                     coarsening: true,
+                    beyond_trend: false,
                 },
             ),
         ] {
@@ -2105,6 +2143,24 @@ rtol = 1e-8
             "curves = \"a.csv\"\nruptures = \"b.csv\"\n{CONSTANTS}\n[objective]\nspecimen_effects = [\"hardening\"]\n"
         ));
         assert!(bad.is_err());
+    }
+
+    /// `specimen_scatter`: the likelihood's by default, the estimate beyond the stress trend
+    /// by name (carried into the resolved options), anything else refused.
+    #[test]
+    fn specimen_scatter_parses_and_reaches_the_resolved_options() {
+        let cfg = |extra: &str| {
+            parse(&format!(
+                "curves = \"a.csv\"\nruptures = \"b.csv\"\n{CONSTANTS}\n[objective]\nspecimen_effects = [\"rate\"]\n{extra}"
+            ))
+        };
+        let default = cfg("").unwrap();
+        assert_eq!(default.objective.specimen_scatter, SpecimenScatter::Likelihood);
+        assert!(!default.objective.specimen_options(&[]).0.beyond_trend);
+        let beyond = cfg("specimen_scatter = \"beyond_stress_trend\"\n").unwrap();
+        let (o, _) = beyond.objective.specimen_options(&[]);
+        assert!(o.rate && o.beyond_trend, "{o:?}");
+        assert!(cfg("specimen_scatter = \"trend\"\n").is_err());
     }
 
     #[test]

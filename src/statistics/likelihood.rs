@@ -70,6 +70,31 @@ pub struct MlOptions {
     pub white_first: bool,
     /// Which specimen effects (random effects) the fit carries.
     pub specimen: SpecimenOptions,
+    /// Hold the scatter of each kind (rate, ductility, coarsening; sd of the ln factor) at
+    /// these values instead of estimating it: `diagnose` with
+    /// [`SpecimenOptions::beyond_trend`] fits every extension at the base's scatter.
+    pub hold_scatter: Option<[f64; 3]>,
+}
+
+/// The index of `kind` in [`MlOptions::hold_scatter`].
+pub fn kind_index(kind: EffectKind) -> usize {
+    match kind {
+        EffectKind::Rate => 0,
+        EffectKind::Ductility => 1,
+        EffectKind::Coarsening => 2,
+    }
+}
+
+/// [`MlOptions::hold_scatter`] from a fit's specimen report: each kind's scatter, the floor
+/// for kinds it does not carry (dropped at zero scatter).
+pub fn held_scatter(sp: Option<&SpecimenFit>) -> [f64; 3] {
+    let mut h = [SCATTER_FLOOR; 3];
+    if let Some(sp) = sp {
+        for (k, t) in sp.kinds.iter().zip(&sp.scatter) {
+            h[kind_index(*k)] = t.max(SCATTER_FLOOR);
+        }
+    }
+    h
 }
 
 impl Default for MlOptions {
@@ -78,6 +103,7 @@ impl Default for MlOptions {
             lifetime_sd_floor: crate::errmodel::DEFAULT_LIFETIME_SD_FLOOR,
             white_first: true,
             specimen: SpecimenOptions::NONE,
+            hold_scatter: None,
         }
     }
 }
@@ -147,6 +173,11 @@ pub struct SpecimenOptions {
     /// A coarsening-rate factor per specimen (only when asked for by name: `auto` fits rate
     /// and ductility).
     pub coarsening: bool,
+    /// The scatter estimated by restricted likelihood beyond a within-temperature trend of the
+    /// factors with ln σ ([`EffectLayout::lmm`]), not by maximum likelihood over all of them
+    /// (`[objective] specimen_scatter = "beyond_stress_trend"`).
+    #[serde(default)]
+    pub beyond_trend: bool,
 }
 
 impl SpecimenOptions {
@@ -155,13 +186,22 @@ impl SpecimenOptions {
         rate: false,
         ductility: false,
         coarsening: false,
+        beyond_trend: false,
     };
     /// Both kinds.
     pub const BOTH: SpecimenOptions = SpecimenOptions {
         rate: true,
         ductility: true,
         coarsening: false,
+        beyond_trend: false,
     };
+    /// These kinds with the scatter estimated as `how` says.
+    pub fn with_scatter(self, how: crate::config::SpecimenScatter) -> SpecimenOptions {
+        SpecimenOptions {
+            beyond_trend: how == crate::config::SpecimenScatter::BeyondStressTrend,
+            ..self
+        }
+    }
     /// Whether any effect is asked for.
     pub fn any(&self) -> bool {
         self.rate || self.ductility || self.coarsening
@@ -236,9 +276,90 @@ pub struct EffectLayout {
     pub m_data: usize,
     /// Per curve, its rows [start, end) among the data residuals (strains and lifetime).
     pub rows: Vec<(usize, usize)>,
+    /// Directions of the effects whose scatter is not estimated (empty unless
+    /// [`SpecimenOptions::beyond_trend`]): per kind (its index in `kinds`) and temperature
+    /// with two stresses or more, the curves' weights of [`stress_trend_weights`]. In the
+    /// linear mixed model of the scatter each is a fixed effect ([`EffectLayout::lmm`]).
+    pub trend: Vec<(usize, Vec<(usize, f64)>)>,
+}
+
+/// Per temperature whose curves were tested at more than one stress: the curves' weights
+/// (x_i − x̄)/‖x − x̄‖ with x = ln σ, so that Σ w_i η_i is the effects' within-temperature
+/// regression slope on ln σ times ‖x − x̄‖, zero for effects that do not follow stress.
+pub fn stress_trend_weights(curves: &[Curve]) -> Vec<Vec<(usize, f64)>> {
+    let mut temps: Vec<f64> = curves.iter().map(|c| c.temperature_c).collect();
+    temps.sort_by(f64::total_cmp);
+    temps.dedup();
+    let mut out = Vec::new();
+    for t in temps {
+        let at: Vec<usize> = (0..curves.len())
+            .filter(|&i| curves[i].temperature_c == t)
+            .collect();
+        let x: Vec<f64> = at.iter().map(|&i| curves[i].stress_mpa.ln()).collect();
+        let xm = x.iter().sum::<f64>() / x.len() as f64;
+        let norm = x.iter().map(|v| (v - xm) * (v - xm)).sum::<f64>().sqrt();
+        if !(norm > 1e-9) {
+            continue;
+        }
+        out.push(
+            at.iter()
+                .zip(&x)
+                .map(|(&i, v)| (i, (v - xm) / norm))
+                .collect(),
+        );
+    }
+    out
 }
 
 impl EffectLayout {
+    /// This layout with [`EffectLayout::trend`] set for every kind on `curves`.
+    pub fn with_trend(mut self, curves: &[Curve]) -> EffectLayout {
+        let groups = stress_trend_weights(curves);
+        self.trend = (0..self.kinds.len())
+            .flat_map(|k| groups.iter().map(move |w| (k, w.clone())))
+            .collect();
+        self
+    }
+
+    /// The layout of the kinds `keep` (indices into `kinds`), with their trend directions.
+    pub fn keeping(&self, keep: &[usize]) -> EffectLayout {
+        EffectLayout {
+            kinds: keep.iter().map(|&k| self.kinds[k]).collect(),
+            trend: self
+                .trend
+                .iter()
+                .filter_map(|(k, w)| keep.iter().position(|g| g == k).map(|p| (p, w.clone())))
+                .collect(),
+            ..self.clone()
+        }
+    }
+
+    /// The linear mixed model of the whitened residuals `r` and Jacobian `jac` at effects
+    /// `eta` ([`Lmm::from_jacobian`]); each direction of [`EffectLayout::trend`] (Σ_i w_i·Z_i,
+    /// Z_i the effect's column of curve i) is a fixed-effect column besides the constants, so
+    /// that the scatter is estimated from how the effects differ beyond those trends.
+    pub fn lmm(&self, jac: &DMatrix<f64>, r: &[f64], eta: &[f64]) -> Lmm {
+        let (nt, n, kk) = (self.n_theta, self.n_curves, self.kinds.len());
+        if self.trend.is_empty() {
+            return Lmm::from_jacobian(jac, r, &self.rows, nt, kk, eta);
+        }
+        let g = self.trend.len();
+        let ne = self.n_effects();
+        let m = jac.nrows();
+        let mut aug = DMatrix::<f64>::zeros(m, nt + g + ne);
+        aug.columns_mut(0, nt).copy_from(&jac.columns(0, nt));
+        aug.columns_mut(nt + g, ne).copy_from(&jac.columns(nt, ne));
+        for (j, (k, w)) in self.trend.iter().enumerate() {
+            for (i, wi) in w {
+                let (a, b) = self.rows[*i];
+                for row in a..b {
+                    aug[(row, nt + j)] += wi * jac[(row, nt + k * n + i)];
+                }
+            }
+        }
+        Lmm::from_jacobian(&aug, r, &self.rows, nt + g, kk, eta)
+    }
+
     /// The layout of `kinds` for `model` on `curves` in `space`; kinds whose constant the
     /// model lacks or `space` holds fixed are left out (listed in the second value).
     pub fn new(
@@ -272,6 +393,7 @@ impl EffectLayout {
         (
             Some(EffectLayout {
                 kinds: out,
+                trend: Vec::new(),
                 n_curves: curves.len(),
                 n_theta: space.n_free(),
                 m_data: off,
@@ -626,7 +748,7 @@ impl<'a> LikelihoodProblem<'a> {
         };
         let (nt, n, md) = (layout.n_theta, layout.n_curves, layout.m_data);
         let eta = &x[nt..];
-        let lmm = Lmm::from_jacobian(jac, r, &layout.rows, nt, layout.kinds.len(), eta);
+        let lmm = layout.lmm(jac, r, eta);
         let mut guard = self.scatter.lock().expect("scatter lock");
         let new = lmm.estimate(&guard, true);
         // A change the criterion does not see (its search's own resolution) would only keep
@@ -1454,7 +1576,15 @@ pub fn ml_fit_row(
     // (−2 ln L −8852.7 against −8967.6 from the same start with the white round alone, on
     // 16 generated specimens).
     let specimen_layout = if opts.specimen.any() {
-        EffectLayout::new(model, curves, space, &opts.specimen.kinds())
+        let (layout, dropped) = EffectLayout::new(model, curves, space, &opts.specimen.kinds());
+        let layout = layout.map(|l| {
+            if opts.specimen.beyond_trend {
+                l.with_trend(curves)
+            } else {
+                l
+            }
+        });
+        (layout, dropped)
     } else {
         (None, vec![])
     };
@@ -1583,10 +1713,7 @@ pub fn ml_fit_row(
                 if given.is_empty() {
                     return None;
                 }
-                let reduced = EffectLayout {
-                    kinds: given.iter().map(|&k| layout.kinds[k]).collect(),
-                    ..layout.clone()
-                };
+                let reduced = layout.keeping(&given);
                 let mut u = space.to_unit(&x1);
                 for &k in &given {
                     u.extend_from_slice(&eta[k * n..(k + 1) * n]);
@@ -1760,7 +1887,15 @@ fn hier_fit(
         (lo[k], hi[k]) = (x[k], x[k]);
     }
     x.extend_from_slice(eta);
-    let mut tau = scatter;
+    let mut tau = match opts.hold_scatter {
+        Some(h) => layout.kinds.iter().map(|k| h[kind_index(k.0)]).collect(),
+        None => scatter,
+    };
+    // Beyond the stress trend, the scatter is the restricted likelihood's of the linear mixed
+    // model with the trends as fixed effects: no criterion at the modes (which would count
+    // the trends) and no descent test of the Laplace −2 ln L (which the estimate does not
+    // minimise).
+    let beyond = !layout.trend.is_empty();
     let mut noise = noise.clone();
     let (mut its, mut evs) = (0, 0);
     let mut termination = Termination::ConvergedObjective;
@@ -1866,7 +2001,11 @@ fn hier_fit(
         let data: f64 = rr[..layout.m_data].iter().map(|v| v * v).sum::<f64>()
             + profiled.normalising(curves.iter().map(|c| c.times_h.len()), lives);
         let now = data + laplace_terms(&x[nt..], &g, &tau);
-        if let Some(prev) = accepted.as_ref() {
+        if opts.hold_scatter.is_some() {
+            // The scatter is held: one round of penalised least squares at it.
+            break;
+        }
+        if let Some(prev) = accepted.as_ref().filter(|_| !beyond) {
             if !crate::specimen::step_pays(prev.neg2ll, now, SCATTER_TOL) {
                 // The linear mixed model's step did not pay: its linearisation promised a
                 // gain from larger (or smaller) effects that the curves, refitted, do not
@@ -1891,14 +2030,15 @@ fn hier_fit(
                 continue;
             }
         }
-        let lmm = Lmm::from_jacobian(&jac, &rr, &layout.rows, nt, layout.kinds.len(), &x[nt..]);
+        let lmm = layout.lmm(&jac, &rr, &x[nt..]);
         // Maximum likelihood, not REML: the fit's −2 ln L compares models with different
         // constants, and REML's scatter grows with their number ([`finish_hier`]).
         let at_modes = |t: &[f64]| laplace_terms(&x[nt..], &g, t);
         let (new, settled) = match method {
-            ScatterMethod::LinearMixedModel => {
-                let new = lmm.estimate(&tau, false);
-                let settled = !(lmm.neg2l(&new, false) < lmm.neg2l(&tau, false) - SCATTER_TOL);
+            ScatterMethod::LinearMixedModel | ScatterMethod::BeyondStressTrend => {
+                let new = lmm.estimate(&tau, beyond);
+                let settled =
+                    !(lmm.neg2l(&new, beyond) < lmm.neg2l(&tau, beyond) - SCATTER_TOL);
                 let stays = settled || scatter_settled(&new, &tau);
                 // Where the linear model would stay, the criterion at the modes must not see
                 // a descent: it lies above the Laplace −2 ln L profiled over the effects and
@@ -1906,7 +2046,7 @@ fn hier_fit(
                 // (measured on Alloy 617 at 950 °C: the linear model held the coarsening
                 // scatter at its bound 3.0, where the criterion at the modes was lowest at
                 // 0.2–0.4).
-                let better = stays
+                let better = (stays && !beyond)
                     .then(|| minimise_scatter(&tau, at_modes))
                     .filter(|b| at_modes(b) < at_modes(&tau) - SCATTER_TOL);
                 match better {
@@ -1975,6 +2115,7 @@ fn scatter_estimates(
     g: &[crate::specimen::KMat],
     tau: &[f64],
     method: ScatterMethod,
+    lmm_has_trend: bool,
 ) -> (Vec<f64>, Vec<f64>, ScatterMethod) {
     let at_modes = |t: &[f64], restricted: bool| {
         crate::specimen::laplace_criterion(lmm, eta, g, t, restricted)
@@ -1983,8 +2124,13 @@ fn scatter_estimates(
         let reml = minimise_scatter(&ml, |t| at_modes(t, true));
         (ml, reml, ScatterMethod::LaplaceAtModes)
     };
+    if lmm_has_trend {
+        // Beyond the stress trend: the restricted likelihood's scatter, for −2 ln L too.
+        let reml = lmm.estimate(tau, true);
+        return (reml.clone(), reml, ScatterMethod::BeyondStressTrend);
+    }
     match method {
-        ScatterMethod::LinearMixedModel => {
+        ScatterMethod::LinearMixedModel | ScatterMethod::BeyondStressTrend => {
             let ml = lmm.estimate(tau, false);
             // Where the linear model stays at the scatter the modes were fitted at, the
             // criterion at the modes must not fall elsewhere ([`hier_fit`]'s check; here for
@@ -2035,8 +2181,18 @@ fn finish_hier(
     space.from_unit(&x[..nt], &mut params);
     // The scatter at its estimate at x, under the error model re-estimated at x.
     let (rr, jac, noise) = whitened_at(model, curves, space, x, layout, tau, settings, opts)?;
-    let lmm = Lmm::from_jacobian(&jac, &rr, &layout.rows, nt, layout.kinds.len(), &x[nt..]);
-    let (tau_ml, tau, method) = scatter_estimates(&lmm, &x[nt..], &layout.gram(&jac), tau, method);
+    let lmm = layout.lmm(&jac, &rr, &x[nt..]);
+    let (tau_ml, tau, method) = match opts.hold_scatter {
+        Some(_) => (tau.to_vec(), tau.to_vec(), method),
+        None => scatter_estimates(
+            &lmm,
+            &x[nt..],
+            &layout.gram(&jac),
+            tau,
+            method,
+            !layout.trend.is_empty(),
+        ),
+    };
     let keep: Vec<usize> = (0..tau.len())
         .filter(|&k| tau[k] > 1.01 * SCATTER_FLOOR)
         .collect();
@@ -2056,6 +2212,7 @@ fn finish_hier(
             noise,
             vec![],
             settings,
+            opts.hold_scatter.is_some(),
         );
     }
     // A kind at the floor is dropped only where that does not cost likelihood: with readings
@@ -2079,6 +2236,7 @@ fn finish_hier(
         noise,
         vec![],
         settings,
+        opts.hold_scatter.is_some(),
     );
     let dropped: Vec<EffectKind> = (0..tau.len())
         .filter(|k| !keep.contains(k))
@@ -2099,18 +2257,25 @@ fn finish_hier(
         f.ok().then_some(f)
     } else {
         (|| {
-            let l = EffectLayout {
-                kinds: keep.iter().map(|&k| layout.kinds[k]).collect(),
-                ..layout.clone()
-            };
+            let l = layout.keeping(&keep);
             let mut xr = x[..nt].to_vec();
             for &k in &keep {
                 xr.extend_from_slice(&x[nt + k * n..nt + (k + 1) * n]);
             }
             let t: Vec<f64> = keep.iter().map(|&k| tau[k]).collect();
             let (rr, jac, noise) = whitened_at(model, curves, space, &xr, &l, &t, settings, opts)?;
-            let lmm = Lmm::from_jacobian(&jac, &rr, &l.rows, nt, l.kinds.len(), &xr[nt..]);
-            let (t_ml, t, method) = scatter_estimates(&lmm, &xr[nt..], &l.gram(&jac), &t, method);
+            let lmm = l.lmm(&jac, &rr, &xr[nt..]);
+            let (t_ml, t, method) = match opts.hold_scatter {
+                Some(_) => (t.clone(), t.clone(), method),
+                None => scatter_estimates(
+                    &lmm,
+                    &xr[nt..],
+                    &l.gram(&jac),
+                    &t,
+                    method,
+                    !l.trend.is_empty(),
+                ),
+            };
             report_hier(
                 model,
                 curves,
@@ -2126,6 +2291,7 @@ fn finish_hier(
                 noise,
                 dropped,
                 settings,
+                opts.hold_scatter.is_some(),
             )
         })()
     };
@@ -2154,6 +2320,7 @@ fn report_hier(
     noise: ErrorModel,
     dropped: Vec<EffectKind>,
     settings: &FitSettings,
+    held: bool,
 ) -> Option<MlFit> {
     let n = layout.n_curves;
     let nt = layout.n_theta;
@@ -2173,7 +2340,12 @@ fn report_hier(
     // constants move with it: a constant collinear with the effects (a ductility that
     // varies with stress beside specimens' ductility) would take their spread there, and
     // the likelihood at the constants as they are would fall.
-    let tau_ml = crate::specimen::minimise_scatter(&tau_ml, |t| laplace_terms(eta, &g, t));
+    // (Held, or estimated beyond the stress trend: −2 ln L at that scatter.)
+    let tau_ml = if held || !layout.trend.is_empty() {
+        tau_ml
+    } else {
+        crate::specimen::minimise_scatter(&tau_ml, |t| laplace_terms(eta, &g, t))
+    };
     let terms = laplace_terms(eta, &g, &tau_ml);
     let factors = layout.factors(eta);
     let obj = raw_objective(model, curves, settings).with_factors(Some(factors));
@@ -2247,6 +2419,11 @@ pub fn scatter_intervals(
     let (Some(layout), _) = EffectLayout::new(model, curves, space, &kinds) else {
         return;
     };
+    let layout = if sp.scatter_method == ScatterMethod::BeyondStressTrend {
+        layout.with_trend(curves)
+    } else {
+        layout
+    };
     let mut x = space.to_unit(&fit.params);
     for e in &sp.effects {
         x.extend_from_slice(e);
@@ -2264,12 +2441,14 @@ pub fn scatter_intervals(
         return;
     };
     let nt = layout.n_theta;
-    let lmm = Lmm::from_jacobian(&jac, &rr, &layout.rows, nt, layout.kinds.len(), &x[nt..]);
+    let lmm = layout.lmm(&jac, &rr, &x[nt..]);
     let g = layout.gram(&jac);
     for k in 0..kinds.len() {
         // Under the criterion the estimate came from.
         let (lo, hi) = match sp.scatter_method {
-            ScatterMethod::LinearMixedModel => lmm.interval(k, &sp.scatter, CHI2_1_95, true),
+            ScatterMethod::LinearMixedModel | ScatterMethod::BeyondStressTrend => {
+                lmm.interval(k, &sp.scatter, CHI2_1_95, true)
+            }
             // The upper end from the criterion at the modes (the linear model's promise of
             // gains from larger effects is what failed); the lower end from the linear model,
             // which turns exact as the effects shrink to zero, while the criterion at held
@@ -2747,6 +2926,134 @@ mod tests {
 
     /// A ruptured two-point curve at `t` °C and `s` MPa: what the factor summaries read of a
     /// curve (its temperature, stress and specimen).
+    /// The stress-trend weights: one group per temperature with two stresses or more, each
+    /// centred and of unit norm, so that effects a + b ln σ give Σ w η = b‖x − x̄‖ and
+    /// effects without a trend 0.
+    #[test]
+    fn stress_trend_weights_are_the_within_temperature_regression() {
+        let curves = vec![
+            two_point_curve(850.0, 30.0, None),
+            two_point_curve(850.0, 43.0, None),
+            two_point_curve(850.0, 43.0, None),
+            two_point_curve(900.0, 20.0, None),
+            two_point_curve(950.0, 15.0, None),
+            two_point_curve(950.0, 25.0, None),
+        ];
+        let w = stress_trend_weights(&curves);
+        // 900 °C has one curve: no group.
+        assert_eq!(w.len(), 2);
+        assert_eq!(
+            w[0].iter().map(|(i, _)| *i).collect::<Vec<_>>(),
+            vec![0, 1, 2]
+        );
+        assert_eq!(w[1].iter().map(|(i, _)| *i).collect::<Vec<_>>(), vec![4, 5]);
+        for g in &w {
+            let sum: f64 = g.iter().map(|(_, v)| v).sum();
+            let norm: f64 = g.iter().map(|(_, v)| v * v).sum();
+            assert!(sum.abs() < 1e-12 && (norm - 1.0).abs() < 1e-12, "{g:?}");
+        }
+        let x: Vec<f64> = [30.0f64, 43.0, 43.0].iter().map(|s| s.ln()).collect();
+        let xm = x.iter().sum::<f64>() / 3.0;
+        let spread = x.iter().map(|v| (v - xm).powi(2)).sum::<f64>().sqrt();
+        let (a, b) = (0.4, -1.7);
+        let dot: f64 = w[0].iter().map(|(i, wi)| wi * (a + b * x[*i])).sum();
+        assert!((dot - b * spread).abs() < 1e-12, "{dot}");
+    }
+
+    /// The scatter beyond the stress trend against the closed form of a balanced one-way
+    /// random-effects model: 8 specimens at two temperatures, 40 whitened readings each
+    /// (unit variance), an intercept as the constant, each specimen's effect a strong trend
+    /// with ln σ plus its own part u_i. The restricted likelihood of the curve means with q
+    /// fixed columns gives τ̂² = RSS/(n − q) − 1/m: with the trends as fixed effects (q = 3)
+    /// the scatter is that of u alone; without them (q = 1) the trend is counted as scatter.
+    #[test]
+    fn the_scatter_beyond_the_trend_is_the_restricted_anova_estimate() {
+        use rand::SeedableRng;
+        use rand_distr::{Distribution, StandardNormal};
+        let stresses = [(850.0, 30.0), (850.0, 35.0), (850.0, 40.0), (850.0, 45.0)]
+            .into_iter()
+            .chain([(900.0, 20.0), (900.0, 24.0), (900.0, 28.0), (900.0, 32.0)]);
+        let curves: Vec<Curve> = stresses
+            .map(|(t, s)| two_point_curve(t, s, None))
+            .collect();
+        let (n, m) = (curves.len(), 40usize);
+        let u = [0.30, -0.20, 0.10, -0.25, -0.10, 0.25, -0.30, 0.20];
+        let slope = |t: f64| if t < 875.0 { 4.0 } else { -3.0 };
+        let groups = stress_trend_weights(&curves);
+        let mut eta = vec![0.0; n];
+        for g in &groups {
+            let x: Vec<f64> = g.iter().map(|(i, _)| curves[*i].stress_mpa.ln()).collect();
+            let xm = x.iter().sum::<f64>() / x.len() as f64;
+            for ((i, _), xi) in g.iter().zip(&x) {
+                eta[*i] = slope(curves[*i].temperature_c) * (xi - xm) + u[*i];
+            }
+        }
+        // Jacobian: the intercept, then one effect column per curve; residuals r = −y at
+        // zero effects, y = Zη + e.
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(58);
+        let mut jac = DMatrix::<f64>::zeros(n * m, 1 + n);
+        let mut r = vec![0.0; n * m];
+        let mut means = vec![0.0; n];
+        for i in 0..n {
+            for row in i * m..(i + 1) * m {
+                jac[(row, 0)] = 1.0;
+                jac[(row, 1 + i)] = 1.0;
+                let e: f64 = StandardNormal.sample(&mut rng);
+                r[row] = -(eta[i] + e);
+                means[i] += (eta[i] + e) / m as f64;
+            }
+        }
+        let layout = EffectLayout {
+            kinds: vec![(EffectKind::Rate, 0, 0)],
+            trend: Vec::new(),
+            n_curves: n,
+            n_theta: 1,
+            m_data: n * m,
+            rows: (0..n).map(|i| (i * m, (i + 1) * m)).collect(),
+        };
+        // The closed form: least squares of the curve means on the fixed columns.
+        let closed = |cols: &[Vec<f64>]| -> f64 {
+            let q = cols.len();
+            let x = DMatrix::from_fn(n, q, |i, c| cols[c][i]);
+            let y = nalgebra::DVector::from_column_slice(&means);
+            let beta = (x.transpose() * &x)
+                .try_inverse()
+                .expect("full rank")
+                * x.transpose()
+                * &y;
+            let rss = (&y - &x * beta).norm_squared();
+            (rss / (n - q) as f64 - 1.0 / m as f64).max(0.0).sqrt()
+        };
+        let ones = vec![1.0; n];
+        let trend_cols: Vec<Vec<f64>> = groups
+            .iter()
+            .map(|g| {
+                let mut c = vec![0.0; n];
+                for (i, w) in g {
+                    c[*i] = *w;
+                }
+                c
+            })
+            .collect();
+        let zero = vec![0.0; n];
+        let plain = layout.lmm(&jac, &r, &zero).estimate(&[0.1], true)[0];
+        let beyond = layout
+            .clone()
+            .with_trend(&curves)
+            .lmm(&jac, &r, &zero)
+            .estimate(&[0.1], true)[0];
+        let want_plain = closed(&[ones.clone()]);
+        let mut all = vec![ones];
+        all.extend(trend_cols);
+        let want_beyond = closed(&all);
+        assert!((plain / want_plain - 1.0).abs() < 0.01, "{plain} {want_plain}");
+        assert!((beyond / want_beyond - 1.0).abs() < 0.01, "{beyond} {want_beyond}");
+        // The trend is ~1 in ln factor across each temperature's stresses; u's sd is 0.25.
+        assert!(plain > 2.0 * beyond, "{plain} {beyond}");
+        let u_sd = (u.iter().map(|v| v * v).sum::<f64>() / (n - 3) as f64).sqrt();
+        assert!((beyond - u_sd).abs() < 0.1, "{beyond} {u_sd}");
+    }
+
     fn two_point_curve(t: f64, s: f64, specimen: Option<&str>) -> crate::data::Curve {
         crate::data::Curve {
             temperature_c: t,

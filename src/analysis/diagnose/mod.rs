@@ -281,6 +281,21 @@ fn recipe_of(spec: &Spec, starts: &[Vec<f64>], j: usize) -> Recipe {
     }
 }
 
+/// `ml` for the fits of an extension beside base fit `base`: with the scatter estimated
+/// beyond the stress trend ([`crate::likelihood::SpecimenOptions::beyond_trend`]) the scatter
+/// held at the base's, so that every model is compared at the scatter estimated under the
+/// null (as a score test takes its nuisances); `ml` with its scatter free otherwise.
+fn ext_options(ml: &MlOptions, base: Option<&MlFit>) -> MlOptions {
+    let hold = base
+        .and_then(|b| b.specimen.as_ref())
+        .filter(|_| ml.specimen.beyond_trend)
+        .map(|sp| crate::likelihood::held_scatter(Some(sp)));
+    MlOptions {
+        hold_scatter: hold,
+        ..*ml
+    }
+}
+
 /// A base refit that beats the base fit by less than this (−2 ln L) does not replace it.
 const CROSS_TOL: f64 = 1e-3;
 
@@ -332,6 +347,7 @@ fn cross_start(
     }
     let direct = MlOptions {
         white_first: false,
+        hold_scatter: None,
         ..*ml
     };
     let ext = fits[k].as_ref().expect("found");
@@ -360,6 +376,7 @@ fn cross_start(
     }
     let base_names = specs[0].names();
     let from = b.specimen.as_ref().map(EffectStart::from);
+    let direct_ext = ext_options(&direct, Some(&b));
     let redo: Vec<usize> = (1..fits.len())
         .filter(|&j| {
             fits[j]
@@ -379,7 +396,7 @@ fn cross_start(
                 &s,
                 from.as_ref(),
                 settings,
-                &direct,
+                &direct_ext,
             );
             (j, f)
         })
@@ -1086,7 +1103,8 @@ fn null_replicate(
         let warm = st.len();
         st.extend(ext_random[k].iter().cloned());
         let from = b0.specimen.as_ref().map(EffectStart::from);
-        let (fk, _) = fit_best(spec, &data, &st, warm, from.as_ref(), settings, ml);
+        let ml_ext = ext_options(ml, Some(b0));
+        let (fk, _) = fit_best(spec, &data, &st, warm, from.as_ref(), settings, &ml_ext);
         rep_fits.push(fk);
     }
     // The same cross-start as on the data, among the extensions still refitted.
@@ -1110,6 +1128,10 @@ fn null_replicate(
     out[n_ext + ng] = 0.0;
     out.push(b0.neg2ll);
     out.extend_from_slice(&b0.params);
+    // The scatter the replicate's extensions were held at ([`null_again`] holds it too).
+    if let Some(h) = ext_options(ml, Some(b0)).hold_scatter {
+        out.extend_from_slice(&h);
+    }
     out
 }
 
@@ -1148,7 +1170,16 @@ fn null_again(
     if first.len() <= n_ext + ng + 1 || first[n_ext + ng] > 0.0 {
         return out; // the base refit failed there
     }
-    let (b0_ll, b0_params) = (first[n_ext + ng + 1], &first[n_ext + ng + 2..]);
+    let np = specs[0].names().len();
+    let (b0_ll, b0_params) = (
+        first[n_ext + ng + 1],
+        &first[n_ext + ng + 2..(n_ext + ng + 2 + np).min(first.len())],
+    );
+    let held = &first[(n_ext + ng + 2 + np).min(first.len())..];
+    let ml_ext = MlOptions {
+        hold_scatter: (held.len() == 3).then(|| [held[0], held[1], held[2]]),
+        ..*ml
+    };
     let (data, _, _) = null_data(specs, base, curves, settings, dc, shapes, reading, b);
     let base_names = specs[0].names();
     for k in (0..n_ext).filter(|&k| again[k]) {
@@ -1165,7 +1196,7 @@ fn null_again(
             out[k] = first[k];
             continue;
         };
-        let (f, _) = fit_best(spec, &data, &[start], 0, None, settings, ml);
+        let (f, _) = fit_best(spec, &data, &[start], 0, None, settings, &ml_ext);
         out[k] = again_ratio(first[k], f.filter(|f| f.ok()).map(|f| b0_ll - f.neg2ll));
     }
     out[n_ext + ng] = 0.0;
@@ -1313,7 +1344,12 @@ pub fn diagnose_observed(
     let ml = MlOptions {
         lifetime_sd_floor: dc.lifetime_sd_floor,
         white_first: true,
-        specimen: setup.specimen_effects.resolve(curves).0,
+        specimen: setup
+            .specimen_effects
+            .resolve(curves)
+            .0
+            .with_scatter(setup.specimen_scatter),
+        hold_scatter: None,
     };
     let specs = &setup.variants;
 
@@ -1382,6 +1418,8 @@ pub fn diagnose_observed(
             .filter(|_| i > 0)
             .and_then(|f| f.specimen.as_ref())
             .map(EffectStart::from);
+        // An extension's fits at the base's scatter where it is held ([`ext_options`]).
+        let ml = if i > 0 { ext_options(&ml, base) } else { ml };
         let fitted = fit_all(
             spec,
             curves,
