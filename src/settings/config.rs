@@ -1493,8 +1493,7 @@ impl RunConfig {
     /// length.
     pub fn calibration(&self, data: &Dataset) -> Result<Calibration> {
         let given_start = self.starts_all_given();
-        let (specimen_effects, specimen_note) =
-            self.objective.specimen_options(&data.curves);
+        let (specimen_effects, specimen_note) = self.objective.specimen_options(&data.curves);
         Ok(Calibration {
             model: self.build_model()?,
             space: self.space(),
@@ -2155,7 +2154,10 @@ rtol = 1e-8
             ))
         };
         let default = cfg("").unwrap();
-        assert_eq!(default.objective.specimen_scatter, SpecimenScatter::Likelihood);
+        assert_eq!(
+            default.objective.specimen_scatter,
+            SpecimenScatter::Likelihood
+        );
         assert!(!default.objective.specimen_options(&[]).0.beyond_trend);
         let beyond = cfg("specimen_scatter = \"beyond_stress_trend\"\n").unwrap();
         let (o, _) = beyond.objective.specimen_options(&[]);

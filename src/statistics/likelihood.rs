@@ -2037,8 +2037,7 @@ fn hier_fit(
         let (new, settled) = match method {
             ScatterMethod::LinearMixedModel | ScatterMethod::BeyondStressTrend => {
                 let new = lmm.estimate(&tau, beyond);
-                let settled =
-                    !(lmm.neg2l(&new, beyond) < lmm.neg2l(&tau, beyond) - SCATTER_TOL);
+                let settled = !(lmm.neg2l(&new, beyond) < lmm.neg2l(&tau, beyond) - SCATTER_TOL);
                 let stays = settled || scatter_settled(&new, &tau);
                 // Where the linear model would stay, the criterion at the modes must not see
                 // a descent: it lies above the Laplace −2 ln L profiled over the effects and
@@ -2973,9 +2972,7 @@ mod tests {
         let stresses = [(850.0, 30.0), (850.0, 35.0), (850.0, 40.0), (850.0, 45.0)]
             .into_iter()
             .chain([(900.0, 20.0), (900.0, 24.0), (900.0, 28.0), (900.0, 32.0)]);
-        let curves: Vec<Curve> = stresses
-            .map(|(t, s)| two_point_curve(t, s, None))
-            .collect();
+        let curves: Vec<Curve> = stresses.map(|(t, s)| two_point_curve(t, s, None)).collect();
         let (n, m) = (curves.len(), 40usize);
         let u = [0.30, -0.20, 0.10, -0.25, -0.10, 0.25, -0.30, 0.20];
         let slope = |t: f64| if t < 875.0 { 4.0 } else { -3.0 };
@@ -3016,11 +3013,7 @@ mod tests {
             let q = cols.len();
             let x = DMatrix::from_fn(n, q, |i, c| cols[c][i]);
             let y = nalgebra::DVector::from_column_slice(&means);
-            let beta = (x.transpose() * &x)
-                .try_inverse()
-                .expect("full rank")
-                * x.transpose()
-                * &y;
+            let beta = (x.transpose() * &x).try_inverse().expect("full rank") * x.transpose() * &y;
             let rss = (&y - &x * beta).norm_squared();
             (rss / (n - q) as f64 - 1.0 / m as f64).max(0.0).sqrt()
         };
@@ -3046,8 +3039,14 @@ mod tests {
         let mut all = vec![ones];
         all.extend(trend_cols);
         let want_beyond = closed(&all);
-        assert!((plain / want_plain - 1.0).abs() < 0.01, "{plain} {want_plain}");
-        assert!((beyond / want_beyond - 1.0).abs() < 0.01, "{beyond} {want_beyond}");
+        assert!(
+            (plain / want_plain - 1.0).abs() < 0.01,
+            "{plain} {want_plain}"
+        );
+        assert!(
+            (beyond / want_beyond - 1.0).abs() < 0.01,
+            "{beyond} {want_beyond}"
+        );
         // The trend is ~1 in ln factor across each temperature's stresses; u's sd is 0.25.
         assert!(plain > 2.0 * beyond, "{plain} {beyond}");
         let u_sd = (u.iter().map(|v| v * v).sum::<f64>() / (n - 3) as f64).sqrt();
