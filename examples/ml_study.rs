@@ -48,6 +48,7 @@ fn main() -> anyhow::Result<()> {
         lifetime_sd_floor: dc.lifetime_sd_floor,
         white_first: false,
         specimen: SpecimenOptions::NONE,
+        hold_scatter: None,
     };
     let mut rng = ChaCha8Rng::seed_from_u64(dc.seed);
     let starts: Vec<Vec<f64>> = latin_hypercube(n_starts, spec.space.n_free(), &mut rng)

@@ -44,6 +44,7 @@ fn main() {
         rate: k.split(',').any(|x| x == "rate"),
         ductility: k.split(',').any(|x| x == "ductility"),
         coarsening: k.split(',').any(|x| x == "coarsening"),
+        beyond_trend: false,
     });
     std::fs::create_dir_all(&out).expect("OUT");
     let path = out.join("fits.jsonl");

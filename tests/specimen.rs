@@ -338,6 +338,7 @@ fn the_coarsening_scatter_of_generated_specimens_is_recovered() {
             rate: true,
             ductility: false,
             coarsening,
+            beyond_trend: false,
         },
         ..MlOptions::default()
     };
@@ -965,6 +966,7 @@ fn hierarchical_reference<'a>(
             rate: true,
             ductility: false,
             coarsening: false,
+            beyond_trend: false,
         },
         ..MlOptions::default()
     };
@@ -1308,6 +1310,7 @@ fn a_nested_warm_fit_never_ends_above_the_base_optimum() {
         lifetime_sd_floor: cfg.diagnose.lifetime_sd_floor,
         white_first: false,
         specimen: setup.specimen_effects.resolve(&curves).0,
+        hold_scatter: None,
     };
     let mut base_ll = f64::NAN;
     let mut checked = 0;

@@ -3035,7 +3035,7 @@ mod tests {
             .with_trend(&curves)
             .lmm(&jac, &r, &zero)
             .estimate(&[0.1], true)[0];
-        let want_plain = closed(&[ones.clone()]);
+        let want_plain = closed(std::slice::from_ref(&ones));
         let mut all = vec![ones];
         all.extend(trend_cols);
         let want_beyond = closed(&all);
