@@ -119,21 +119,13 @@ pub struct ObjectiveConfig {
     /// likelihood from how the factors differ beyond a straight line in ln σ at each
     /// temperature, and `diagnose` compares every model at the base model's scatter, so that
     /// an effect that follows stress shows as misfit of the base instead of as a larger
-    /// scatter (docs/SPECIMENS.md, "The scatter beyond the stress trend").
+    /// scatter (docs/SPECIMENS.md, "The scatter beyond the stress trend"). Left out of the
+    /// run's identity at its default, so that runs without it keep their run ids.
+    #[serde(skip_serializing_if = "SpecimenScatter::is_default")]
     pub specimen_scatter: SpecimenScatter,
 }
 
-/// `[objective] specimen_scatter`: how the scatter between specimens is estimated.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum SpecimenScatter {
-    /// Maximum likelihood over all the factors.
-    #[default]
-    Likelihood,
-    /// Restricted likelihood beyond a within-temperature trend with ln σ; every model of a
-    /// diagnosis at the base's scatter.
-    BeyondStressTrend,
-}
+pub use crate::likelihood::SpecimenScatter;
 
 impl ObjectiveConfig {
     /// The specimen effects for `curves` with the configured scatter estimate, and a note for

@@ -163,6 +163,25 @@ impl EffectKind {
     }
 }
 
+/// `[objective] specimen_scatter`: how the scatter between specimens is estimated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SpecimenScatter {
+    /// Maximum likelihood over all the factors.
+    #[default]
+    Likelihood,
+    /// Restricted likelihood beyond a within-temperature trend with ln σ; every model of a
+    /// diagnosis at the base's scatter.
+    BeyondStressTrend,
+}
+
+impl SpecimenScatter {
+    /// Whether this is the default (`likelihood`).
+    pub fn is_default(&self) -> bool {
+        *self == SpecimenScatter::Likelihood
+    }
+}
+
 /// Which specimen effects a maximum-likelihood fit carries.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 pub struct SpecimenOptions {
@@ -176,7 +195,7 @@ pub struct SpecimenOptions {
     /// The scatter estimated by restricted likelihood beyond a within-temperature trend of the
     /// factors with ln σ ([`EffectLayout::lmm`]), not by maximum likelihood over all of them
     /// (`[objective] specimen_scatter = "beyond_stress_trend"`).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub beyond_trend: bool,
 }
 
@@ -196,9 +215,9 @@ impl SpecimenOptions {
         beyond_trend: false,
     };
     /// These kinds with the scatter estimated as `how` says.
-    pub fn with_scatter(self, how: crate::config::SpecimenScatter) -> SpecimenOptions {
+    pub fn with_scatter(self, how: SpecimenScatter) -> SpecimenOptions {
         SpecimenOptions {
-            beyond_trend: how == crate::config::SpecimenScatter::BeyondStressTrend,
+            beyond_trend: how == SpecimenScatter::BeyondStressTrend,
             ..self
         }
     }
