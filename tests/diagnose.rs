@@ -38,7 +38,7 @@ fn battery_of_6_generated_sets() {
         6,
         creepfit::synth::World::Identical,
         None,
-        None,
+        &creepfit::battery::SetOverrides::default(),
         &TestProgress::new("battery_of_6_generated_sets"),
     )
     .unwrap();

@@ -186,6 +186,11 @@ pub enum Command {
         /// `auto` in `specimens`, all three in `shapes`).
         #[arg(long, value_enum, value_delimiter = ',')]
         specimen_effects: Option<Vec<crate::likelihood::EffectKind>>,
+        /// `[objective] specimen_scatter` of every set's configuration (`likelihood`, the
+        /// default, or `beyond_stress_trend`): the battery measures that estimate's
+        /// calibration.
+        #[arg(long, value_enum, default_value = "likelihood")]
+        specimen_scatter: crate::likelihood::SpecimenScatter,
         /// No progress bar and no line per set.
         #[arg(long, short)]
         quiet: bool,
@@ -454,6 +459,7 @@ pub fn run(cli: Cli) -> Result<()> {
             world,
             scenario,
             specimen_effects,
+            specimen_scatter,
             quiet,
         } => commands::with_threads(threads, || {
             commands::battery(
@@ -462,7 +468,10 @@ pub fn run(cli: Cli) -> Result<()> {
                 seed,
                 world,
                 scenario.as_deref(),
-                specimen_effects.as_deref(),
+                &crate::battery::SetOverrides {
+                    effects: specimen_effects,
+                    scatter: specimen_scatter,
+                },
                 quiet,
             )
         }),

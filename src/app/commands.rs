@@ -316,7 +316,7 @@ pub fn battery(
     seed: u64,
     world: crate::synth::World,
     scenario: Option<&str>,
-    effects: Option<&[crate::likelihood::EffectKind]>,
+    overrides: &crate::battery::SetOverrides,
     quiet: bool,
 ) -> Result<()> {
     if let Some(sc) = scenario {
@@ -336,8 +336,11 @@ pub fn battery(
     if let Some(sc) = scenario {
         id["scenario"] = sc.into();
     }
-    if let Some(k) = effects {
+    if let Some(k) = &overrides.effects {
         id["specimen_effects"] = serde_json::json!(k);
+    }
+    if !overrides.scatter.is_default() {
+        id["specimen_scatter"] = serde_json::json!(overrides.scatter);
     }
     crate::identity::bind_folder(out, BATTERY_IDENTITY, "results.jsonl", &id)?;
     let folder = RunFolder::take_over(lock, "battery", &|f| {
@@ -346,7 +349,7 @@ pub fn battery(
     crate::output::record(&out.join(BATTERY_IDENTITY));
     let bars = Bars::new(quiet);
     let results =
-        crate::battery::run_battery_observed(out, seed, sets, world, scenario, effects, &bars);
+        crate::battery::run_battery_observed(out, seed, sets, world, scenario, overrides, &bars);
     bars.clear();
     export::battery::record_written(out);
     let outcome = results.and_then(|r| export::battery::write(out, &r, seed));

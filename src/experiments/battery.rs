@@ -366,17 +366,26 @@ pub fn run_one_diagnosed(
     seed: u64,
     world: World,
 ) -> (SetResult, Option<crate::diagnose::Diagnosis>) {
-    run_one_diagnosed_with(dir, scenario, seed, world, None)
+    run_one_diagnosed_with(dir, scenario, seed, world, &SetOverrides::default())
 }
 
-/// [`run_one_diagnosed`] with the set's `[objective] specimen_effects` set to `effects` when
-/// given (the configuration whose calibration a battery measures; else the world's own).
+/// What a battery writes into every set's configuration: the configuration whose calibration
+/// it measures (by default the world's own).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SetOverrides {
+    /// `[objective] specimen_effects` (else the world's: `auto` in `specimens`).
+    pub effects: Option<Vec<EffectKind>>,
+    /// `[objective] specimen_scatter` (written only when not the default).
+    pub scatter: crate::likelihood::SpecimenScatter,
+}
+
+/// [`run_one_diagnosed`] with the set's configuration overridden as `overrides` says.
 pub fn run_one_diagnosed_with(
     dir: &Path,
     scenario: &str,
     seed: u64,
     world: World,
-    effects: Option<&[EffectKind]>,
+    overrides: &SetOverrides,
 ) -> (SetResult, Option<crate::diagnose::Diagnosis>) {
     let mut diagnosis = None;
     let name = format!("set-{seed}");
@@ -409,8 +418,12 @@ pub fn run_one_diagnosed_with(
     let folder = dir.join("sets").join(&name);
     let res = (|| -> Result<()> {
         let mut set = generate_in(&name, scenario, None, seed, world)?;
-        if let Some(k) = effects {
+        if let Some(k) = &overrides.effects {
             set.config_toml = crate::synth::with_specimen_effects(&set.config_toml, k);
+        }
+        if !overrides.scatter.is_default() {
+            set.config_toml =
+                crate::synth::with_specimen_scatter(&set.config_toml, overrides.scatter);
         }
         write_set(&set, &folder)?;
         let t = &set.truth;
@@ -486,7 +499,7 @@ pub fn run_battery(
         n,
         world,
         scenario,
-        None,
+        &SetOverrides::default(),
         &crate::progress::Bars::new(!progress),
     )
 }
@@ -499,7 +512,7 @@ pub fn run_battery_observed(
     n: usize,
     world: World,
     scenario: Option<&str>,
-    effects: Option<&[EffectKind]>,
+    overrides: &SetOverrides,
     observer: &dyn crate::progress::Observer,
 ) -> Result<Vec<SetResult>> {
     if let Some(sc) = scenario {
@@ -521,7 +534,7 @@ pub fn run_battery_observed(
         .par_iter()
         .map(|&(i, seed)| {
             let sc = scenario.unwrap_or_else(|| scenario_of(i));
-            let r = run_one_diagnosed_with(dir, sc, seed, world, effects).0;
+            let r = run_one_diagnosed_with(dir, sc, seed, world, overrides).0;
             let line = serde_json::to_string(&r).expect("plain values") + "\n";
             {
                 let mut f = file.lock().expect("results lock");

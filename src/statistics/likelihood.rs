@@ -164,8 +164,19 @@ impl EffectKind {
 }
 
 /// `[objective] specimen_scatter`: how the scatter between specimens is estimated.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    clap::ValueEnum,
+)]
 #[serde(rename_all = "snake_case")]
+#[value(rename_all = "snake_case")]
 pub enum SpecimenScatter {
     /// Maximum likelihood over all the factors.
     #[default]

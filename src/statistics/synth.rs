@@ -743,6 +743,25 @@ pub fn with_specimen_effects(config: &str, kinds: &[crate::likelihood::EffectKin
     }
 }
 
+/// `config` (a generated set's configuration) with `[objective] specimen_scatter = how`: the
+/// line added to its `[objective]` table, or the table added.
+pub fn with_specimen_scatter(config: &str, how: crate::likelihood::SpecimenScatter) -> String {
+    let word = match how {
+        crate::likelihood::SpecimenScatter::Likelihood => "likelihood",
+        crate::likelihood::SpecimenScatter::BeyondStressTrend => "beyond_stress_trend",
+    };
+    let line = format!("specimen_scatter = \"{word}\"");
+    let lines: Vec<&str> = config.lines().collect();
+    match lines.iter().position(|l| l.trim() == "[objective]") {
+        Some(at) => {
+            let mut out: Vec<String> = lines.iter().map(|l| l.to_string()).collect();
+            out.insert(at + 1, line);
+            out.join("\n") + "\n"
+        }
+        None => format!("{config}\n[objective]\n{line}\n"),
+    }
+}
+
 /// Shortest round-trip text of a number.
 fn fmt(v: f64) -> String {
     format!("{v}")
@@ -1002,6 +1021,40 @@ mod tests {
                     cfg.objective.specimen_effects,
                     crate::config::SpecimenEffects::Kinds(kinds.clone()),
                     "{world:?}: {text}"
+                );
+            }
+        }
+    }
+
+    /// The battery's `--specimen-scatter` in a set's configuration: into the `[objective]`
+    /// table where the set has one (after `--specimen-effects`), else as a table; read back
+    /// as that estimate, with the kinds untouched.
+    #[test]
+    fn the_specimen_scatter_is_set_in_a_generated_configuration() {
+        use crate::likelihood::{EffectKind::Rate, SpecimenScatter};
+        let set = generate_in("t", "none", None, 3102, World::Specimens).unwrap();
+        let with_kinds = with_specimen_effects(&set.config_toml, &[Rate]);
+        for (text, kinds) in [
+            (set.config_toml.clone(), None),
+            (with_kinds, Some(vec![Rate])),
+        ] {
+            let text = with_specimen_scatter(&text, SpecimenScatter::BeyondStressTrend);
+            let cfg = crate::config::RunConfig::from_str_with(
+                &text,
+                std::path::Path::new("t.toml"),
+                &Default::default(),
+            )
+            .unwrap();
+            assert_eq!(
+                cfg.objective.specimen_scatter,
+                SpecimenScatter::BeyondStressTrend,
+                "{text}"
+            );
+            if let Some(k) = kinds {
+                assert_eq!(
+                    cfg.objective.specimen_effects,
+                    crate::config::SpecimenEffects::Kinds(k),
+                    "{text}"
                 );
             }
         }
