@@ -100,6 +100,11 @@ pub enum Command {
         /// Most bootstrap replicates (default: [diagnose] bootstrap).
         #[arg(long)]
         bootstrap: Option<usize>,
+        /// Most replicates of a test whose p-value after --bootstrap is at most alpha/2
+        /// (default: [diagnose] bootstrap_extended, else 4 (bootstrap + 1) - 1: 639 at the default;
+        /// at or below --bootstrap: none).
+        #[arg(long)]
+        bootstrap_extended: Option<usize>,
         /// False-alarm level (default: [diagnose] alpha).
         #[arg(long)]
         alpha: Option<f64>,
@@ -415,6 +420,7 @@ pub fn run(cli: Cli) -> Result<()> {
             starts,
             seed,
             bootstrap,
+            bootstrap_extended,
             alpha,
             threads,
             quiet,
@@ -425,6 +431,7 @@ pub fn run(cli: Cli) -> Result<()> {
                     starts,
                     seed,
                     bootstrap,
+                    bootstrap_extended,
                     alpha,
                 },
                 ..long_run(out, quiet, stop_after)

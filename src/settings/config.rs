@@ -373,6 +373,13 @@ pub struct DiagnoseConfig {
     /// smallest that can reject at Holm's first threshold α/m at α = 0.05 over every
     /// catalogued extension and two goodness-of-fit tests (m = 8: 159 replicates, p ≥ 1/160).
     pub bootstrap: usize,
+    /// Most replicates of a test whose p-value after `bootstrap` replicates is at most α/2
+    /// (Besag–Clifford stopping still applies): the decisions where `bootstrap` replicates
+    /// resolve too coarsely (Holm's α/8 … α/2 are 1–4 replicates in 160) are taken on more.
+    /// Default (`None`): 4 (`bootstrap` + 1) − 1, four times the resolution (639 at the
+    /// default `bootstrap`: p down to 1/640); at or below `bootstrap`: no extension.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bootstrap_extended: Option<usize>,
     /// Latin-hypercube starts per model on the data (plus the initial guess). Default 16.
     pub starts: usize,
     /// Warm starts per model and bootstrap replicate: the best distinct local optima found
@@ -407,6 +414,7 @@ impl Default for DiagnoseConfig {
         DiagnoseConfig {
             alpha: 0.05,
             bootstrap: DEFAULT_BOOTSTRAP,
+            bootstrap_extended: None,
             starts: 16,
             replicate_basins: 3,
             replicate_starts: 0,
@@ -419,6 +427,14 @@ impl Default for DiagnoseConfig {
 }
 
 impl DiagnoseConfig {
+    /// The most replicates of a test close to significance: `bootstrap_extended`, by default
+    /// 4 (`bootstrap` + 1) − 1; never fewer than `bootstrap`.
+    pub fn most_replicates(&self) -> usize {
+        self.bootstrap_extended
+            .unwrap_or(4 * (self.bootstrap + 1) - 1)
+            .max(self.bootstrap)
+    }
+
     /// Check the values; `Err` names the field.
     pub fn validate(&self) -> std::result::Result<(), Invalid> {
         let bad = |field: &str, what: String| Err(invalid(format!("diagnose.{field}"), what));
@@ -644,6 +660,8 @@ pub struct DiagnoseOverrides {
     pub seed: Option<u64>,
     /// `--bootstrap`: most bootstrap replicates.
     pub bootstrap: Option<usize>,
+    /// `--bootstrap-extended`: most replicates of a test close to significance.
+    pub bootstrap_extended: Option<usize>,
     /// `--alpha`: false-alarm level.
     pub alpha: Option<f64>,
 }
@@ -1214,6 +1232,10 @@ impl RunConfig {
                 starts: cli.diagnose.starts.unwrap_or(raw.diagnose.starts),
                 seed: cli.diagnose.seed.unwrap_or(raw.diagnose.seed),
                 bootstrap: cli.diagnose.bootstrap.unwrap_or(raw.diagnose.bootstrap),
+                bootstrap_extended: cli
+                    .diagnose
+                    .bootstrap_extended
+                    .or(raw.diagnose.bootstrap_extended),
                 alpha: cli.diagnose.alpha.unwrap_or(raw.diagnose.alpha),
                 ..raw.diagnose
             },

@@ -12,6 +12,9 @@
 //! statistic costs a fit of its own (an extension's likelihood ratio) may be decided alone
 //! the same way and dropped from the later replicates; its p-value is then the one of the
 //! replicates up to its stop, still a valid p-value (Besag & Clifford's sequential test).
+//! A test whose p-value after the first replicates is close to significance (at most α/2,
+//! where Holm's thresholds are a few replicates apart) goes on to more ([`Depth`]); its
+//! p-value is then the one over all of them, and the rule's p-values stay exact.
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -377,27 +380,100 @@ impl Sampled {
     }
 }
 
-/// Run replicates `0..max` of `one` in batches; after each batch stop if every one of the
-/// `observed` statistics has at least [`STOP_EXCEEDANCES`] replicates at or above it (NaN:
-/// a failed refit, counted as at or above). A statistic marked `droppable` whose test has
-/// reached that count on its own (or whose observed value is not finite) is decided: `one(b,
-/// active)` is told so through `active[k] = false` and may leave it NaN from then on.
-/// Every decision falls between batches of fixed size, so the result does not depend on the
-/// thread count.
+/// How many replicates a sequential bootstrap draws: `first` for every test, and up to
+/// `most` for a test whose p-value after `first` is at most `extend_p`, where more replicates
+/// can change a decision (Holm's thresholds α/m … α/2 are within a few replicates of
+/// 1/(first + 1)). The p-values stay exact: the DP of
+/// `the_extended_sequential_p_value_is_valid_at_every_level` computes their null
+/// distribution under the rule, P(p ≤ a) ≤ a at every a.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Depth {
+    /// Replicates of every test (unless decided earlier, [`STOP_EXCEEDANCES`]).
+    pub first: usize,
+    /// Most replicates of a test that is still close to significance after `first`.
+    pub most: usize,
+    /// The p-value after `first` at or below which a test goes on to `most`.
+    pub extend_p: f64,
+}
+
+impl Depth {
+    /// `max` replicates, no extension (the rule before session 59).
+    pub fn fixed(max: usize) -> Depth {
+        Depth {
+            first: max,
+            most: max,
+            extend_p: 0.0,
+        }
+    }
+
+    /// Whether a test with `g` replicates at or above its statistic among the `n` drawn goes
+    /// on sampling, `extended` telling whether it passed the check after `first`: decided
+    /// at [`STOP_EXCEEDANCES`] (Besag & Clifford), after `first` unless its p-value
+    /// (g + 1)/(first + 1) is at most `extend_p`, and at `most`.
+    pub fn goes_on(&self, n: usize, g: usize) -> bool {
+        if g >= STOP_EXCEEDANCES {
+            return false;
+        }
+        if n < self.first {
+            return true;
+        }
+        if n == self.first && (g + 1) as f64 / (self.first + 1) as f64 > self.extend_p {
+            return false;
+        }
+        n < self.most
+    }
+
+    /// The end of the batch that begins at replicate `lo`: [`BATCH`] replicates, cut at
+    /// `first` and at `most`.
+    pub fn batch_end(&self, lo: usize) -> usize {
+        if lo < self.first {
+            (lo + BATCH).min(self.first)
+        } else {
+            (lo + BATCH).min(self.most.max(self.first))
+        }
+    }
+}
+
+/// [`sequential_in`] to `max` replicates, no extension.
 pub fn sequential<F>(observed: &[f64], droppable: &[bool], max: usize, one: F) -> Sampled
 where
     F: Fn(usize, &[bool]) -> Vec<f64> + Sync,
 {
+    sequential_in(observed, droppable, Depth::fixed(max), one, |_| {})
+}
+
+/// Run replicates of `one` in batches to `depth.first`; after each batch stop if every one
+/// of the `observed` statistics has at least [`STOP_EXCEEDANCES`] replicates at or above it
+/// (NaN: a failed refit, counted as at or above). A statistic marked `droppable` whose test
+/// has reached that count on its own (or whose observed value is not finite) is decided:
+/// `one(b, active)` is told so through `active[k] = false` and may leave it NaN from then
+/// on. After `depth.first` the tests [`Depth::goes_on`] keeps go on to `depth.most`
+/// (`extending(n)` is told first, n the most replicates to come), each counted until it is
+/// decided; the others end at `depth.first`. Every decision falls between batches of fixed
+/// size, so the result does not depend on the thread count.
+pub fn sequential_in<F, E>(
+    observed: &[f64],
+    droppable: &[bool],
+    depth: Depth,
+    one: F,
+    extending: E,
+) -> Sampled
+where
+    F: Fn(usize, &[bool]) -> Vec<f64> + Sync,
+    E: Fn(usize),
+{
     let n = observed.len();
     let exceed = |out: &[Vec<f64>], k: usize| out.iter().filter(|r| !(r[k] < observed[k])).count();
-    let mut out: Vec<Vec<f64>> = Vec::with_capacity(max);
+    let first = depth.first;
+    let most = depth.most.max(first);
+    let mut out: Vec<Vec<f64>> = Vec::with_capacity(first);
     let mut active: Vec<bool> = (0..n)
         .map(|k| !droppable[k] || observed[k].is_finite())
         .collect();
     let mut computed = vec![0usize; n];
-    while out.len() < max {
+    while out.len() < first {
         let lo = out.len();
-        let hi = (lo + BATCH).min(max);
+        let hi = depth.batch_end(lo);
         let batch: Vec<Vec<f64>> = (lo..hi).into_par_iter().map(|b| one(b, &active)).collect();
         out.extend(batch);
         for k in 0..n {
@@ -411,12 +487,41 @@ where
         let done = (0..n).all(|k| {
             !observed[k].is_finite() || exceed(&out[..computed[k]], k) >= STOP_EXCEEDANCES
         });
-        if done && out.len() < max {
+        if done && out.len() < first {
             return Sampled {
                 reps: out,
                 computed,
                 stopped_early: true,
             };
+        }
+    }
+    // The tests close to significance go on; the others end here.
+    let mut going: Vec<bool> = (0..n)
+        .map(|k| {
+            observed[k].is_finite()
+                && computed[k] == first
+                && depth.goes_on(first, exceed(&out[..first], k))
+        })
+        .collect();
+    if going.iter().any(|g| *g) {
+        extending(most - first);
+        for k in 0..n {
+            active[k] = going[k];
+        }
+    }
+    while going.iter().any(|g| *g) {
+        let lo = out.len();
+        let hi = depth.batch_end(lo);
+        let batch: Vec<Vec<f64>> = (lo..hi).into_par_iter().map(|b| one(b, &active)).collect();
+        out.extend(batch);
+        for k in 0..n {
+            if going[k] {
+                computed[k] = out.len();
+                if !depth.goes_on(out.len(), exceed(&out[..computed[k]], k)) {
+                    going[k] = false;
+                    active[k] = false;
+                }
+            }
         }
     }
     Sampled {
@@ -734,6 +839,163 @@ mod tests {
         });
         assert_eq!(s.computed, vec![0, 20]);
         assert!(s.column(0).is_empty());
+    }
+
+    /// The exact null distribution of the p-value (g + 1)/(n + 1) a single test reports
+    /// under `goes_on` (decisions after every batch of [`Depth::batch_end`]): under the null
+    /// the data's statistic and the replicates' are exchangeable, so the exceedances follow
+    /// Pólya's urn — the next replicate is at or above the data's with probability
+    /// (g + 1)/(n + 2) after g of n.
+    fn null_p_distribution(
+        depth: &Depth,
+        goes_on: impl Fn(usize, usize) -> bool,
+    ) -> Vec<(f64, f64)> {
+        let most = depth.most.max(depth.first);
+        let mut at: Vec<f64> = vec![1.0]; // P(g) among the running paths
+        let mut out: Vec<(f64, f64)> = Vec::new();
+        let mut n = 0;
+        while n < most && !at.is_empty() {
+            let end = depth.batch_end(n);
+            while n < end {
+                let mut next = vec![0.0; at.len() + 1];
+                for (g, pr) in at.iter().enumerate() {
+                    let q = (g + 1) as f64 / (n + 2) as f64;
+                    next[g + 1] += pr * q;
+                    next[g] += pr * (1.0 - q);
+                }
+                at = next;
+                n += 1;
+            }
+            for (g, pr) in at.iter_mut().enumerate() {
+                if *pr > 0.0 && !goes_on(n, g) {
+                    out.push(((g + 1) as f64 / (n + 1) as f64, *pr));
+                    *pr = 0.0;
+                }
+            }
+        }
+        out.sort_by(|a, b| a.0.total_cmp(&b.0));
+        out
+    }
+
+    /// The largest P(p ≤ a)/a over the support of the reported p-value.
+    fn worst_size_ratio(dist: &[(f64, f64)]) -> f64 {
+        let mut cum = 0.0;
+        let mut worst: f64 = 0.0;
+        for (i, (p, pr)) in dist.iter().enumerate() {
+            cum += pr;
+            if dist.get(i + 1).is_none_or(|(q, _)| *q > *p) {
+                worst = worst.max(cum / p);
+            }
+        }
+        worst
+    }
+
+    #[test]
+    fn the_extended_sequential_p_value_is_valid_at_every_level() {
+        for depth in [
+            Depth {
+                first: 159,
+                most: 639,
+                extend_p: 0.025,
+            },
+            Depth {
+                first: 159,
+                most: 639,
+                extend_p: 0.05,
+            },
+            Depth {
+                first: 99,
+                most: 399,
+                extend_p: 0.025,
+            },
+            Depth::fixed(159),
+        ] {
+            let dist = null_p_distribution(&depth, |n, g| depth.goes_on(n, g));
+            let total: f64 = dist.iter().map(|d| d.1).sum();
+            assert!((total - 1.0).abs() < 1e-9, "{depth:?}: {total}");
+            let worst = worst_size_ratio(&dist);
+            assert!(worst <= 1.0 + 1e-9, "{depth:?}: P(p ≤ a)/a reaches {worst}");
+            // Not vacuous: the smallest p-value is 1/(most + 1), with exactly that chance.
+            let (p0, pr0) = dist[0];
+            let most = depth.most.max(depth.first) as f64;
+            assert!((p0 - 1.0 / (most + 1.0)).abs() < 1e-12, "{depth:?}: {p0}");
+            assert!((pr0 - 1.0 / (most + 1.0)).abs() < 1e-9, "{depth:?}: {pr0}");
+        }
+        // The check can fail: stopping as soon as the p-value looks significant is not a
+        // valid rule, and the DP says so.
+        let depth = Depth {
+            first: 159,
+            most: 639,
+            extend_p: 0.025,
+        };
+        let peeking = null_p_distribution(&depth, |n, g| {
+            depth.goes_on(n, g) && (g + 1) as f64 / (n + 1) as f64 > 0.02
+        });
+        assert!(worst_size_ratio(&peeking) > 1.2);
+    }
+
+    #[test]
+    fn a_test_close_to_significance_goes_on_to_the_most_replicates() {
+        let depth = Depth {
+            first: 159,
+            most: 639,
+            extend_p: 0.025,
+        };
+        // Replicate b's statistics: 0 never reaches its observed value (goes on to 639),
+        // 1 reaches it in 1 of 40 (5 of the first 159: ends at 159), 2 in 1 of 2 (decided
+        // after 20), 3 not droppable and never reached, 4 in 1 of 150 (one of the first 159:
+        // goes on and is decided by its 10th exceedance, at 1,500 > 639: runs to the end).
+        let one = |b: usize, _: &[bool]| {
+            vec![
+                0.0,
+                if b % 40 == 7 { 2.0 } else { 0.0 },
+                (b % 2) as f64,
+                0.0,
+                if b % 150 == 3 { 2.0 } else { 0.0 },
+            ]
+        };
+        let observed = [1.0, 1.0, 1.0, 1.0, 1.0];
+        let droppable = [true, true, true, false, true];
+        let told = std::sync::Mutex::new(Vec::new());
+        let s = sequential_in(&observed, &droppable, depth, one, |n| {
+            told.lock().unwrap().push(n)
+        });
+        assert_eq!(s.computed, vec![639, 159, 20, 639, 639]);
+        assert_eq!(s.reps.len(), 639);
+        assert_eq!(*told.lock().unwrap(), vec![480]);
+        assert_eq!(p_value(1.0, &s.column(0)), 1.0 / 640.0);
+        assert_eq!(p_value(1.0, &s.column(1)), 5.0 / 160.0);
+        // A test that reaches its tenth exceedance after `first` ends there.
+        let one = |b: usize, _: &[bool]| vec![if b % 60 == 3 { 2.0 } else { 0.0 }];
+        let s = sequential_in(&[1.0], &[true], depth, one, |_| {});
+        // Exceedances at 3, 63, 123 of the first 159 (p 4/160 = 0.025: goes on), …: the
+        // 10th is replicate 543, in the batch 539–548.
+        assert_eq!(s.computed, vec![549]);
+        // The same replicates and counts whatever the thread count.
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let s1 = pool.install(|| sequential_in(&[1.0], &[true], depth, one, |_| {}));
+        assert_eq!(s, s1);
+        // Without the extension (`fixed`), the old rule: everything ends at 159.
+        let s = sequential_in(
+            &observed,
+            &droppable,
+            Depth::fixed(159),
+            |b, a| {
+                let _ = a;
+                vec![
+                    0.0,
+                    if b % 40 == 7 { 2.0 } else { 0.0 },
+                    (b % 2) as f64,
+                    0.0,
+                    0.0,
+                ]
+            },
+            |_| panic!("no extension"),
+        );
+        assert_eq!(s.computed, vec![159, 159, 20, 159, 159]);
     }
 
     #[test]

@@ -11,7 +11,7 @@ use std::sync::Mutex;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-use super::bootstrap::Sampled;
+use super::bootstrap::{Depth, Sampled};
 use crate::errmodel::{Ar1, ErrorModel, Residuals};
 use crate::error::{Error, Result};
 use crate::journal::{debug_hash, exact, Exact};
@@ -51,16 +51,16 @@ impl Hooks<'_> {
         key: &str,
         observed: &[f64],
         droppable: &[bool],
-        max: usize,
+        depth: Depth,
         one: F,
     ) -> Result<Sampled>
     where
         F: Fn(usize, &[bool]) -> Vec<f64> + Sync,
     {
         let prefix = format!("rep/{stream}/{key}/");
-        self.phase(name, max);
+        self.phase(name, depth.first);
         if let Some(j) = self.journal {
-            let found = (0..max)
+            let found = (0..depth.first)
                 .filter(|b| j.contains(&format!("{prefix}{b}")))
                 .count();
             self.observer.resumed(found as u64);
@@ -69,7 +69,16 @@ impl Hooks<'_> {
         let stop = || {
             self.observer.cancelled() || failure.lock().unwrap_or_else(|e| e.into_inner()).is_some()
         };
-        let out = super::bootstrap::sequential(observed, droppable, max, |b, active| {
+        let extending = |n: usize| {
+            self.phase(&format!("{name}, tests close to significance"), n);
+            if let Some(j) = self.journal {
+                let found = (depth.first..depth.first + n)
+                    .filter(|b| j.contains(&format!("{prefix}{b}")))
+                    .count();
+                self.observer.resumed(found as u64);
+            }
+        };
+        let journaled = |b: usize, active: &[bool]| {
             let k = format!("{prefix}{b}");
             if let Some(r) = self.journal.and_then(|j| j.get::<Exact>(&k)) {
                 return r.0;
@@ -89,7 +98,8 @@ impl Hooks<'_> {
             }
             self.step();
             r
-        });
+        };
+        let out = super::bootstrap::sequential_in(observed, droppable, depth, journaled, extending);
         if let Some(e) = failure.into_inner().unwrap_or_else(|e| e.into_inner()) {
             return Err(e);
         }
@@ -411,7 +421,7 @@ mod tests {
                 journal: Some(&j),
             };
             let e = hooks
-                .sequential("toy", 1, "k", &observed, &[false; 2], 60, toy)
+                .sequential("toy", 1, "k", &observed, &[false; 2], Depth::fixed(60), toy)
                 .unwrap_err();
             assert!(matches!(e, Error::Interrupted(_)), "{e}");
             j.written() as usize
@@ -426,10 +436,18 @@ mod tests {
             journal: Some(&j),
         };
         let resumed = hooks
-            .sequential("toy", 1, "k", &observed, &[false; 2], 60, |b, a| {
-                calls.fetch_add(1, Ordering::SeqCst);
-                toy(b, a)
-            })
+            .sequential(
+                "toy",
+                1,
+                "k",
+                &observed,
+                &[false; 2],
+                Depth::fixed(60),
+                |b, a| {
+                    calls.fetch_add(1, Ordering::SeqCst);
+                    toy(b, a)
+                },
+            )
             .unwrap();
         assert_eq!(calls.load(Ordering::SeqCst), 60 - kept);
         let bits = |r: &Sampled| {
@@ -446,10 +464,18 @@ mod tests {
         // Replicates under another fit (another key) are not reused.
         let calls = AtomicUsize::new(0);
         hooks
-            .sequential("toy", 1, "other", &observed, &[false; 2], 60, |b, a| {
-                calls.fetch_add(1, Ordering::SeqCst);
-                toy(b, a)
-            })
+            .sequential(
+                "toy",
+                1,
+                "other",
+                &observed,
+                &[false; 2],
+                Depth::fixed(60),
+                |b, a| {
+                    calls.fetch_add(1, Ordering::SeqCst);
+                    toy(b, a)
+                },
+            )
             .unwrap();
         assert_eq!(calls.load(Ordering::SeqCst), 60);
     }

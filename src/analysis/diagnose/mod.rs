@@ -733,8 +733,10 @@ pub struct Indistinguishable {
 pub struct BootstrapInfo {
     /// Null replicates drawn (under the fitted base model).
     pub replicates: usize,
-    /// The most that were allowed.
+    /// The most that were allowed for every test.
     pub max: usize,
+    /// The most that were allowed for a test close to significance (p ≤ α/2 after `max`).
+    pub most: usize,
     /// Sampling stopped early: every test was clearly not significant.
     pub stopped_early: bool,
     /// The spread of the specimens' own shapes the replicates' new specimens were given,
@@ -1222,6 +1224,16 @@ fn null_shapes(gs: &[gof::Gof], effects: bool) -> SpecimenShapes {
         .map_or_else(SpecimenShapes::none, SpecimenShapes::from_gof)
 }
 
+/// How many null replicates `dc` asks for: [`DiagnoseConfig::bootstrap`] for every test, up
+/// to [`DiagnoseConfig::bootstrap_extended`] for a test whose p-value is then at most α/2.
+pub fn depth_of(dc: &DiagnoseConfig) -> bootstrap::Depth {
+    bootstrap::Depth {
+        first: dc.bootstrap,
+        most: dc.most_replicates(),
+        extend_p: dc.alpha / 2.0,
+    }
+}
+
 /// Goodness-of-fit bootstrap of one fitted model: replicates under it, refitted by it.
 #[allow(clippy::too_many_arguments)]
 fn gof_bootstrap(
@@ -1260,7 +1272,7 @@ fn gof_bootstrap(
         &key,
         &observed,
         &none,
-        dc.bootstrap,
+        depth_of(dc),
         |b, _| {
             let mut rng = bootstrap::replicate_rng(dc.seed, GOF_STREAM, b);
             let (data, drawn) = bootstrap::replicate_hier_drawn(
@@ -1588,7 +1600,7 @@ pub fn diagnose_observed(
         &key,
         &observed_seq,
         &droppable,
-        dc.bootstrap,
+        depth_of(dc),
         |b, active| {
             null_replicate(
                 specs, &fits, &basins, curves, &warm, &ml, dc, &shapes, &reading, b, active,
@@ -1634,7 +1646,7 @@ pub fn diagnose_observed(
             &hooks::model_key(&(&key, &again)),
             &observed_again,
             &droppable_again,
-            dc.bootstrap,
+            depth_of(dc),
             |b, active| {
                 let redo: Vec<bool> = (0..n_ext + ng).map(|k| again[k] && active[k]).collect();
                 null_again(
@@ -1879,6 +1891,7 @@ pub fn diagnose_observed(
         bootstrap: BootstrapInfo {
             replicates: reps.len(),
             max: dc.bootstrap,
+            most: depth_of(dc).most,
             stopped_early: sampled.stopped_early,
             specimen_shape_sd_pct: shapes.sd_pct(),
             failed_base_refits,

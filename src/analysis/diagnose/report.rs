@@ -286,7 +286,15 @@ pub fn report_md(name: &str, setup: &DiagnoseSetup, d: &Diagnosis) -> String {
         } else {
             "common to the curves, and per curve"
         },
-        d.bootstrap.max,
+        if d.bootstrap.most > d.bootstrap.max {
+            format!(
+                "{} (up to {} for a test whose p-value after {} is at most α/2, where Holm's \
+                 thresholds are a few replicates apart)",
+                d.bootstrap.max, d.bootstrap.most, d.bootstrap.max
+            )
+        } else {
+            d.bootstrap.max.to_string()
+        },
         shapes_md(d),
         d.settings.replicate_basins,
         d.settings.replicate_starts,
