@@ -329,7 +329,7 @@ fn diagnosis_json_keeps_its_contract() {
         let obs = column["observed"].as_f64().unwrap_or(f64::NAN);
         let g = values
             .iter()
-            .filter(|v| !(v.as_f64().unwrap_or(f64::NAN) < obs))
+            .filter(|v| v.as_f64().is_none_or(|x| x >= obs))
             .count();
         let decided = g >= 10;
         let ended_first = l == first && (g + 1) as f64 / (first + 1) as f64 > alpha / 2.0;

@@ -306,6 +306,7 @@ def diagnose(
     starts: Optional[int] = None,
     seed: Optional[int] = None,
     bootstrap: Optional[int] = None,
+    bootstrap_extended: Optional[int] = None,
     alpha: Optional[float] = None,
     threads: Optional[int] = None,
     progress: Progress = True,
@@ -316,7 +317,9 @@ def diagnose(
     stop hook yet; ``fit`` and ``predict`` likewise).
 
     Args:
-        starts, seed, bootstrap, alpha: ``[diagnose]``'s settings (default: the file's).
+        starts, seed, bootstrap, bootstrap_extended, alpha: ``[diagnose]``'s settings
+            (default: the file's; ``bootstrap_extended``: the most replicates of a test whose
+            p-value after ``bootstrap`` is at most alpha/2).
         threads: worker threads (default: all cores).
         progress: a bar (True; the elapsed time: the library reports no counts yet), a
             callback ``(done, total)``, or nothing.
@@ -326,7 +329,7 @@ def diagnose(
     cb, close = _progress(progress, "diagnose", "s")
     try:
         out, warns = _native.diagnose(
-            text, kind, c, r, starts, seed, bootstrap,
+            text, kind, c, r, starts, seed, bootstrap, bootstrap_extended,
             None if alpha is None else float(alpha), threads, cb,
         )
     finally:

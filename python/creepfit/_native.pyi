@@ -41,6 +41,7 @@ def diagnose(
     starts: Optional[int] = None,
     seed: Optional[int] = None,
     bootstrap: Optional[int] = None,
+    bootstrap_extended: Optional[int] = None,
     alpha: Optional[float] = None,
     threads: Optional[int] = None,
     progress: _Progress = None,

@@ -491,7 +491,7 @@ fn sweep(
 /// callback, store its counts in `Progress::done`/`total` here (as `sweep` does) and the
 /// Python bar shows them.
 #[pyfunction]
-#[pyo3(signature = (config, kind, curves=None, ruptures=None, starts=None, seed=None, bootstrap=None, alpha=None, threads=None, progress=None))]
+#[pyo3(signature = (config, kind, curves=None, ruptures=None, starts=None, seed=None, bootstrap=None, bootstrap_extended=None, alpha=None, threads=None, progress=None))]
 #[allow(clippy::too_many_arguments)]
 fn diagnose(
     py: Python<'_>,
@@ -502,6 +502,7 @@ fn diagnose(
     starts: Option<usize>,
     seed: Option<u64>,
     bootstrap: Option<usize>,
+    bootstrap_extended: Option<usize>,
     alpha: Option<f64>,
     threads: Option<usize>,
     progress: Option<Bound<'_, PyAny>>,
@@ -513,6 +514,7 @@ fn diagnose(
             starts,
             seed,
             bootstrap,
+            bootstrap_extended,
             alpha,
         },
         run: RunOptions {

@@ -505,9 +505,7 @@ where
         .collect();
     if going.iter().any(|g| *g) {
         extending(most - first);
-        for k in 0..n {
-            active[k] = going[k];
-        }
+        active.copy_from_slice(&going);
     }
     while going.iter().any(|g| *g) {
         let lo = out.len();
