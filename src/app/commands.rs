@@ -342,6 +342,9 @@ pub fn battery(
     if !overrides.scatter.is_default() {
         id["specimen_scatter"] = serde_json::json!(overrides.scatter);
     }
+    if let Some(most) = overrides.bootstrap_extended {
+        id["bootstrap_extended"] = most.into();
+    }
     crate::identity::bind_folder(out, BATTERY_IDENTITY, "results.jsonl", &id)?;
     let folder = RunFolder::take_over(lock, "battery", &|f| {
         f == BATTERY_IDENTITY || f == "results.jsonl" || f.starts_with("sets/")

@@ -377,6 +377,8 @@ pub struct SetOverrides {
     pub effects: Option<Vec<EffectKind>>,
     /// `[objective] specimen_scatter` (written only when not the default).
     pub scatter: crate::likelihood::SpecimenScatter,
+    /// `[diagnose] bootstrap_extended` (written only when given).
+    pub bootstrap_extended: Option<usize>,
 }
 
 /// [`run_one_diagnosed`] with the set's configuration overridden as `overrides` says.
@@ -424,6 +426,9 @@ pub fn run_one_diagnosed_with(
         if !overrides.scatter.is_default() {
             set.config_toml =
                 crate::synth::with_specimen_scatter(&set.config_toml, overrides.scatter);
+        }
+        if let Some(most) = overrides.bootstrap_extended {
+            set.config_toml = crate::synth::with_bootstrap_extended(&set.config_toml, most);
         }
         write_set(&set, &folder)?;
         let t = &set.truth;

@@ -762,6 +762,21 @@ pub fn with_specimen_scatter(config: &str, how: crate::likelihood::SpecimenScatt
     }
 }
 
+/// `config` (a generated set's configuration) with `[diagnose] bootstrap_extended = most`: a
+/// battery's sets then sample a test close to significance on to `most` replicates.
+pub fn with_bootstrap_extended(config: &str, most: usize) -> String {
+    let line = format!("bootstrap_extended = {most}");
+    let lines: Vec<&str> = config.lines().collect();
+    match lines.iter().position(|l| l.trim() == "[diagnose]") {
+        Some(at) => {
+            let mut out: Vec<String> = lines.iter().map(|l| l.to_string()).collect();
+            out.insert(at + 1, line);
+            out.join("\n") + "\n"
+        }
+        None => format!("{config}\n[diagnose]\n{line}\n"),
+    }
+}
+
 /// Shortest round-trip text of a number.
 fn fmt(v: f64) -> String {
     format!("{v}")
@@ -1057,7 +1072,26 @@ mod tests {
                     "{text}"
                 );
             }
+            // The bootstrap's extension beside it, and alone.
+            for t in [text.clone(), set.config_toml.clone()] {
+                let t = with_bootstrap_extended(&t, 639);
+                let cfg = crate::config::RunConfig::from_str_with(
+                    &t,
+                    std::path::Path::new("t.toml"),
+                    &Default::default(),
+                )
+                .unwrap();
+                assert_eq!(cfg.diagnose.most_replicates(), 639, "{t}");
+                assert_eq!(cfg.diagnose.bootstrap_extended, Some(639));
+            }
         }
+        let cfg = crate::config::RunConfig::from_str_with(
+            &set.config_toml,
+            std::path::Path::new("t.toml"),
+            &Default::default(),
+        )
+        .unwrap();
+        assert_eq!(cfg.diagnose.most_replicates(), cfg.diagnose.bootstrap);
     }
 
     /// The coarsening factors are drawn N(0, sd²): over many sets, the mean of (κ/sd)² is 1
