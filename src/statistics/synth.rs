@@ -750,31 +750,31 @@ pub fn with_specimen_scatter(config: &str, how: crate::likelihood::SpecimenScatt
         crate::likelihood::SpecimenScatter::Likelihood => "likelihood",
         crate::likelihood::SpecimenScatter::BeyondStressTrend => "beyond_stress_trend",
     };
-    let line = format!("specimen_scatter = \"{word}\"");
+    with_line_in(
+        config,
+        "objective",
+        &format!("specimen_scatter = \"{word}\""),
+    )
+}
+
+/// `config` with `line` added first in its table `[table]`, or the table added at the end.
+fn with_line_in(config: &str, table: &str, line: &str) -> String {
+    let head = format!("[{table}]");
     let lines: Vec<&str> = config.lines().collect();
-    match lines.iter().position(|l| l.trim() == "[objective]") {
+    match lines.iter().position(|l| l.trim() == head) {
         Some(at) => {
-            let mut out: Vec<String> = lines.iter().map(|l| l.to_string()).collect();
+            let mut out: Vec<&str> = lines.clone();
             out.insert(at + 1, line);
             out.join("\n") + "\n"
         }
-        None => format!("{config}\n[objective]\n{line}\n"),
+        None => format!("{config}\n{head}\n{line}\n"),
     }
 }
 
 /// `config` (a generated set's configuration) with `[diagnose] bootstrap_extended = most`: a
 /// battery's sets then sample a test close to significance on to `most` replicates.
 pub fn with_bootstrap_extended(config: &str, most: usize) -> String {
-    let line = format!("bootstrap_extended = {most}");
-    let lines: Vec<&str> = config.lines().collect();
-    match lines.iter().position(|l| l.trim() == "[diagnose]") {
-        Some(at) => {
-            let mut out: Vec<String> = lines.iter().map(|l| l.to_string()).collect();
-            out.insert(at + 1, line);
-            out.join("\n") + "\n"
-        }
-        None => format!("{config}\n[diagnose]\n{line}\n"),
-    }
+    with_line_in(config, "diagnose", &format!("bootstrap_extended = {most}"))
 }
 
 /// Shortest round-trip text of a number.
