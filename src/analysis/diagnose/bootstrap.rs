@@ -407,9 +407,9 @@ impl Depth {
     }
 
     /// Whether a test with `g` replicates at or above its statistic among the `n` drawn goes
-    /// on sampling, `extended` telling whether it passed the check after `first`: decided
-    /// at [`STOP_EXCEEDANCES`] (Besag & Clifford), after `first` unless its p-value
-    /// (g + 1)/(first + 1) is at most `extend_p`, and at `most`.
+    /// on sampling (asked after every batch): not once decided at [`STOP_EXCEEDANCES`]
+    /// (Besag & Clifford), not after `first` unless its p-value (g + 1)/(first + 1) is at
+    /// most `extend_p`, and not at `most`.
     pub fn goes_on(&self, n: usize, g: usize) -> bool {
         if g >= STOP_EXCEEDANCES {
             return false;
@@ -471,11 +471,17 @@ where
         .map(|k| !droppable[k] || observed[k].is_finite())
         .collect();
     let mut computed = vec![0usize; n];
-    while out.len() < first {
+    // The next batch of replicates, each told which tests are still computed.
+    let draw = |out: &mut Vec<Vec<f64>>, active: &[bool]| {
         let lo = out.len();
-        let hi = depth.batch_end(lo);
-        let batch: Vec<Vec<f64>> = (lo..hi).into_par_iter().map(|b| one(b, &active)).collect();
+        let batch: Vec<Vec<f64>> = (lo..depth.batch_end(lo))
+            .into_par_iter()
+            .map(|b| one(b, active))
+            .collect();
         out.extend(batch);
+    };
+    while out.len() < first {
+        draw(&mut out, &active);
         for k in 0..n {
             if active[k] {
                 computed[k] = out.len();
@@ -508,10 +514,7 @@ where
         active.copy_from_slice(&going);
     }
     while going.iter().any(|g| *g) {
-        let lo = out.len();
-        let hi = depth.batch_end(lo);
-        let batch: Vec<Vec<f64>> = (lo..hi).into_par_iter().map(|b| one(b, &active)).collect();
-        out.extend(batch);
+        draw(&mut out, &active);
         for k in 0..n {
             if going[k] {
                 computed[k] = out.len();
@@ -981,8 +984,7 @@ mod tests {
             &observed,
             &droppable,
             Depth::fixed(159),
-            |b, a| {
-                let _ = a;
+            |b, _| {
                 vec![
                     0.0,
                     if b % 40 == 7 { 2.0 } else { 0.0 },

@@ -58,25 +58,26 @@ impl Hooks<'_> {
         F: Fn(usize, &[bool]) -> Vec<f64> + Sync,
     {
         let prefix = format!("rep/{stream}/{key}/");
-        self.phase(name, depth.first);
-        if let Some(j) = self.journal {
-            let found = (0..depth.first)
-                .filter(|b| j.contains(&format!("{prefix}{b}")))
-                .count();
-            self.observer.resumed(found as u64);
-        }
+        // A phase over replicates `range`: those an earlier run journaled count as resumed.
+        let phase = |label: &str, range: std::ops::Range<usize>| {
+            self.phase(label, range.len());
+            if let Some(j) = self.journal {
+                let found = range
+                    .filter(|b| j.contains(&format!("{prefix}{b}")))
+                    .count();
+                self.observer.resumed(found as u64);
+            }
+        };
+        phase(name, 0..depth.first);
         let failure: Mutex<Option<Error>> = Mutex::new(None);
         let stop = || {
             self.observer.cancelled() || failure.lock().unwrap_or_else(|e| e.into_inner()).is_some()
         };
         let extending = |n: usize| {
-            self.phase(&format!("{name}, tests close to significance"), n);
-            if let Some(j) = self.journal {
-                let found = (depth.first..depth.first + n)
-                    .filter(|b| j.contains(&format!("{prefix}{b}")))
-                    .count();
-                self.observer.resumed(found as u64);
-            }
+            phase(
+                &format!("{name}, tests close to significance"),
+                depth.first..depth.first + n,
+            )
         };
         let journaled = |b: usize, active: &[bool]| {
             let k = format!("{prefix}{b}");
