@@ -385,25 +385,42 @@ impl Sampled {
 /// can change a decision (Holm's thresholds α/m … α/2 are within a few replicates of
 /// 1/(first + 1)). The p-values stay exact: the DP of
 /// `the_extended_sequential_p_value_is_valid_at_every_level` computes their null
-/// distribution under the rule, P(p ≤ a) ≤ a at every a.
+/// distribution under the rule, P(p ≤ a) ≤ a at every a. Built by [`Depth::new`], which
+/// keeps `most ≥ first`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Depth {
     /// Replicates of every test (unless decided earlier, [`STOP_EXCEEDANCES`]).
-    pub first: usize,
+    first: usize,
     /// Most replicates of a test that is still close to significance after `first`.
-    pub most: usize,
+    most: usize,
     /// The p-value after `first` at or below which a test goes on to `most`.
-    pub extend_p: f64,
+    extend_p: f64,
 }
 
 impl Depth {
+    /// `first` replicates for every test, up to `most` (raised to `first` if below it) for a
+    /// test whose p-value after `first` is at most `extend_p`.
+    pub fn new(first: usize, most: usize, extend_p: f64) -> Depth {
+        Depth {
+            first,
+            most: most.max(first),
+            extend_p,
+        }
+    }
+
     /// `max` replicates, no extension (the rule before session 59).
     pub fn fixed(max: usize) -> Depth {
-        Depth {
-            first: max,
-            most: max,
-            extend_p: 0.0,
-        }
+        Depth::new(max, max, 0.0)
+    }
+
+    /// Replicates of every test.
+    pub fn first(&self) -> usize {
+        self.first
+    }
+
+    /// Most replicates of any test (at least [`Depth::first`]).
+    pub fn most(&self) -> usize {
+        self.most
     }
 
     /// Whether a test with `g` replicates at or above its statistic among the `n` drawn goes
@@ -429,7 +446,7 @@ impl Depth {
         if lo < self.first {
             (lo + BATCH).min(self.first)
         } else {
-            (lo + BATCH).min(self.most.max(self.first))
+            (lo + BATCH).min(self.most)
         }
     }
 }
@@ -465,7 +482,7 @@ where
     let n = observed.len();
     let exceed = |out: &[Vec<f64>], k: usize| out.iter().filter(|r| !(r[k] < observed[k])).count();
     let first = depth.first;
-    let most = depth.most.max(first);
+    let most = depth.most;
     let mut out: Vec<Vec<f64>> = Vec::with_capacity(first);
     let mut active: Vec<bool> = (0..n)
         .map(|k| !droppable[k] || observed[k].is_finite())
@@ -851,7 +868,7 @@ mod tests {
         depth: &Depth,
         goes_on: impl Fn(usize, usize) -> bool,
     ) -> Vec<(f64, f64)> {
-        let most = depth.most.max(depth.first);
+        let most = depth.most;
         let mut at: Vec<f64> = vec![1.0]; // P(g) among the running paths
         let mut out: Vec<(f64, f64)> = Vec::new();
         let mut n = 0;
@@ -894,21 +911,9 @@ mod tests {
     #[test]
     fn the_extended_sequential_p_value_is_valid_at_every_level() {
         for depth in [
-            Depth {
-                first: 159,
-                most: 639,
-                extend_p: 0.025,
-            },
-            Depth {
-                first: 159,
-                most: 639,
-                extend_p: 0.05,
-            },
-            Depth {
-                first: 99,
-                most: 399,
-                extend_p: 0.025,
-            },
+            Depth::new(159, 639, 0.025),
+            Depth::new(159, 639, 0.05),
+            Depth::new(99, 399, 0.025),
             Depth::fixed(159),
         ] {
             let dist = null_p_distribution(&depth, |n, g| depth.goes_on(n, g));
@@ -918,17 +923,13 @@ mod tests {
             assert!(worst <= 1.0 + 1e-9, "{depth:?}: P(p ≤ a)/a reaches {worst}");
             // Not vacuous: the smallest p-value is 1/(most + 1), with exactly that chance.
             let (p0, pr0) = dist[0];
-            let most = depth.most.max(depth.first) as f64;
+            let most = depth.most as f64;
             assert!((p0 - 1.0 / (most + 1.0)).abs() < 1e-12, "{depth:?}: {p0}");
             assert!((pr0 - 1.0 / (most + 1.0)).abs() < 1e-9, "{depth:?}: {pr0}");
         }
         // The check can fail: stopping as soon as the p-value looks significant is not a
         // valid rule, and the DP says so.
-        let depth = Depth {
-            first: 159,
-            most: 639,
-            extend_p: 0.025,
-        };
+        let depth = Depth::new(159, 639, 0.025);
         let peeking = null_p_distribution(&depth, |n, g| {
             depth.goes_on(n, g) && (g + 1) as f64 / (n + 1) as f64 > 0.02
         });
@@ -937,11 +938,7 @@ mod tests {
 
     #[test]
     fn a_test_close_to_significance_goes_on_to_the_most_replicates() {
-        let depth = Depth {
-            first: 159,
-            most: 639,
-            extend_p: 0.025,
-        };
+        let depth = Depth::new(159, 639, 0.025);
         // Replicate b's statistics: 0 never reaches its observed value (goes on to 639),
         // 1 reaches it in 1 of 40 (5 of the first 159: ends at 159), 2 in 1 of 2 (decided
         // after 20), 3 not droppable and never reached, 4 in 1 of 150 (one of the first 159:

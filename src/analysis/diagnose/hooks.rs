@@ -68,7 +68,7 @@ impl Hooks<'_> {
                 self.observer.resumed(found as u64);
             }
         };
-        phase(name, 0..depth.first);
+        phase(name, 0..depth.first());
         let failure: Mutex<Option<Error>> = Mutex::new(None);
         let stop = || {
             self.observer.cancelled() || failure.lock().unwrap_or_else(|e| e.into_inner()).is_some()
@@ -76,7 +76,7 @@ impl Hooks<'_> {
         let extending = |n: usize| {
             phase(
                 &format!("{name}, tests close to significance"),
-                depth.first..depth.first + n,
+                depth.first()..depth.first() + n,
             )
         };
         let journaled = |b: usize, active: &[bool]| {

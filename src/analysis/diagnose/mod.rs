@@ -1227,11 +1227,7 @@ fn null_shapes(gs: &[gof::Gof], effects: bool) -> SpecimenShapes {
 /// How many null replicates `dc` asks for: [`DiagnoseConfig::bootstrap`] for every test, up
 /// to [`DiagnoseConfig::bootstrap_extended`] for a test whose p-value is then at most α/2.
 pub fn depth_of(dc: &DiagnoseConfig) -> bootstrap::Depth {
-    bootstrap::Depth {
-        first: dc.bootstrap,
-        most: dc.most_replicates(),
-        extend_p: dc.alpha / 2.0,
-    }
+    bootstrap::Depth::new(dc.bootstrap, dc.most_replicates(), dc.alpha / 2.0)
 }
 
 /// Goodness-of-fit bootstrap of one fitted model: replicates under it, refitted by it.
@@ -1891,7 +1887,7 @@ pub fn diagnose_observed(
         bootstrap: BootstrapInfo {
             replicates: reps.len(),
             max: dc.bootstrap,
-            most: depth_of(dc).most,
+            most: depth_of(dc).most(),
             stopped_early: sampled.stopped_early,
             specimen_shape_sd_pct: shapes.sd_pct(),
             failed_base_refits,
