@@ -352,29 +352,132 @@ impl Lmm {
         minimise_scatter(start, |t| self.neg2l(t, restricted))
     }
 
-    /// The profile interval of τ_kind at level `chi2` (3.84 for 95 %): the scatters whose
-    /// criterion, the others re-estimated, lies within `chi2` of the minimum at `tau_hat`.
-    /// The lower end is 0 when the floor is inside; the upper end [`SCATTER_MAX`] when the
-    /// interval reaches it.
+    /// The profile interval of τ_kind at cutoffs `cut` ([`Cutoffs::chi2`] for the χ²₁ rule,
+    /// [`Cutoffs::small_sample`] calibrated to the effects' degrees of freedom): the scatters
+    /// whose criterion, the others re-estimated, lies within the cutoff of the minimum at
+    /// `tau_hat`. The lower end is 0 when the floor is inside; the upper end [`SCATTER_MAX`]
+    /// when the interval reaches it.
     pub fn interval(
         &self,
         kind: usize,
         tau_hat: &[f64],
-        chi2: f64,
+        cut: Cutoffs,
         restricted: bool,
     ) -> (f64, f64) {
-        profile_interval(kind, tau_hat, chi2, |t| self.neg2l(t, restricted))
+        profile_interval(kind, tau_hat, cut, |t| self.neg2l(t, restricted))
+    }
+
+    /// The effective degrees of freedom of kind `kind`'s scatter at scatter `tau`: with M the
+    /// residual maker of the fixed effects X and Z the kind's effect columns, the effects are
+    /// seen beyond the constants through ZᵀMZ, whose eigenvalues λ_j give each direction the
+    /// variance τ² + 1/λ_j; the Fisher information of ln τ² is then that of
+    /// Σ_j (τ²λ_j / (1 + τ²λ_j))² exact degrees of freedom. n − p for n groups seen precisely
+    /// whose levels p fixed effects act on (a one-way model); a direction a constant mimics
+    /// exactly (the rate factors' common level and the rate constant) counts nothing, one
+    /// the data see poorly in part. The degrees of freedom of [`Cutoffs::small_sample`].
+    pub fn effect_dof(&self, kind: usize, tau: f64) -> f64 {
+        let (n, p) = (self.blocks.len(), self.p);
+        let mut zmz = DMatrix::<f64>::from_fn(n, n, |i, l| {
+            if i == l {
+                self.blocks[i].zz[kind][kind]
+            } else {
+                0.0
+            }
+        });
+        if p > 0 {
+            let mut xx = DMatrix::<f64>::zeros(p, p);
+            for b in &self.blocks {
+                xx += &b.xx;
+            }
+            let eig = xx.symmetric_eigen();
+            let top = eig.eigenvalues.iter().fold(0.0f64, |m, v| m.max(*v));
+            // W = Λ^{-1/2} Vᵀ XᵀZ over the directions X determines: ZᵀX(XᵀX)⁺XᵀZ = WᵀW.
+            let xz = DMatrix::<f64>::from_fn(p, n, |c, i| self.blocks[i].xz[c][kind]);
+            let mut w = eig.eigenvectors.transpose() * xz;
+            for j in 0..p {
+                let l = eig.eigenvalues[j];
+                let f = if l > 1e-12 * top { 1.0 / l.sqrt() } else { 0.0 };
+                w.row_mut(j).scale_mut(f);
+            }
+            zmz -= w.transpose() * w;
+        }
+        let t2 = tau * tau;
+        zmz.symmetric_eigen()
+            .eigenvalues
+            .iter()
+            .map(|&l| {
+                let r = t2 * l.max(0.0);
+                (r / (1.0 + r)).powi(2)
+            })
+            .sum()
     }
 }
 
-/// The profile interval of τ_kind at level `chi2` under the criterion `f` (−2 ln L in the
+/// Where a scatter's profile interval ends: the rise of −2 ln L from its minimum allowed
+/// below the estimate (`lower`) and above it (`upper`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Cutoffs {
+    /// The rise at the interval's lower end.
+    pub lower: f64,
+    /// The rise at the interval's upper end.
+    pub upper: f64,
+}
+
+impl Cutoffs {
+    /// The same rise `chi2` at both ends (3.84 for the asymptotic 95 % interval).
+    pub fn chi2(chi2: f64) -> Cutoffs {
+        Cutoffs {
+            lower: chi2,
+            upper: chi2,
+        }
+    }
+
+    /// The profile's cutoffs that make a `level` interval of a scatter whose effects have
+    /// `dof` degrees of freedom ([`Lmm::effect_dof`], at least 1) the exact one of a normal
+    /// variance, [τ̂·√(d/χ²_{d,(1+level)/2}), τ̂·√(d/χ²_{d,(1−level)/2})]: there the profile
+    /// rises by d·(u − 1 − ln u) at u = (τ̂/τ)², so the cutoffs are that rise at u =
+    /// χ²_{d,q}/d. The asymptotic χ²₁ rule (3.84 at both ends) is their limit for large d;
+    /// with the 3–6 degrees of freedom of a few specimens it ends the interval about 10 %
+    /// too low above the estimate (docs/SPECIMENS.md, "The scatter's interval with few
+    /// specimens").
+    pub fn small_sample(dof: f64, level: f64) -> Cutoffs {
+        use statrs::distribution::{ChiSquared, ContinuousCDF};
+        let d = if dof >= 1.0 { dof } else { 1.0 };
+        let chi = ChiSquared::new(d).expect("d ≥ 1");
+        // The quantile by bisection in ln x on the CDF (statrs' own inverse is NaN at the
+        // 2.5 % point of one degree of freedom).
+        let quantile = |q: f64| {
+            let (mut lo, mut hi) = ((1e-12f64).ln(), (10.0 * d + 100.0).ln());
+            for _ in 0..200 {
+                let mid = 0.5 * (lo + hi);
+                if chi.cdf(mid.exp()) < q {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            (0.5 * (lo + hi)).exp()
+        };
+        let rise = |q: f64| {
+            let u = quantile(q) / d;
+            d * (u - 1.0 - u.ln())
+        };
+        Cutoffs {
+            lower: rise(0.5 * (1.0 + level)),
+            upper: rise(0.5 * (1.0 - level)),
+        }
+    }
+}
+
+/// The profile interval of τ_kind at cutoffs `cut` under the criterion `f` (−2 ln L in the
 /// scatters, minimal at `tau_hat`): the scatters whose criterion, the others re-estimated,
-/// lies within `chi2` of the minimum. The lower end is 0 when the floor is inside; the upper
-/// end [`SCATTER_MAX`] when the interval reaches it.
+/// lies within the cutoff of the minimum (`cut.lower` below `tau_hat`, `cut.upper` above).
+/// The lower end is 0 when the floor is inside; the upper end [`SCATTER_MAX`] when the
+/// interval reaches it.
 pub fn profile_interval(
     kind: usize,
     tau_hat: &[f64],
-    chi2: f64,
+    cut: Cutoffs,
     f: impl Fn(&[f64]) -> f64,
 ) -> (f64, f64) {
     let k = tau_hat.len();
@@ -396,7 +499,7 @@ pub fn profile_interval(
     };
     let lh = tau_hat[kind].clamp(SCATTER_FLOOR, SCATTER_MAX).ln();
     let (lf, lm) = (SCATTER_FLOOR.ln(), SCATTER_MAX.ln());
-    let cross = |mut inside: f64, mut outside: f64| -> f64 {
+    let cross = |mut inside: f64, mut outside: f64, chi2: f64| -> f64 {
         for _ in 0..60 {
             let mid = 0.5 * (inside + outside);
             if prof(mid) <= chi2 {
@@ -410,15 +513,15 @@ pub fn profile_interval(
         }
         0.5 * (inside + outside)
     };
-    let lo = if prof(lf) <= chi2 {
+    let lo = if prof(lf) <= cut.lower {
         0.0
     } else {
-        cross(lh, lf).exp()
+        cross(lh, lf, cut.lower).exp()
     };
-    let hi = if prof(lm) <= chi2 {
+    let hi = if prof(lm) <= cut.upper {
         SCATTER_MAX
     } else {
-        cross(lh, lm).exp()
+        cross(lh, lm, cut.upper).exp()
     };
     (lo, hi)
 }
@@ -687,7 +790,7 @@ mod tests {
         // interval covers τ in about 95 % of sets.
         let (n, p, tau) = (6usize, 2usize, 0.3f64);
         let reps = 400;
-        let (mut reml, mut ml, mut cover) = (0.0, 0.0, 0);
+        let (mut reml, mut ml, mut cover, mut cover_small) = (0.0, 0.0, 0, 0);
         for s in 0..reps {
             let (x, z, y, groups) = {
                 // X constant within a group (a constant acts on a curve's level), Z = 10.
@@ -712,9 +815,18 @@ mod tests {
             let tm = lmm.estimate(&[0.1], false)[0];
             reml += tr * tr;
             ml += tm * tm;
-            let (lo, hi) = lmm.interval(0, &[tr], 3.841_459, true);
+            let (lo, hi) = lmm.interval(0, &[tr], Cutoffs::chi2(3.841_459), true);
             if lo <= tau && tau <= hi {
                 cover += 1;
+            }
+            // The levels' fixed effects lie in the effects' span: at most n − p degrees of
+            // freedom, each effect seen through 20 rows of Z = 10 (τ²λ = 0.09 · 2000 = 180
+            // at the truth, less at a small estimate, none at the floor).
+            let dof = lmm.effect_dof(0, tr);
+            assert!(dof <= (n - p) as f64 + 1e-9, "dof {dof}");
+            let (lo, hi) = lmm.interval(0, &[tr], Cutoffs::small_sample(dof, 0.95), true);
+            if lo <= tau && tau <= hi {
+                cover_small += 1;
             }
         }
         let (reml, ml) = (reml / reps as f64, ml / reps as f64);
@@ -730,6 +842,84 @@ mod tests {
         );
         let c = cover as f64 / reps as f64;
         assert!((0.90..=0.98).contains(&c), "coverage {c}");
+        // Calibrated to the 4 degrees of freedom: 95 % within three binomial standard
+        // deviations over 400 sets (0.917–0.983).
+        let c_small = cover_small as f64 / reps as f64;
+        assert!(
+            (0.917..=0.983).contains(&c_small),
+            "coverage {c_small} (χ²₁ rule {c})"
+        );
+    }
+
+    #[test]
+    fn small_sample_cutoffs_end_the_profile_at_the_exact_interval_of_a_variance() {
+        // d = 5 by hand: χ²₅ quantiles 0.831211 (2.5 %) and 12.83250 (97.5 %); the rise
+        // d(u − 1 − ln u) at u = q/5 is 3.11979 below the estimate and 4.80276 above.
+        let c = Cutoffs::small_sample(5.0, 0.95);
+        assert!((c.lower - 3.11979).abs() < 2e-4, "{c:?}");
+        assert!((c.upper - 4.80276).abs() < 2e-4, "{c:?}");
+        // Many degrees of freedom: the asymptotic χ²₁ rule at both ends.
+        let c = Cutoffs::small_sample(1e6, 0.95);
+        assert!((c.lower - 3.841459).abs() < 0.01 && (c.upper - 3.841459).abs() < 0.01);
+        // On the profile of a normal variance from d degrees of freedom, −2 ln L(τ) =
+        // d ln τ² + d s²/τ², the interval is the χ² pivot's [s √(d/χ²_{.975}), s √(d/χ²_{.025})].
+        for (d, q_lo, q_hi) in [(3.0, 0.215795, 9.348404), (5.0, 0.831211, 12.832502)] {
+            let s = 0.08;
+            let f = |t: &[f64]| d * (t[0] * t[0]).ln() + d * s * s / (t[0] * t[0]);
+            let (lo, hi) = profile_interval(0, &[s], Cutoffs::small_sample(d, 0.95), f);
+            let (want_lo, want_hi) = (s * (d / q_hi).sqrt(), s * (d / q_lo).sqrt());
+            assert!(
+                (lo / want_lo - 1.0).abs() < 1e-4,
+                "d {d}: {lo} vs {want_lo}"
+            );
+            assert!(
+                (hi / want_hi - 1.0).abs() < 1e-4,
+                "d {d}: {hi} vs {want_hi}"
+            );
+        }
+    }
+
+    #[test]
+    fn effect_dof_counts_the_effects_beyond_the_constants() {
+        // Six groups of 10 rows, one effect per group (Z = 1 on its rows).
+        let (n, per) = (6usize, 10usize);
+        let m = n * per;
+        let groups: Vec<(usize, usize)> = (0..n).map(|i| (i * per, (i + 1) * per)).collect();
+        let mut z = DMatrix::zeros(m, n);
+        for r in 0..m {
+            z[(r, r / per)] = 1.0;
+        }
+        let y = DVector::from_fn(m, |r, _| (r as f64 * 0.37).sin());
+        let level = |r: usize| 1.0 + 0.3 * (r / per) as f64;
+        let within = |r: usize| (r % per) as f64 - 4.5;
+        // Seen precisely (τ²λ = 10⁶ · 10): whole degrees of freedom.
+        for (cols, want) in [
+            // No constants: every effect free.
+            (vec![], 6.0),
+            // A common level: n − 1.
+            (vec![&level as &dyn Fn(usize) -> f64], 5.0),
+            // A level and a trend across groups: n − 2.
+            (
+                vec![&level, &|r: usize| (r / per) as f64 * (r / per) as f64],
+                4.0,
+            ),
+            // A level and a column within the groups, orthogonal to every group's level: n − 1.
+            (vec![&level, &within], 5.0),
+        ] {
+            let x = DMatrix::from_fn(m, cols.len(), |r, c| cols[c](r));
+            let lmm = lmm_of(&x, &z, &y, &groups, 1);
+            let dof = lmm.effect_dof(0, 1e3);
+            assert!(
+                (dof - want).abs() < 1e-4,
+                "{} constants: {dof} vs {want}",
+                cols.len()
+            );
+        }
+        // Seen poorly: at τ²λ = 1 (τ² = 0.1, λ = 10 rows of Z = 1) each direction gives a
+        // quarter of the information of a precisely seen one.
+        let lmm = lmm_of(&DMatrix::zeros(m, 0), &z, &y, &groups, 1);
+        let dof = lmm.effect_dof(0, 0.1f64.sqrt());
+        assert!((dof - 1.5).abs() < 1e-9, "{dof}");
     }
 
     #[test]

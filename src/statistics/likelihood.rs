@@ -57,7 +57,7 @@ use crate::model::objective::{
     CreepProblem, CurveFactors, Evaluation, Objective, ObjectiveSettings, ParamSpace,
 };
 use crate::model::{Model, Role};
-use crate::specimen::{minimise_scatter, Lmm, ScatterMethod};
+use crate::specimen::{minimise_scatter, Cutoffs, Lmm, ScatterMethod};
 
 /// Options of [`ml_fit`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -2430,7 +2430,8 @@ fn report_hier(
 /// [`SpecimenFit::scatter_lo95`] and [`SpecimenFit::scatter_hi95`]), from the restricted
 /// likelihood of the linear mixed model at the fit ([`crate::specimen::Lmm::interval`]), or
 /// of the Laplace criterion at the modes where the estimate came from that
-/// ([`SpecimenFit::scatter_method`]).
+/// ([`SpecimenFit::scatter_method`]); the cutoffs calibrated to each kind's degrees of
+/// freedom ([`Cutoffs::small_sample`]), as a few specimens give.
 /// Kept out of every fit because the bootstrap's refits do not need it. No-op without
 /// specimen effects or when the fit cannot be evaluated again.
 pub fn scatter_intervals(
@@ -2473,20 +2474,23 @@ pub fn scatter_intervals(
     let lmm = layout.lmm(&jac, &rr, &x[nt..]);
     let g = layout.gram(&jac);
     for k in 0..kinds.len() {
+        // Calibrated to the effects' degrees of freedom beyond the constants (and the trend
+        // directions, which are fixed effects of `lmm`).
+        let cut = Cutoffs::small_sample(lmm.effect_dof(k, sp.scatter[k]), 0.95);
         // Under the criterion the estimate came from.
         let (lo, hi) = match sp.scatter_method {
             ScatterMethod::LinearMixedModel | ScatterMethod::BeyondStressTrend => {
-                lmm.interval(k, &sp.scatter, CHI2_1_95, true)
+                lmm.interval(k, &sp.scatter, cut, true)
             }
             // The upper end from the criterion at the modes (the linear model's promise of
             // gains from larger effects is what failed); the lower end from the linear model,
             // which turns exact as the effects shrink to zero, while the criterion at held
             // modes cannot let them shrink (its penalty η̂²/τ² grows without bound).
             ScatterMethod::LaplaceAtModes => {
-                let (_, hi) = crate::specimen::profile_interval(k, &sp.scatter, CHI2_1_95, |t| {
+                let (_, hi) = crate::specimen::profile_interval(k, &sp.scatter, cut, |t| {
                     crate::specimen::laplace_criterion(&lmm, &x[nt..], &g, t, true)
                 });
-                let (lo, _) = lmm.interval(k, &sp.scatter, CHI2_1_95, true);
+                let (lo, _) = lmm.interval(k, &sp.scatter, cut, true);
                 (lo.min(sp.scatter[k]), hi)
             }
         };
