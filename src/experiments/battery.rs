@@ -1315,6 +1315,7 @@ mod tests {
         let fit = |kinds: Vec<EffectKind>, s: Vec<f64>| SpecimenFit {
             scatter_lo95: s.iter().map(|v| v / 2.0).collect(),
             scatter_hi95: s.iter().map(|v| v * 2.0).collect(),
+            scatter_dof: vec![f64::NAN; s.len()],
             effects: vec![vec![]; kinds.len()],
             effects_sd: vec![vec![]; kinds.len()],
             kinds,

@@ -926,6 +926,11 @@ pub struct SpecimenFit {
     pub scatter_lo95: Vec<f64>,
     /// Per kind: upper end of the 95 % interval.
     pub scatter_hi95: Vec<f64>,
+    /// Per kind: the degrees of freedom the interval was calibrated to
+    /// ([`crate::specimen::Lmm::effect_dof`]): about the specimens less the directions the
+    /// constants take up, less where the data see the factors poorly; below 2 the data
+    /// hardly separate the scatter from the constants (NaN before [`scatter_intervals`]).
+    pub scatter_dof: Vec<f64>,
     /// Per kind, per curve: the specimen's ln factor (conditional mode; rate: its creep rate
     /// is e^η times the population's; ductility: its rupture strain e^ζ times).
     pub effects: Vec<Vec<f64>>,
@@ -2412,6 +2417,7 @@ fn report_hier(
             kinds: layout.kinds.iter().map(|k| k.0).collect(),
             scatter_lo95: vec![f64::NAN; tau.len()],
             scatter_hi95: vec![f64::NAN; tau.len()],
+            scatter_dof: vec![f64::NAN; tau.len()],
             scatter: tau,
             effects,
             effects_sd,
@@ -2476,7 +2482,9 @@ pub fn scatter_intervals(
     for k in 0..kinds.len() {
         // Calibrated to the effects' degrees of freedom beyond the constants (and the trend
         // directions, which are fixed effects of `lmm`).
-        let cut = Cutoffs::small_sample(lmm.effect_dof(k, sp.scatter[k]), 0.95);
+        let dof = lmm.effect_dof(k, sp.scatter[k]);
+        sp.scatter_dof[k] = dof;
+        let cut = Cutoffs::small_sample(dof, 0.95);
         // Under the criterion the estimate came from.
         let (lo, hi) = match sp.scatter_method {
             ScatterMethod::LinearMixedModel | ScatterMethod::BeyondStressTrend => {
@@ -3162,6 +3170,7 @@ mod tests {
             scatter: vec![0.3, 0.2],
             scatter_lo95: vec![0.1, 0.0],
             scatter_hi95: vec![0.6, 0.5],
+            scatter_dof: vec![4.0, 4.0],
             effects: vec![rate, vec![0.1; 5]],
             effects_sd: vec![vec![0.05; 5], vec![0.05; 5]],
             neg2ll_effects: 0.0,
@@ -3239,6 +3248,7 @@ mod tests {
             scatter: vec![0.3, 0.2],
             scatter_lo95: vec![0.1, 0.0],
             scatter_hi95: vec![0.6, 0.5],
+            scatter_dof: vec![4.0, 4.0],
             effects: vec![vec![0.1, 0.3, -0.2, 0.5], vec![0.0, 0.2, 0.1, -0.1]],
             effects_sd: vec![vec![0.05; 4], vec![0.05; 4]],
             neg2ll_effects: 0.0,

@@ -258,6 +258,10 @@ struct SpecimenRecord {
     scatter: Exact,
     scatter_lo95: Exact,
     scatter_hi95: Exact,
+    /// Absent from journals written before it existed (their intervals the χ²₁ rule's):
+    /// NaN, as before the intervals are computed.
+    #[serde(default)]
+    scatter_dof: Option<Exact>,
     effects: Vec<Exact>,
     effects_sd: Vec<Exact>,
     #[serde(with = "exact")]
@@ -317,6 +321,7 @@ impl From<&ModelFits> for FitsRecord {
                     scatter: Exact(s.scatter.clone()),
                     scatter_lo95: Exact(s.scatter_lo95.clone()),
                     scatter_hi95: Exact(s.scatter_hi95.clone()),
+                    scatter_dof: Some(Exact(s.scatter_dof.clone())),
                     effects: exacts(&s.effects),
                     effects_sd: exacts(&s.effects_sd),
                     neg2ll_effects: s.neg2ll_effects,
@@ -375,6 +380,9 @@ impl From<FitsRecord> for ModelFits {
                     kinds: s.kinds,
                     scatter: s.scatter.0,
                     scatter_lo95: s.scatter_lo95.0,
+                    scatter_dof: s
+                        .scatter_dof
+                        .map_or_else(|| vec![f64::NAN; s.scatter_hi95.0.len()], |d| d.0),
                     scatter_hi95: s.scatter_hi95.0,
                     effects: plain(s.effects),
                     effects_sd: plain(s.effects_sd),
@@ -514,6 +522,7 @@ mod tests {
                 scatter: vec![0.23],
                 scatter_lo95: vec![0.0],
                 scatter_hi95: vec![f64::NAN],
+                scatter_dof: vec![3.5],
                 effects: vec![vec![-0.1, 0.2 / 3.0]],
                 effects_sd: vec![vec![0.05, 0.07]],
                 neg2ll_effects: 12.5,
@@ -563,5 +572,18 @@ mod tests {
             format!("{:?}", h.fits_done("fits/1/x/0").unwrap()),
             format!("{none:?}")
         );
+        // A record written before the intervals' degrees of freedom existed reads back with
+        // them unknown (NaN), everything else as written.
+        let mut v = serde_json::to_value(FitsRecord::from(&fits)).unwrap();
+        v["best"]["specimen"]
+            .as_object_mut()
+            .unwrap()
+            .remove("scatter_dof")
+            .expect("written");
+        let old = ModelFits::from(serde_json::from_value::<FitsRecord>(v).unwrap());
+        let sp = old.best.as_ref().unwrap().specimen.as_ref().unwrap();
+        assert!(sp.scatter_dof.len() == 1 && sp.scatter_dof[0].is_nan());
+        assert_eq!(sp.scatter_hi95.len(), 1);
+        assert_eq!(sp.scatter, vec![0.23]);
     }
 }

@@ -452,11 +452,12 @@ fn specimens_md(d: &Diagnosis, setup: &DiagnoseSetup) -> String {
             continue;
         }
         s += &format!(
-            "- The {what} varies {:.0} % between specimens (sd of the ln factor {:.3}, 95 % {:.3}–{:.3}).\n",
+            "- The {what} varies {:.0} % between specimens (sd of the ln factor {:.3}, 95 % {:.3}–{:.3}{}).\n",
             crate::report::tables::lognormal_cv_pct(sp.scatter[j]),
             sp.scatter[j],
             sp.scatter_lo95[j],
-            sp.scatter_hi95[j]
+            sp.scatter_hi95[j],
+            crate::report::tables::scatter_dof_note(sp.scatter_dof.get(j).copied())
         );
     }
     if sp.scatter_method != crate::specimen::ScatterMethod::LinearMixedModel {

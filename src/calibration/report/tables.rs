@@ -712,6 +712,24 @@ pub fn lognormal_cv_pct(s: f64) -> f64 {
     100.0 * (s * s).exp_m1().sqrt()
 }
 
+/// Below this many degrees of freedom ([`crate::specimen::Lmm::effect_dof`]) the data hardly
+/// separate a scatter from the constants: fewer than two specimens' worth beyond them.
+pub const FEW_SCATTER_DOF: f64 = 2.0;
+
+/// What a scatter's interval rests on, for a printed line after its ends: ", from 4.2
+/// degrees of freedom", and where they are fewer than [`FEW_SCATTER_DOF`] that the data hardly
+/// separate the scatter from the constants; empty when unknown (an interval computed before
+/// they were counted, or none).
+pub fn scatter_dof_note(dof: Option<f64>) -> String {
+    match dof {
+        Some(d) if d.is_finite() && d < FEW_SCATTER_DOF => format!(
+            ", from {d:.1} degrees of freedom: the data hardly separate it from the constants"
+        ),
+        Some(d) if d.is_finite() => format!(", from {d:.1} degrees of freedom"),
+        _ => String::new(),
+    }
+}
+
 /// A p-value for a printed line: three decimals, or two significant digits below 0.001.
 pub fn p_text(p: f64) -> String {
     if p.is_finite() && p < 1e-3 {
@@ -744,6 +762,7 @@ pub fn specimens_json(sp: &crate::fit::FitSpecimens) -> Value {
                         "sd_ln": jnum(f.scatter[j]),
                         "sd_ln_lo95": jnum(f.scatter_lo95[j]),
                         "sd_ln_hi95": jnum(f.scatter_hi95[j]),
+                        "sd_ln_dof": jnum(f.scatter_dof.get(j).copied().unwrap_or(f64::NAN)),
                         "cv_pct": jnum(lognormal_cv_pct(f.scatter[j])),
                         "at_bound": crate::likelihood::scatter_at_bound(f.scatter[j]),
                     }),
@@ -952,5 +971,25 @@ mod tests {
         let file = std::fs::read_to_string(&path).unwrap();
         assert_eq!(csv_text(&header, rows.iter()), file);
         assert!(file.starts_with("name,value,note\nA,0.0000000001,\"a, quoted\"\nB,,\n"));
+    }
+
+    #[test]
+    fn a_scatter_from_few_degrees_of_freedom_says_so() {
+        for (dof, want) in [
+            (None, ""),
+            (Some(f64::NAN), ""),
+            (Some(4.23), ", from 4.2 degrees of freedom"),
+            (Some(2.0), ", from 2.0 degrees of freedom"),
+            (
+                Some(1.96),
+                ", from 2.0 degrees of freedom: the data hardly separate it from the constants",
+            ),
+            (
+                Some(0.4),
+                ", from 0.4 degrees of freedom: the data hardly separate it from the constants",
+            ),
+        ] {
+            assert_eq!(scatter_dof_note(dof), want, "{dof:?}");
+        }
     }
 }

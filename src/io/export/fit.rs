@@ -188,11 +188,12 @@ fn print_specimens(sp: &crate::fit::FitSpecimens) {
                 continue;
             }
             println!(
-                "specimens: the {what} varies {:.0} % between specimens (sd of ln factor {:.3}, 95 % {:.3}–{:.3}; specimens.csv: each specimen's factor)",
+                "specimens: the {what} varies {:.0} % between specimens (sd of ln factor {:.3}, 95 % {:.3}–{:.3}{}; specimens.csv: each specimen's factor)",
                 tables::lognormal_cv_pct(f.scatter[j]),
                 f.scatter[j],
                 f.scatter_lo95[j],
-                f.scatter_hi95[j]
+                f.scatter_hi95[j],
+                tables::scatter_dof_note(f.scatter_dof.get(j).copied())
             );
         }
         if f.scatter_method != crate::specimen::ScatterMethod::LinearMixedModel {
