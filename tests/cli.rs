@@ -694,6 +694,20 @@ fn specimen_factors_by_temperature_and_campaign() {
     );
     assert!(data_term <= objective + 1e-6, "{data_term} vs {objective}");
     let sp_json = &s["specimens"];
+    // The scatter's interval and the degrees of freedom it was calibrated to: 34 specimens,
+    // less the directions the constants take up exactly — the rate factors' level and their
+    // trend in 1/T (A's Arrhenius law), the ductility factors' level (C has no law).
+    for (kind, most) in [("rate", 32.0), ("ductility", 33.0)] {
+        let k = &sp_json["scatter"][kind];
+        let num = |key: &str| k[key].as_f64().unwrap_or(f64::NAN);
+        let dof = num("sd_ln_dof");
+        assert!(dof > 2.0 && dof <= most + 1e-6, "{kind}: {k}");
+        assert!(
+            num("sd_ln_lo95") < num("sd_ln") && num("sd_ln") < num("sd_ln_hi95"),
+            "{kind}: {k}"
+        );
+    }
+    assert!(stdout.contains("degrees of freedom"), "{stdout}");
     assert_eq!(
         check(&sp_json["by_temperature"], &|r| format!("{} °C", r[t])),
         4
