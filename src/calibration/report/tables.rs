@@ -720,13 +720,27 @@ pub const FEW_SCATTER_DOF: f64 = 2.0;
 /// degrees of freedom", and where they are fewer than [`FEW_SCATTER_DOF`] that the data hardly
 /// separate the scatter from the constants; empty when unknown (an interval computed before
 /// they were counted, or none).
+/// The count is printed to one decimal, or where rounding would put it on the other side of
+/// [`FEW_SCATTER_DOF`] than the words, cut (not rounded) to two (1.96 reads "1.96", 1.999
+/// "1.99", never "2.0 … hardly separate").
 pub fn scatter_dof_note(dof: Option<f64>) -> String {
-    match dof {
-        Some(d) if d.is_finite() && d < FEW_SCATTER_DOF => format!(
-            ", from {d:.1} degrees of freedom: the data hardly separate it from the constants"
-        ),
-        Some(d) if d.is_finite() => format!(", from {d:.1} degrees of freedom"),
-        _ => String::new(),
+    let Some(d) = dof.filter(|d| d.is_finite()) else {
+        return String::new();
+    };
+    let few = d < FEW_SCATTER_DOF;
+    let one = format!("{d:.1}");
+    let crosses = one
+        .parse::<f64>()
+        .is_ok_and(|r| (r < FEW_SCATTER_DOF) != few);
+    let text = if crosses {
+        format!("{:.2}", (d * 100.0).floor() / 100.0)
+    } else {
+        one
+    };
+    if few {
+        format!(", from {text} degrees of freedom: the data hardly separate it from the constants")
+    } else {
+        format!(", from {text} degrees of freedom")
     }
 }
 
@@ -982,7 +996,15 @@ mod tests {
             (Some(2.0), ", from 2.0 degrees of freedom"),
             (
                 Some(1.96),
-                ", from 2.0 degrees of freedom: the data hardly separate it from the constants",
+                ", from 1.96 degrees of freedom: the data hardly separate it from the constants",
+            ),
+            (
+                Some(1.999),
+                ", from 1.99 degrees of freedom: the data hardly separate it from the constants",
+            ),
+            (
+                Some(1.94),
+                ", from 1.9 degrees of freedom: the data hardly separate it from the constants",
             ),
             (
                 Some(0.4),
