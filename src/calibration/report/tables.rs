@@ -720,6 +720,7 @@ pub const FEW_SCATTER_DOF: f64 = 2.0;
 /// degrees of freedom", and where they are fewer than [`FEW_SCATTER_DOF`] that the data hardly
 /// separate the scatter from the constants; empty when unknown (an interval computed before
 /// they were counted, or none).
+///
 /// The count is printed to one decimal, or where rounding would put it on the other side of
 /// [`FEW_SCATTER_DOF`] than the words, cut (not rounded) to two (1.96 reads "1.96", 1.999
 /// "1.99", never "2.0 … hardly separate").
