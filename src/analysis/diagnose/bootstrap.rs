@@ -15,6 +15,11 @@
 //! A test whose p-value after the first replicates is close to significance (at most α/2,
 //! where Holm's thresholds are a few replicates apart) goes on to more ([`Depth`]); its
 //! p-value is then the one over all of them, and the rule's p-values stay exact.
+//! Where the tests sampled together are the whole family of Holm's procedure, sampling also
+//! stops once every test's p-value is bound above Holm's smallest threshold and the
+//! extension's level ([`Depth::settled`]): nothing can be rejected any more, so every
+//! decision is the one the whole run would make; the p-values reported are then those of the
+//! replicates drawn, each above that bound.
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -369,7 +374,8 @@ pub struct Sampled {
     /// Per statistic: the leading replicates in which it was computed (all of them unless its
     /// test was decided and dropped).
     pub computed: Vec<usize>,
-    /// Sampling stopped before `max`: every test was clearly not significant.
+    /// Sampling stopped before `first`: every test was clearly not significant, or (with
+    /// [`Depth::with_family_stop`]) the family was settled as not rejected.
     pub stopped_early: bool,
 }
 
@@ -395,6 +401,10 @@ pub struct Depth {
     most: usize,
     /// The p-value after `first` at or below which a test goes on to `most`.
     extend_p: f64,
+    /// The level of Holm's procedure over the tests sampled together (the finite observed
+    /// statistics), where sampling may stop once it can reject none of them
+    /// ([`Depth::settled`]); `None`: no such stop.
+    family_alpha: Option<f64>,
 }
 
 impl Depth {
@@ -405,7 +415,39 @@ impl Depth {
             first,
             most: most.max(first),
             extend_p,
+            family_alpha: None,
         }
+    }
+
+    /// The same, and sampling stops as soon as Holm's procedure at `alpha` over the tests
+    /// sampled together can reject none of them whatever the later replicates
+    /// ([`Depth::settled`]): only for a bootstrap whose tests are the whole family Holm's
+    /// procedure is applied to.
+    pub fn with_family_stop(self, alpha: f64) -> Depth {
+        Depth {
+            family_alpha: Some(alpha),
+            ..self
+        }
+    }
+
+    /// Whether the tests sampled together, `exceed[k]` replicates at or above test k's
+    /// observed statistic so far, are settled as not rejected: every test's p-value after
+    /// `first` can only be at least (exceed + 1)/(first + 1), and where that is above both
+    /// Holm's smallest threshold α/m (m = `exceed.len()`) and `extend_p` (so that no test
+    /// goes on to `most`, where its p-value could fall), Holm's first step rejects nothing
+    /// and so nothing at all: the decisions are the ones the whole `first` replicates would
+    /// give. False without [`Depth::with_family_stop`] or tests.
+    pub fn settled(&self, exceed: &[usize]) -> bool {
+        let Some(alpha) = self.family_alpha else {
+            return false;
+        };
+        if exceed.is_empty() {
+            return false;
+        }
+        let bound = (alpha / exceed.len() as f64).max(self.extend_p);
+        exceed
+            .iter()
+            .all(|&g| (g + 1) as f64 / (self.first + 1) as f64 > bound)
     }
 
     /// `max` replicates, no extension (the rule before session 59).
@@ -461,7 +503,8 @@ where
 
 /// Run replicates of `one` in batches to `depth.first`; after each batch stop if every one
 /// of the `observed` statistics has at least [`STOP_EXCEEDANCES`] replicates at or above it
-/// (NaN: a failed refit, counted as at or above). A statistic marked `droppable` whose test
+/// (NaN: a failed refit, counted as at or above), or, with [`Depth::with_family_stop`], once
+/// Holm's procedure over them can reject none ([`Depth::settled`]). A statistic marked `droppable` whose test
 /// has reached that count on its own (or whose observed value is not finite) is decided:
 /// `one(b, active)` is told so through `active[k] = false` and may leave it NaN from then
 /// on. After `depth.first` the tests [`Depth::goes_on`] keeps go on to `depth.most`
@@ -510,7 +553,11 @@ where
         let done = (0..n).all(|k| {
             !observed[k].is_finite() || exceed(&out[..computed[k]], k) >= STOP_EXCEEDANCES
         });
-        if done && out.len() < first {
+        let tested: Vec<usize> = (0..n)
+            .filter(|&k| observed[k].is_finite())
+            .map(|k| exceed(&out[..computed[k]], k))
+            .collect();
+        if (done || depth.settled(&tested)) && out.len() < first {
             return Sampled {
                 reps: out,
                 computed,
@@ -927,6 +974,19 @@ mod tests {
             assert!((p0 - 1.0 / (most + 1.0)).abs() < 1e-12, "{depth:?}: {p0}");
             assert!((pr0 - 1.0 / (most + 1.0)).abs() < 1e-9, "{depth:?}: {pr0}");
         }
+        // With the family stop a test's p-value stays valid at every level, even where the
+        // other tests of its family are settled from the start (its own exceedances alone
+        // end the run: the earliest stop it can meet), m = 1, 2 and 8.
+        for m in [1usize, 2, 8] {
+            let depth = Depth::new(159, 639, 0.025).with_family_stop(0.05);
+            let dist = null_p_distribution(&depth, |n, g| {
+                let mut family = vec![1000; m];
+                family[0] = g;
+                depth.goes_on(n, g) && !(n < depth.first && depth.settled(&family))
+            });
+            let worst = worst_size_ratio(&dist);
+            assert!(worst <= 1.0 + 1e-9, "m = {m}: P(p ≤ a)/a reaches {worst}");
+        }
         // The check can fail: stopping as soon as the p-value looks significant is not a
         // valid rule, and the DP says so.
         let depth = Depth::new(159, 639, 0.025);
@@ -934,6 +994,95 @@ mod tests {
             depth.goes_on(n, g) && (g + 1) as f64 / (n + 1) as f64 > 0.02
         });
         assert!(worst_size_ratio(&peeking) > 1.2);
+    }
+
+    #[test]
+    fn a_family_is_settled_once_holm_can_reject_nothing() {
+        let d = Depth::new(159, 639, 0.025).with_family_stop(0.05);
+        // (exceedances so far, settled): m = 8, bound max(0.05/8, 0.025) = 0.025 = 4/160.
+        let eight = |g: usize, last: usize| {
+            let mut v = vec![g; 7];
+            v.push(last);
+            v
+        };
+        for (exceed, want) in [
+            (eight(4, 4), true),   // 5/160 = 0.03125 > 0.025
+            (eight(4, 3), false),  // 4/160 = 0.025 is not above it: could still reject
+            (eight(10, 0), false), // one test with nothing above its statistic yet
+            (eight(20, 10), true),
+            (vec![8], true),  // m = 1: bound α = 0.05; 9/160 = 0.05625
+            (vec![7], false), // 8/160 = 0.05
+            (vec![], false),  // no tests: nothing to settle
+        ] {
+            assert_eq!(d.settled(&exceed), want, "{exceed:?}");
+        }
+        // m = 1 with a looser extension level: the extension's level bounds it.
+        let wide = Depth::new(159, 639, 0.1).with_family_stop(0.05);
+        assert!(!wide.settled(&[8])); // 0.05625 ≤ 0.1: may go on to 639 and fall
+        assert!(wide.settled(&[16])); // 17/160 = 0.10625
+                                      // Without the family stop, never.
+        assert!(!Depth::new(159, 639, 0.025).settled(&[100, 100]));
+    }
+
+    /// Holm's decisions at `alpha` over the p-values of every test of `s`.
+    fn holm_decisions(observed: &[f64], s: &Sampled, alpha: f64) -> Vec<bool> {
+        let p: Vec<f64> = (0..observed.len())
+            .map(|k| p_value(observed[k], &s.column(k)))
+            .collect();
+        crate::diagnose::decide::holm(&p, alpha).0
+    }
+
+    /// The family stop changes no decision: over many families of tests whose statistics
+    /// sit anywhere from far beyond their nulls to well inside them (p-values from 0 to 1,
+    /// many near Holm's thresholds), Holm's decisions on the stopped run are those of the
+    /// whole run, which it never exceeds; and it does stop some runs early.
+    #[test]
+    fn the_family_stop_makes_the_decisions_of_the_whole_run() {
+        let alpha = 0.05;
+        let depth = Depth::new(159, 639, alpha / 2.0);
+        let mut stopped = 0;
+        let mut rejecting = 0;
+        for case in 0..400u64 {
+            let mut rng = ChaCha8Rng::seed_from_u64(6200 + case);
+            let m = 1 + (case % 6) as usize;
+            // Test k's replicate exceeds its observed statistic with probability q[k].
+            let q: Vec<f64> = (0..m)
+                .map(|_| match rng.gen_range(0..4) {
+                    0 => 0.0,
+                    1 => rng.gen_range(0.0..0.06),
+                    2 => rng.gen_range(0.02..0.2),
+                    _ => rng.gen_range(0.0..1.0),
+                })
+                .collect();
+            let one = |b: usize, _: &[bool]| {
+                let mut r = ChaCha8Rng::seed_from_u64(case * 100_000 + b as u64);
+                q.iter()
+                    .map(|&qk| if r.gen::<f64>() < qk { 2.0 } else { 0.0 })
+                    .collect::<Vec<f64>>()
+            };
+            let observed = vec![1.0; m];
+            let droppable = vec![false; m];
+            let whole = sequential_in(&observed, &droppable, depth, one, |_| {});
+            let family = depth.with_family_stop(alpha);
+            let fast = sequential_in(&observed, &droppable, family, one, |_| {});
+            let want = holm_decisions(&observed, &whole, alpha);
+            assert_eq!(
+                holm_decisions(&observed, &fast, alpha),
+                want,
+                "case {case}: {q:?}"
+            );
+            assert!(fast.reps.len() <= whole.reps.len());
+            assert_eq!(&whole.reps[..fast.reps.len()], &fast.reps[..]);
+            if fast.reps.len() < whole.reps.len() {
+                stopped += 1;
+                // Stopped only where nothing is rejected, each p-value above the bound.
+                assert!(!want.iter().any(|r| *r), "case {case}");
+            }
+            rejecting += want.iter().any(|r| *r) as usize;
+        }
+        // Not vacuous: both kinds of family occur, and the stop saves replicates (79 and
+        // 289 of the 400 families).
+        assert!(stopped >= 50 && rejecting >= 50, "{stopped} {rejecting}");
     }
 
     #[test]

@@ -737,7 +737,8 @@ pub struct BootstrapInfo {
     pub max: usize,
     /// The most that were allowed for a test close to significance (p ≤ α/2 after `max`).
     pub most: usize,
-    /// Sampling stopped early: every test was clearly not significant.
+    /// Sampling stopped early: every test was clearly not significant (10 null statistics
+    /// at or above its own), or Holm's procedure could reject none of them any more.
     pub stopped_early: bool,
     /// The spread of the specimens' own shapes the replicates' new specimens were given,
     /// resampled from the data's specimens ([`bootstrap::SpecimenShapes`]): root mean square
@@ -1268,7 +1269,7 @@ fn gof_bootstrap(
         &key,
         &observed,
         &none,
-        depth_of(dc),
+        depth_of(dc).with_family_stop(dc.alpha),
         |b, _| {
             let mut rng = bootstrap::replicate_rng(dc.seed, GOF_STREAM, b);
             let (data, drawn) = bootstrap::replicate_hier_drawn(
@@ -1596,7 +1597,7 @@ pub fn diagnose_observed(
         &key,
         &observed_seq,
         &droppable,
-        depth_of(dc),
+        depth_of(dc).with_family_stop(dc.alpha),
         |b, active| {
             null_replicate(
                 specs, &fits, &basins, curves, &warm, &ml, dc, &shapes, &reading, b, active,
