@@ -369,6 +369,11 @@ fn diagnosis_json_keeps_its_contract() {
         .collect();
     assert!(!again.is_empty(), "no test was run again at 590 °C");
     let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    // The Method says how many replicates were drawn where sampling stopped early.
+    assert_eq!(
+        md.contains("drawn: sampling stopped once no test could become significant"),
+        d["bootstrap"]["stopped_early"].as_bool().unwrap()
+    );
     assert!(
         md.contains(&format!(
             "p-values are the second run's ({})",

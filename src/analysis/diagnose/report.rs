@@ -286,7 +286,13 @@ pub fn report_md(name: &str, setup: &DiagnoseSetup, d: &Diagnosis) -> String {
         } else {
             "common to the curves, and per curve"
         },
-        if d.bootstrap.most > d.bootstrap.max {
+        if d.bootstrap.stopped_early {
+            format!(
+                "at most {} ({} drawn: sampling stopped once no test could become \
+                 significant any more)",
+                d.bootstrap.max, d.bootstrap.replicates
+            )
+        } else if d.bootstrap.most > d.bootstrap.max {
             format!(
                 "{} (up to {} for a test whose p-value after {} is at most α/2, where Holm's \
                  thresholds are a few replicates apart)",
