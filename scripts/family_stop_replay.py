@@ -4,8 +4,8 @@
 For each diagnosis.json given (or found under the folders given), the null statistics it
 stored (`bootstrap.null_statistics`, replicate order) are read again batch by batch (10
 replicates) and the first batch end is found where Holm's procedure over the family could
-reject none of the tests any more: every test's (g + 1)/(first + 1) above max(α/m, α/2),
-g its replicates at or above its observed statistic (a failed refit counts as at or above),
+reject none of the tests any more: every test's (g + 1)/(first + 1) above α/m (and above α/2
+too where tests may go on past `max`, `bootstrap.most` > `max`), g its replicates at or above its observed statistic (a failed refit counts as at or above),
 m the family's size (every extension with an observed ratio, and the goodness-of-fit
 shapes that decide: the two beyond specimen shapes with specimen effects, the other two
 without). Prints, per diagnosis, the replicates the run drew and those it would draw with
@@ -36,7 +36,9 @@ def replay(d):
     drawn = d["bootstrap"]["replicates"]
     if not fam:
         return drawn, drawn
-    bound = max(alpha / len(fam), alpha / 2.0)
+    bound = alpha / len(fam)
+    if d["bootstrap"]["most"] > first:
+        bound = max(bound, alpha / 2.0)
     for n in range(10, min(drawn, first) + 1, 10):
         settled = True
         for t in fam:
