@@ -16,10 +16,10 @@
 //! where Holm's thresholds are a few replicates apart) goes on to more ([`Depth`]); its
 //! p-value is then the one over all of them, and the rule's p-values stay exact.
 //! Where the tests sampled together are the whole family of Holm's procedure, sampling also
-//! stops once every test's p-value is bound above Holm's smallest threshold and the
-//! extension's level ([`Depth::settled`]): nothing can be rejected any more, so every
-//! decision is the one the whole run would make; the p-values reported are then those of the
-//! replicates drawn, each above that bound.
+//! stops once every test's p-value is bound above Holm's smallest threshold α/m (and above
+//! the extension's level where tests may be extended; [`Depth::settled`]): nothing can be
+//! rejected any more, so every decision is the one the whole run would make; the p-values
+//! reported are then those of the replicates drawn, each above that bound.
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -981,12 +981,11 @@ mod tests {
             assert!((p0 - 1.0 / (most + 1.0)).abs() < 1e-12, "{depth:?}: {p0}");
             assert!((pr0 - 1.0 / (most + 1.0)).abs() < 1e-9, "{depth:?}: {pr0}");
         }
-        // With the family stop a test's p-value stays valid at every level, even where the
-        // other tests of its family are settled from the start (its own exceedances alone
-        // end the run: the earliest stop it can meet), m = 1, 2 and 8.
-        // Without extension (the defaults) the stop comes as soon as every test of a family
-        // of 8 has one replicate at or above its statistic; the other tests may settle at any
-        // batch (t0), after which this test's own first exceedance ends the run.
+        // With the family stop a test's p-value stays valid at every level (m = 1, 2, 8; with
+        // and without extension): the family's other tests settle at some batch t0 (from the
+        // first on: the earliest stop this test can meet), after which its own exceedances
+        // end the run. Without extension and m = 8 that is its first replicate at or above
+        // its statistic.
         for (first, most) in [(159, 639), (159, 159)] {
             for m in [1usize, 2, 8] {
                 for t0 in (10..first).step_by(10) {
