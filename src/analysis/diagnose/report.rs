@@ -60,7 +60,7 @@ pub fn report_md(name: &str, setup: &DiagnoseSetup, d: &Diagnosis) -> String {
         d.alpha,
         d.bootstrap.replicates,
         if d.bootstrap.stopped_early {
-            ", stopped early: no test near significance"
+            ", stopped early: no test could become significant"
         } else {
             ""
         }
