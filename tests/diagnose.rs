@@ -521,6 +521,18 @@ fn a_diagnosis_that_can_reject_nothing_stops_its_bootstrap_early() {
         );
     }
     let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    // Each test's line says how many replicates its p-value is from: its resolution.
+    for c in cands {
+        let n = c["null_replicates"].as_u64().unwrap();
+        assert!(n <= drawn, "{c}");
+        let line = format!(
+            "- {}: LR {:.2}, bootstrap p = {:.3} ({n} replicates)",
+            c["name"].as_str().unwrap(),
+            c["lr"].as_f64().unwrap(),
+            c["p_value"].as_f64().unwrap()
+        );
+        assert!(md.contains(&line), "{line}");
+    }
     assert!(md.contains(&format!(
         "at most {max} ({drawn} drawn: sampling stopped once no test could become significant"
     )));

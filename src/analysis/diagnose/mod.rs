@@ -1925,6 +1925,14 @@ pub fn shape_name(s: gof::Shape) -> &'static str {
     }
 }
 
+/// " (N replicates)" beside a bootstrap p-value: its resolution, 1/(N + 1) — a test decided
+/// early, or a run stopped early, reports a p-value from fewer than the run's most.
+fn replicates_words(n: Option<usize>) -> String {
+    n.map_or(String::new(), |n| {
+        format!(" ({n} replicate{})", if n == 1 { "" } else { "s" })
+    })
+}
+
 /// Number of fitted constants of the base model.
 fn cands_k0(specs: &[Spec]) -> f64 {
     specs[0].space.n_free() as f64
@@ -1948,10 +1956,11 @@ fn decision_words(
     )];
     for c in cands {
         out.push(format!(
-            "{}: LR {:.2}, bootstrap p = {:.3}, Holm-adjusted {:.3} → {}",
+            "{}: LR {:.2}, bootstrap p = {:.3}{}, Holm-adjusted {:.3} → {}",
             c.name,
             c.lr,
             c.p_value.unwrap_or(f64::NAN),
+            replicates_words(c.null_replicates),
             c.p_holm.unwrap_or(f64::NAN),
             if c.significant {
                 "rejects the base model"
@@ -1962,7 +1971,7 @@ fn decision_words(
     }
     for g in base_gof.iter().filter(|g| !g.decides) {
         out.push(format!(
-            "base goodness of fit, {} shape (reported, not part of the family: {}): G {:.1}, bootstrap p = {:.3}",
+            "base goodness of fit, {} shape (reported, not part of the family: {}): G {:.1}, bootstrap p = {:.3}{}",
             shape_name(g.gof.shape),
             if g.gof.shape.beyond_specimens() {
                 "without specimen effects every curve's own shape is model error"
@@ -1970,16 +1979,18 @@ fn decision_words(
                 "with specimen effects a shape of each specimen's own is specimen scatter"
             },
             g.gof.statistic,
-            g.p_value
+            g.p_value,
+            replicates_words(Some(g.replicates))
         ));
     }
     for g in base_gof.iter().filter(|g| g.decides) {
         let rejected = g.p_holm.unwrap_or(1.0) <= dc.alpha && sel.base_gof_rejected;
         out.push(format!(
-            "base goodness of fit, {} shape: G {:.1}, bootstrap p = {:.3}, Holm-adjusted {:.3} → {}",
+            "base goodness of fit, {} shape: G {:.1}, bootstrap p = {:.3}{}, Holm-adjusted {:.3} → {}",
             shape_name(g.gof.shape),
             g.gof.statistic,
             g.p_value,
+            replicates_words(Some(g.replicates)),
             g.p_holm.unwrap_or(f64::NAN),
             if rejected {
                 "a misfit beyond the error model remains"
@@ -2012,10 +2023,11 @@ fn decision_words(
             cause_gof
                 .iter()
                 .map(|g| format!(
-                    "{} shape G {:.1}, p = {:.3}{}",
+                    "{} shape G {:.1}, p = {:.3}{}{}",
                     shape_name(g.gof.shape),
                     g.gof.statistic,
                     g.p_value,
+                    replicates_words(Some(g.replicates)),
                     if g.decides { "" } else { " (reported only)" }
                 ))
                 .collect::<Vec<_>>()
