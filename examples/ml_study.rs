@@ -102,7 +102,10 @@ fn main() -> anyhow::Result<()> {
             anyhow::bail!("no fit to add specimen effects to");
         };
         let t = Instant::now();
-        let spo = setup.specimen_effects.resolve(&curves).0;
+        let spo = setup
+            .specimen_effects
+            .resolve(&curves, setup.specimen_scatter)
+            .0;
         let h = with_specimens(
             best.clone(),
             spec.model.as_ref(),

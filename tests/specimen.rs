@@ -1311,7 +1311,10 @@ fn a_nested_warm_fit_never_ends_above_the_base_optimum() {
     let ml = MlOptions {
         lifetime_sd_floor: cfg.diagnose.lifetime_sd_floor,
         white_first: false,
-        specimen: setup.specimen_effects.resolve(&curves).0,
+        specimen: setup
+            .specimen_effects
+            .resolve(&curves, setup.specimen_scatter)
+            .0,
         hold_scatter: None,
     };
     let mut base_ll = f64::NAN;
@@ -1458,13 +1461,15 @@ fn fits_hierarchical_polish_goes_on_while_it_gains() {
     let text = std::fs::read_to_string(root.join("configs/alloy617-900C.toml"))
         .unwrap()
         .replace("../data/", &format!("{}/data/", root.display()));
-    // Three kinds of specimen effects (the configuration's until 2026-12-02; it fits none
-    // at 900 °C since, having no replicates there), under the likelihood objective.
+    // Three kinds of specimen effects (the configuration's until 2026-12-02), under the
+    // likelihood objective, their scatter the likelihood's own (the configuration's until
+    // 2026-12-03; since, two kinds beyond the stress trend).
     let auto = "specimen_effects = \"auto\"\n";
-    assert!(text.contains(auto));
+    let beyond = "specimen_scatter = \"beyond_stress_trend\"\n";
+    assert!(text.contains(auto) && text.contains(beyond));
     std::fs::write(
         &cfg,
-        text.replace(auto, "").replace(
+        text.replace(auto, "").replace(beyond, "").replace(
             "[objective]\n",
             "[objective]\nkind = \"likelihood\"\nspecimen_effects = [\"rate\", \"ductility\", \"coarsening\"]\n",
         ),

@@ -42,6 +42,30 @@ pub fn shares_a_condition(conditions: impl Iterator<Item = (f64, f64)>) -> bool 
         .any(|(i, a)| c[i + 1..].iter().any(|b| a == b))
 }
 
+/// Degrees of freedom the specimens' factors keep beyond a level per temperature and, where a
+/// temperature has two stresses or more, a straight line in ln σ there (the directions
+/// `specimen_scatter = "beyond_stress_trend"` takes out of the scatter): Σ_T (n_T − 1 − [two
+/// stresses or more at T]) over the tests' `conditions` (temperature °C, stress MPa), one per
+/// specimen. An upper bound: the constants take further directions.
+pub fn dof_beyond_trend(conditions: impl Iterator<Item = (f64, f64)>) -> usize {
+    let mut c: Vec<(f64, f64)> = conditions.collect();
+    c.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    let mut dof = 0;
+    let mut i = 0;
+    while i < c.len() {
+        let t = c[i].0;
+        let at: Vec<f64> = c[i..]
+            .iter()
+            .take_while(|x| x.0 == t)
+            .map(|x| x.1)
+            .collect();
+        i += at.len();
+        let two_stresses = at.iter().any(|s| *s != at[0]);
+        dof += at.len() - 1 - usize::from(two_stresses);
+    }
+    dof
+}
+
 /// Most kinds of specimen effect a curve carries (rate, ductility, coarsening).
 pub const MAX_KINDS: usize = 3;
 /// A k × k matrix of the effects (k ≤ [`MAX_KINDS`], the rest zero).
@@ -637,6 +661,40 @@ mod tests {
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
     use rand_distr::{Distribution, StandardNormal};
+
+    /// (conditions, degrees of freedom beyond a level and a line in ln σ per temperature).
+    #[test]
+    fn degrees_of_freedom_beyond_the_trend_count_specimens_past_level_and_line() {
+        for (conds, want) in [
+            (vec![], 0),
+            (vec![(900.0, 30.0)], 0),
+            // Two stresses: a level and a line take both.
+            (vec![(900.0, 30.0), (900.0, 35.0)], 0),
+            // Alloy 617 at 900 °C: seven specimens, seven stresses.
+            ((0..7).map(|k| (900.0, 25.0 + 5.0 * k as f64)).collect(), 5),
+            // Four specimens at three stresses (a replicate pair): 4 − 2.
+            (
+                vec![(600.0, 80.0), (600.0, 91.0), (600.0, 80.0), (600.0, 104.0)],
+                2,
+            ),
+            // Replicates at one stress only: a level, no line.
+            (vec![(600.0, 80.0), (600.0, 80.0), (600.0, 80.0)], 2),
+            // Per temperature, in any order: 3 − 2 at 850, 1 − 1 at 900, 2 − 2 at 950.
+            (
+                vec![
+                    (950.0, 20.0),
+                    (850.0, 40.0),
+                    (900.0, 30.0),
+                    (850.0, 45.0),
+                    (950.0, 25.0),
+                    (850.0, 50.0),
+                ],
+                1,
+            ),
+        ] {
+            assert_eq!(dof_beyond_trend(conds.iter().copied()), want, "{conds:?}");
+        }
+    }
 
     #[test]
     fn replicates_are_two_tests_at_one_temperature_and_stress() {

@@ -134,7 +134,7 @@ impl ObjectiveConfig {
         &self,
         curves: &[crate::data::Curve],
     ) -> (crate::likelihood::SpecimenOptions, Option<String>) {
-        let (o, note) = self.specimen_effects.resolve(curves);
+        let (o, note) = self.specimen_effects.resolve(curves, self.specimen_scatter);
         (o.with_scatter(self.specimen_scatter), note)
     }
 }
@@ -143,7 +143,9 @@ impl ObjectiveConfig {
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(untagged)]
 pub enum SpecimenEffects {
-    /// `"auto"`: both kinds with replicates in the data, none without.
+    /// `"auto"`: both kinds with replicates in the data; without, both where the scatter is
+    /// estimated beyond the stress trend from at least [`MIN_DOF_BEYOND_TREND`] degrees of
+    /// freedom, none otherwise.
     Auto(AutoWord),
     /// Exactly these kinds.
     Kinds(Vec<crate::likelihood::EffectKind>),
@@ -157,21 +159,43 @@ pub enum AutoWord {
     Auto,
 }
 
+/// Fewest degrees of freedom beyond the within-temperature stress trend
+/// ([`crate::specimen::dof_beyond_trend`]) at which `auto` fits specimen effects to data
+/// without replicates, with `specimen_scatter = "beyond_stress_trend"`: with one, the scatter
+/// is a single specimen's departure from the line, and its interval has no upper end.
+pub const MIN_DOF_BEYOND_TREND: usize = 2;
+
 impl SpecimenEffects {
-    /// The effects for `curves`, and a note for the user when `auto` left them out.
+    /// The effects for `curves` when the scatter is estimated by `scatter`, and a note for the
+    /// user when `auto` decided from the design: effects left out, or fitted without replicates.
+    /// Without replicates the scatter can be told from the constants' stress dependence only
+    /// beyond it: a null set with specimen scatter and one specimen per stress, fitted
+    /// without effects, reads the specimens' differences as misfit (docs/SPECIMENS.md,
+    /// "Session 63").
     pub fn resolve(
         &self,
         curves: &[crate::data::Curve],
+        scatter: crate::likelihood::SpecimenScatter,
     ) -> (crate::likelihood::SpecimenOptions, Option<String>) {
-        use crate::likelihood::{EffectKind, SpecimenOptions};
+        use crate::likelihood::{EffectKind, SpecimenOptions, SpecimenScatter};
         match self {
             SpecimenEffects::Auto(_) => {
+                let dof = crate::specimen::dof_beyond_trend(
+                    curves.iter().map(|c| (c.temperature_c, c.stress_mpa)),
+                );
                 if crate::specimen::has_replicates(curves) {
                     (SpecimenOptions::BOTH, None)
+                } else if scatter == SpecimenScatter::BeyondStressTrend
+                    && dof >= MIN_DOF_BEYOND_TREND
+                {
+                    (
+                        SpecimenOptions::BOTH,
+                        Some(format!("no two specimens share a temperature and stress: each specimen's creep rate and ductility factors are fitted, their scatter estimated from how they differ beyond a straight line in ln stress at each temperature ({dof} degrees of freedom at most); a stress dependence the model misses can still go into the factors (the Specimens section of a diagnosis tests whether they follow stress)")),
+                    )
                 } else {
                     (
                         SpecimenOptions::NONE,
-                        Some("no two specimens share a temperature and stress: specimen-to-specimen scatter cannot be told from the stress and temperature dependence of the constants, so the likelihood treats every specimen as the population's (set [objective] specimen_effects to fit it anyway)".into()),
+                        Some("no two specimens share a temperature and stress: specimen-to-specimen scatter cannot be told from the stress and temperature dependence of the constants, so the likelihood treats every specimen as the population's (set [objective] specimen_effects to fit it anyway, or specimen_scatter = \"beyond_stress_trend\" to fit it beyond the stress trend where the data have the degrees of freedom)".into()),
                     )
                 }
             }
@@ -2152,12 +2176,89 @@ rtol = 1e-8
                 "curves = \"a.csv\"\nruptures = \"b.csv\"\n{CONSTANTS}\n[objective]\nspecimen_effects = {list}\n"
             ))
             .unwrap();
-            assert_eq!(c.objective.specimen_effects.resolve(&[]).0, want, "{list}");
+            assert_eq!(
+                c.objective
+                    .specimen_effects
+                    .resolve(&[], Default::default())
+                    .0,
+                want,
+                "{list}"
+            );
         }
         let bad = parse(&format!(
             "curves = \"a.csv\"\nruptures = \"b.csv\"\n{CONSTANTS}\n[objective]\nspecimen_effects = [\"hardening\"]\n"
         ));
         assert!(bad.is_err());
+    }
+
+    /// `auto` as a table over designs and scatter estimates: replicates give both kinds;
+    /// without, both only beyond the stress trend with two degrees of freedom there or more.
+    #[test]
+    fn auto_fits_effects_without_replicates_only_beyond_the_trend_with_the_freedom() {
+        use crate::likelihood::{SpecimenOptions, SpecimenScatter};
+        let curve = |t: f64, s: f64| crate::data::Curve {
+            temperature_c: t,
+            stress_mpa: s,
+            specimen: None,
+            times_h: vec![0.0, 1.0],
+            strains: vec![0.0, 0.01],
+            rupture_time_h: Some(1.0),
+            rupture_strain: 0.01,
+            min_rate_measured: None,
+            min_rate_estimated: 0.01,
+        };
+        let seven: Vec<_> = (0..7)
+            .map(|k| curve(900.0, 25.0 + 5.0 * k as f64))
+            .collect();
+        let three: Vec<_> = (0..3)
+            .map(|k| curve(900.0, 25.0 + 5.0 * k as f64))
+            .collect();
+        let four: Vec<_> = (0..4)
+            .map(|k| curve(900.0, 25.0 + 5.0 * k as f64))
+            .collect();
+        let pair = vec![curve(750.0, 100.0), curve(750.0, 100.0)];
+        let (lik, beyond) = (
+            SpecimenScatter::Likelihood,
+            SpecimenScatter::BeyondStressTrend,
+        );
+        for (curves, scatter, want, note) in [
+            (&pair, lik, SpecimenOptions::BOTH, None),
+            (&pair, beyond, SpecimenOptions::BOTH, None),
+            (
+                &seven,
+                lik,
+                SpecimenOptions::NONE,
+                Some("treats every specimen"),
+            ),
+            (
+                &seven,
+                beyond,
+                SpecimenOptions::BOTH,
+                Some("(5 degrees of freedom"),
+            ),
+            (
+                &four,
+                beyond,
+                SpecimenOptions::BOTH,
+                Some("(2 degrees of freedom"),
+            ),
+            (
+                &three,
+                beyond,
+                SpecimenOptions::NONE,
+                Some("treats every specimen"),
+            ),
+        ] {
+            let (o, n) = SpecimenEffects::Auto(AutoWord::Auto).resolve(curves, scatter);
+            assert_eq!(o, want, "{} curves, {scatter:?}", curves.len());
+            match note {
+                None => assert!(n.is_none(), "{n:?}"),
+                Some(t) => assert!(n.as_deref().is_some_and(|n| n.contains(t)), "{n:?}"),
+            }
+        }
+        // A list is taken as it is.
+        let list = SpecimenEffects::Kinds(vec![crate::likelihood::EffectKind::Rate]);
+        assert!(!list.resolve(&three, beyond).0.ductility);
     }
 
     /// `specimen_scatter`: the likelihood's by default, the estimate beyond the stress trend

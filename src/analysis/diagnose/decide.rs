@@ -301,6 +301,7 @@ pub fn specimen_shapes_caution(any_significant: bool, shape_sd_pct: f64) -> Opti
 /// they did not and it was `adequate`.
 pub fn specimen_factors_caution(
     replicates: bool,
+    beyond_trend: bool,
     kinds: &[&str],
     effects: &[Vec<f64>],
 ) -> Option<String> {
@@ -314,7 +315,15 @@ pub fn specimen_factors_caution(
         })
         .collect();
     let mut parts = Vec::new();
-    if !replicates && !kinds.is_empty() {
+    if !replicates && !kinds.is_empty() && beyond_trend {
+        parts.push(
+            "no two specimens share a temperature and stress: the specimens' scatter is \
+             estimated beyond a straight line in ln σ, but their fitted factors can still \
+             take up a stress dependence the model misses, which the tests cannot see (the \
+             Specimens section says whether they follow stress)"
+                .to_string(),
+        );
+    } else if !replicates && !kinds.is_empty() {
         parts.push(
             "no two specimens share a temperature and stress, so the specimens' fitted \
              factors cannot be told from the stress dependence of the constants: they may \
@@ -364,17 +373,27 @@ mod tests {
         for (rep, eff, want, text) in cases {
             let names: Vec<String> = (0..eff.len()).map(|k| format!("k{k}")).collect();
             let kinds: Vec<&str> = names.iter().map(String::as_str).collect();
-            let c = super::specimen_factors_caution(*rep, &kinds, eff);
+            let c = super::specimen_factors_caution(*rep, false, &kinds, eff);
             assert_eq!(c.is_some(), *want, "{rep} {eff:?}: {c:?}");
             if let Some(c) = c {
                 assert!(c.contains(text), "{c}");
             }
         }
-        let both = super::specimen_factors_caution(false, &["rate"], &[vec![b, 0.0]]).unwrap();
+        let both =
+            super::specimen_factors_caution(false, false, &["rate"], &[vec![b, 0.0]]).unwrap();
         assert!(
             both.contains("no two specimens") && both.contains("at their bound"),
             "{both}"
         );
+        // Beyond the stress trend the words say what that estimate does and does not do;
+        // with replicates nothing changes.
+        let beyond =
+            super::specimen_factors_caution(false, true, &["rate"], &[vec![0.2, 0.0]]).unwrap();
+        assert!(
+            beyond.contains("beyond a straight line") && !beyond.contains("fitting none"),
+            "{beyond}"
+        );
+        assert!(super::specimen_factors_caution(true, true, &["rate"], &[vec![0.2]]).is_none());
     }
 
     /// (significant extension, τ̂ %, caution expected) as a table.

@@ -1355,7 +1355,7 @@ pub fn diagnose_observed(
         white_first: true,
         specimen: setup
             .specimen_effects
-            .resolve(curves)
+            .resolve(curves, setup.specimen_scatter)
             .0
             .with_scatter(setup.specimen_scatter),
         hold_scatter: None,
@@ -1854,6 +1854,7 @@ pub fn diagnose_observed(
             let kinds: Vec<&str> = sp.kinds.iter().map(|k| k.describe()).collect();
             decide::specimen_factors_caution(
                 crate::specimen::has_replicates(curves),
+                ml.specimen.beyond_trend,
                 &kinds,
                 &sp.effects,
             )
