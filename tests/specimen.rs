@@ -1492,3 +1492,64 @@ fn fits_hierarchical_polish_goes_on_while_it_gains() {
     let obj = s["objective"].as_f64().unwrap();
     assert!(obj < -62600.0, "−2 ln L {obj}");
 }
+
+/// `auto` without replicates, end to end through `fit`: Alloy 617 at 900 °C (seven
+/// specimens, one per stress) under the likelihood. With the shipped estimate beyond the
+/// stress trend the fit carries both kinds of factors (5 degrees of freedom beyond a level
+/// and a line in ln σ) and its note says so and that none are replicates; with the
+/// likelihood's own estimate it fits none and says why. Generated null sets of this design
+/// fitted without factors raised false alarms where these did not (docs/SPECIMENS.md,
+/// "Session 63").
+#[test]
+fn auto_fits_specimen_factors_without_replicates_only_beyond_the_stress_trend() {
+    let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let tmp = tempfile::TempDir::new().unwrap();
+    let text = std::fs::read_to_string(root.join("configs/alloy617-900C.toml"))
+        .unwrap()
+        .replace("../data/", &format!("{}/data/", root.display()))
+        .replace("[objective]\n", "[objective]\nkind = \"likelihood\"\n");
+    let beyond = "specimen_scatter = \"beyond_stress_trend\"\n";
+    assert!(text.contains(beyond) && text.contains("specimen_effects = \"auto\"\n"));
+    let mut notes = Vec::new();
+    for (name, cfg_text) in [
+        ("beyond", text.clone()),
+        ("likelihood", text.replace(beyond, "")),
+    ] {
+        let cfg = tmp.path().join(format!("{name}.toml"));
+        std::fs::write(&cfg, cfg_text).unwrap();
+        let out = tmp.path().join(name);
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_creepfit"))
+            .args([
+                "fit",
+                cfg.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+                "-q",
+            ])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let s: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
+                .unwrap();
+        let sp = &s["specimens"];
+        notes.push((
+            sp["fitted"].as_bool().unwrap(),
+            sp["note"].as_str().unwrap_or_default().to_string(),
+        ));
+    }
+    let (fitted, note) = &notes[0];
+    assert!(*fitted, "{note}");
+    assert!(
+        note.contains("(5 degrees of freedom at most)")
+            && note.contains("0 of 7 specimens are replicates")
+            && note.contains("no replicates)"),
+        "{note}"
+    );
+    let (fitted, note) = &notes[1];
+    assert!(!*fitted, "{note}");
+    assert!(
+        note.contains("treats every specimen as the population's"),
+        "{note}"
+    );
+}

@@ -487,6 +487,17 @@ pub struct FitSpecimens {
     pub stress_trend: Vec<crate::likelihood::StressTrend>,
 }
 
+impl FitSpecimens {
+    /// `note` after the one already there (the configuration's `auto` decision, say), "; "
+    /// between.
+    fn add_note(&mut self, note: String) {
+        self.note = Some(match self.note.take() {
+            Some(first) => format!("{first}; {note}"),
+            None => note,
+        });
+    }
+}
+
 /// Curves in replicate groups and the pooled within-group sd of their ln rupture times.
 pub fn replicate_scatter(curves: &[Curve]) -> (usize, Option<f64>) {
     let mut groups: Vec<((f64, f64), Vec<f64>)> = Vec::new();
@@ -1019,10 +1030,14 @@ pub fn run_fit_observed(
                     sp.stress_trend = f.stress_trend(curves);
                 }
                 if 2 * replicate_curves < curves.len() {
-                    sp.note = Some(format!(
+                    sp.add_note(format!(
                         "{replicate_curves} of {} specimens are replicates (two or more at one temperature and stress); a specimen's factor also takes up what the constants miss from one stress to another, which only the replicates tell apart from scatter: read the scatter as an upper bound where the model misfits (the replicates' own spread of ln rupture time: {})",
                         curves.len(),
-                        replicate_sd_ln_life.map_or("none ruptured".into(), |v| format!("{v:.3}"))
+                        match (replicate_curves, replicate_sd_ln_life) {
+                            (0, _) => "no replicates".to_string(),
+                            (_, None) => "none ruptured".to_string(),
+                            (_, Some(v)) => format!("{v:.3}"),
+                        }
                     ));
                 }
                 let (iters, evals) = (chosen.lm.iterations, chosen.lm.evaluations);
@@ -1048,7 +1063,7 @@ pub fn run_fit_observed(
                 chosen.lm.iterations += iters;
                 chosen.lm.evaluations += evals;
             } else {
-                sp.note = Some(format!(
+                sp.add_note(format!(
                     "specimen effects did not raise the likelihood (the scatter between specimens went to zero or the fit failed: {}); the constants are those of identical specimens",
                     h.failure.as_deref().unwrap_or("no scatter")
                 ));
