@@ -14,11 +14,14 @@
 //!   false-alarm rate and power over many sets, on seeds not used while developing — is
 //!   `creepfit battery`, run by `scripts/bench_battery.sh`.
 //! - Real laboratory curves (Alloy 617, `data/alloy617/`): the verdict and the cause are the
-//!   same on all points and on every 10th point, at every temperature (`-- --ignored`: eight
-//!   diagnoses of Alloy 617; with the configurations' `auto` specimen effects since
-//!   2026-12-02 about 30 minutes on 2 cores: 563 + 448 + 53 + 75 s on all points, 420 + 347 +
-//!   52 + 61 s on every 10th, beside other work; with the three kinds shipped before, the
-//!   verdicts differed at 900 and 950 °C).
+//!   same on all points and on every 10th point, at every temperature, and a conclusion is
+//!   reached at three of the four (`-- --ignored`: eight diagnoses of Alloy 617; with the
+//!   configurations' scatter beyond the stress trend since 2026-12-03 — `auto` then fits
+//!   specimen factors at 900 °C too — run by hand as the same eight diagnoses on
+//!   8225e34's binary: 750 °C strain_softening both, 850 °C unexplained both, 900 °C
+//!   strain_softening both, 950 °C adequate both; 361 s for 750 °C on every 10th point,
+//!   347 + 504 s at 850, 91 + 138 s at 900, 28 + 34 s at 950, beside niced runs; with the
+//!   three kinds shipped before 2026-12-02 the verdicts differed at 900 and 950 °C).
 //! - The contract of `diagnosis.json` on the seed's 590 °C data.
 
 use std::path::{Path, PathBuf};
@@ -146,6 +149,7 @@ fn same_verdict_on_every_tenth_point(temps: &[u32]) {
     let dir = TempDir::new().unwrap();
     let thin = every_tenth(dir.path());
     let progress = TestProgress::new("alloy617 logging density");
+    let mut conclusions = 0;
     for &t in temps {
         let cfg = root().join(format!("configs/alloy617-{t}C.toml"));
         let text = std::fs::read_to_string(&cfg)
@@ -221,6 +225,15 @@ fn same_verdict_on_every_tenth_point(temps: &[u32]) {
             }
         }
         assert_eq!(verdicts[0], verdicts[1], "{t} °C: all points vs every 10th");
+        if verdicts[0].0 != "unexplained" {
+            conclusions += 1;
+        }
+    }
+    // The must-show: a conclusion (`adequate`, or a cause whose own fit holds) at
+    // three of the four temperatures or more (with the configurations of 2026-12-03: 750 and
+    // 900 °C strain_softening, 950 °C adequate, 850 °C unexplained).
+    if temps.len() == 4 {
+        assert!(conclusions >= 3, "conclusions at {conclusions} of 4");
     }
 }
 
