@@ -2,6 +2,8 @@
 //! brute-force integral, the scatter recovered from generated specimens, and `diagnose` on
 //! generated data with specimen scatter (a null set and a hidden effect).
 
+mod common;
+
 use creepfit::config::{LifetimeTerm, ObjectiveKind};
 use creepfit::data::{estimate_min_rate, Curve};
 use creepfit::errmodel::{Ar1, ErrorModel};
@@ -1502,11 +1504,11 @@ fn fits_hierarchical_polish_goes_on_while_it_gains() {
 /// "Session 63").
 #[test]
 fn auto_fits_specimen_factors_without_replicates_only_beyond_the_stress_trend() {
-    let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    use common::{creepfit, json, root};
     let tmp = tempfile::TempDir::new().unwrap();
-    let text = std::fs::read_to_string(root.join("configs/alloy617-900C.toml"))
+    let text = std::fs::read_to_string(root().join("configs/alloy617-900C.toml"))
         .unwrap()
-        .replace("../data/", &format!("{}/data/", root.display()))
+        .replace("../data/", &format!("{}/data/", root().display()))
         .replace("[objective]\n", "[objective]\nkind = \"likelihood\"\n");
     let beyond = "specimen_scatter = \"beyond_stress_trend\"\n";
     assert!(text.contains(beyond) && text.contains("specimen_effects = \"auto\"\n"));
@@ -1518,20 +1520,15 @@ fn auto_fits_specimen_factors_without_replicates_only_beyond_the_stress_trend() 
         let cfg = tmp.path().join(format!("{name}.toml"));
         std::fs::write(&cfg, cfg_text).unwrap();
         let out = tmp.path().join(name);
-        let o = std::process::Command::new(env!("CARGO_BIN_EXE_creepfit"))
-            .args([
-                "fit",
-                cfg.to_str().unwrap(),
-                "--out",
-                out.to_str().unwrap(),
-                "-q",
-            ])
-            .output()
-            .unwrap();
+        let o = creepfit(&[
+            "fit",
+            cfg.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "-q",
+        ]);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        let s: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
-                .unwrap();
+        let s = json(&out.join("summary.json"));
         let sp = &s["specimens"];
         notes.push((
             sp["fitted"].as_bool().unwrap(),
