@@ -358,6 +358,35 @@ pub fn absorbed_noise_caution(phi: &[f64], sd_pct: &[f64]) -> Option<String> {
     ))
 }
 
+/// A caution for a likelihood fit whose reading error writes curves off
+/// ([`crate::errmodel::written_off_curves`]): per curve its label, the marginal sd of its
+/// reading error and its largest measured strain (both % strain). Such a curve's shape no
+/// longer informs the constants; the model misses it. The issue's single-crystal data: a
+/// per-temperature fit took a whole curve for reading error of sd 9 % strain.
+pub fn written_off_caution(
+    labels: &[String],
+    sd_pct: &[f64],
+    largest_pct: &[f64],
+) -> Option<String> {
+    let off = crate::errmodel::written_off_curves(sd_pct, largest_pct);
+    let (i, _) = *off.first()?;
+    Some(format!(
+        "the likelihood's reading error writes {} of {} curves off as noise (marginal sd at \
+         least {:.0} % of the curve's largest measured strain, so that ±2 sd spans the whole \
+         curve; worst {}: sd {:.3} % strain on a curve that reaches {:.3} %): the model does \
+         not follow those curves and their shapes do not inform the constants; where the \
+         specimens differ in ductility or rate, fit their factors ([objective] \
+         specimen_effects, or specimen_scatter = \"beyond_stress_trend\" without \
+         replicates), else consider an extension",
+        off.len(),
+        sd_pct.len(),
+        100.0 * crate::errmodel::WRITES_OFF,
+        labels.get(i).map_or("?", |s| s.as_str()),
+        sd_pct[i],
+        largest_pct[i],
+    ))
+}
+
 /// A caution for a best fit whose every predicted rupture time misses its measurement by
 /// [`NO_FIT_FACTOR`] or more (`lifetime_err_pct`: (t_pred − t_f)/t_f in %, NaN without a measured
 /// rupture): its status only says the iteration stopped (measured: a generated 590 °C set with

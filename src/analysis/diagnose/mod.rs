@@ -795,7 +795,8 @@ pub struct Diagnosis {
     /// The decision, step by step, in words.
     pub decision: Vec<String>,
     /// Where the base fit's error model may have taken misfit for correlated reading error
-    /// ([`decide::absorbed_misfit_caution`]), failed null refits may have kept a test from
+    /// ([`decide::absorbed_misfit_caution`]) or written a curve off as noise
+    /// ([`crate::fit::written_off_caution`]), failed null refits may have kept a test from
     /// rejecting ([`decide::failed_refits_caution`]), or a fit on the data stopped before
     /// convergence ([`decide::unconverged_fits_caution`]); joined by ". Also: "; `null`
     /// otherwise.
@@ -1843,6 +1844,15 @@ pub fn diagnose_observed(
         base.noise
             .as_ref()
             .and_then(|n| decide::absorbed_misfit_caution(&n.phi, &n.strain_sd_pct)),
+        // A curve the base's reading error writes off: the tests see nothing of its shape.
+        base.noise.as_ref().and_then(|n| {
+            let labels: Vec<String> = curves.iter().map(Curve::label).collect();
+            let largest: Vec<f64> = curves
+                .iter()
+                .map(|c| 100.0 * c.strains.iter().copied().fold(0.0, f64::max))
+                .collect();
+            crate::fit::written_off_caution(&labels, &n.strain_sd_pct, &largest)
+        }),
         decide::failed_refits_caution(&failed_per_test, dc.alpha),
         decide::unconverged_fits_caution(
             &std::iter::once(&base)
