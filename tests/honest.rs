@@ -1383,6 +1383,13 @@ fn a_likelihood_fit_that_writes_curves_off_as_noise_is_marked() {
     ok(&["fit", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()]);
     let s = json(&out.join("summary.json"));
     assert_eq!(s["specimens"]["fitted"], true, "{}", s["specimens"]);
+    // Labels SX01 … SX17 name no campaign of two specimens: no table by campaign.
+    assert_eq!(
+        s["specimens"]["by_campaign"].as_array().map_or(0, Vec::len),
+        0,
+        "{}",
+        s["specimens"]["by_campaign"]
+    );
     assert_eq!(written_off(&s), 0);
     assert!(
         s["caution"]

@@ -1053,7 +1053,10 @@ pub fn run_fit_observed(
                         sp.by_temperature.clear();
                     }
                     sp.by_campaign = f.by_group(curves, |c| c.campaign().map(str::to_string));
-                    if sp.by_campaign.len() < 2 {
+                    // Campaigns only where some campaign holds two specimens or more: labels
+                    // without a campaign prefix (`SX01`, `SX02`) are each their own, and a
+                    // table of single specimens says nothing the factors do not.
+                    if sp.by_campaign.len() < 2 || sp.by_campaign.iter().all(|g| g.specimens < 2) {
                         sp.by_campaign.clear();
                     }
                     sp.stress_trend = f.stress_trend(curves);
