@@ -47,6 +47,9 @@ pub struct CurveSignature {
     /// Fitted reading error: marginal sd (% strain) and correlation φ.
     pub noise_sd_pct: f64,
     pub noise_phi: f64,
+    /// The reading error writes the curve off as noise: its marginal sd is at least
+    /// [`crate::errmodel::WRITES_OFF`] of the curve's largest measured strain.
+    pub written_off: bool,
 }
 
 /// One finding for the report: a stable `code`, a sentence and its key number.
@@ -120,6 +123,11 @@ pub fn curve_signature(c: &Curve, e: &[f64], t_pred: f64, noise: &Ar1) -> CurveS
         },
         noise_sd_pct: 100.0 * noise.marginal_sd(),
         noise_phi: noise.phi,
+        written_off: !crate::errmodel::written_off_curves(
+            &[noise.marginal_sd()],
+            &[c.strains.iter().copied().fold(0.0, f64::max)],
+        )
+        .is_empty(),
     }
 }
 
@@ -216,6 +224,10 @@ mod tests {
         };
         let e = [0.0; 5];
         let s = curve_signature(&c, &e, 100.0, &Ar1::white(1e-4));
+        // Written off only from a quarter of the curve's largest strain (6 %): sd 1.5 %.
+        assert!(!s.written_off);
+        assert!(!curve_signature(&c, &e, 100.0, &Ar1::white(0.0149)).written_off);
+        assert!(curve_signature(&c, &e, 100.0, &Ar1::white(0.015)).written_off);
         assert_eq!(s.stage_bias_pct, [0.0; 3]);
         assert!((s.last_fraction - 0.96).abs() < 1e-12);
         assert_eq!(s.last_point_pct.0, s.last_point_pct.1);
