@@ -222,6 +222,11 @@ impl Curve {
         self.min_rate_measured.unwrap_or(self.min_rate_estimated)
     }
 
+    /// The largest measured strain (fraction; 0 without points or with none positive).
+    pub fn largest_strain(&self) -> f64 {
+        self.strains.iter().copied().fold(0.0, f64::max)
+    }
+
     /// The life used for estimates: the rupture time, or the last measured time of an
     /// interrupted test.
     pub fn life_h(&self) -> f64 {

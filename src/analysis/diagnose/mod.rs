@@ -1847,10 +1847,7 @@ pub fn diagnose_observed(
         // A curve the base's reading error writes off: the tests see nothing of its shape.
         base.noise.as_ref().and_then(|n| {
             let labels: Vec<String> = curves.iter().map(Curve::label).collect();
-            let largest: Vec<f64> = curves
-                .iter()
-                .map(|c| 100.0 * c.strains.iter().copied().fold(0.0, f64::max))
-                .collect();
+            let largest: Vec<f64> = curves.iter().map(|c| 100.0 * c.largest_strain()).collect();
             crate::fit::written_off_caution(&labels, &n.strain_sd_pct, &largest)
         }),
         decide::failed_refits_caution(&failed_per_test, dc.alpha),

@@ -123,11 +123,7 @@ pub fn curve_signature(c: &Curve, e: &[f64], t_pred: f64, noise: &Ar1) -> CurveS
         },
         noise_sd_pct: 100.0 * noise.marginal_sd(),
         noise_phi: noise.phi,
-        written_off: !crate::errmodel::written_off_curves(
-            &[noise.marginal_sd()],
-            &[c.strains.iter().copied().fold(0.0, f64::max)],
-        )
-        .is_empty(),
+        written_off: crate::errmodel::writes_off(noise.marginal_sd(), c.largest_strain()),
     }
 }
 

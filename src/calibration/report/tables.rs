@@ -524,11 +524,6 @@ pub fn error_table(rows: &[ErrorRow], min_rate_measured: bool) -> String {
     s
 }
 
-/// A curve's largest measured strain (fraction; 0 without points).
-fn largest_strain(c: &Curve) -> f64 {
-    c.strains.iter().copied().fold(0.0, f64::max)
-}
-
 /// The error model of creep data ([`crate::errmodel`]) estimated from the residuals of `fit`'s
 /// chosen constants: per curve the marginal sd (% strain) and AR(1) correlation of the
 /// residuals — reading error plus whatever misfit the model leaves (φ near 1: mostly misfit) —, the scatter of rupture times (% on the log scale), and −2 ln L. `null` if the
@@ -561,12 +556,8 @@ pub fn error_model_json(cfg: &RunConfig, run: &FitRun, curves: &[Curve]) -> Valu
             "points": e.len(),
             "residual_sd_pct": jnum(100.0 * p.marginal_sd()),
             "ar1_phi": jnum(p.phi),
-            "largest_strain_pct": jnum(100.0 * largest_strain(c)),
-            "written_off": !crate::errmodel::written_off_curves(
-                &[p.marginal_sd()],
-                &[largest_strain(c)],
-            )
-            .is_empty(),
+            "largest_strain_pct": jnum(100.0 * c.largest_strain()),
+            "written_off": crate::errmodel::writes_off(p.marginal_sd(), c.largest_strain()),
         })).collect::<Vec<_>>(),
         "lifetime_sd_pct": jnum(100.0 * m.lifetime_sd),
         "lifetime_sd_floor_pct": jnum(100.0 * cfg.diagnose.lifetime_sd_floor),
