@@ -268,6 +268,8 @@ fn diagnosis_json_keeps_its_contract() {
     // A caution is a sentence or null (the 590 °C base fit's reading error is not correlated
     // to its bound on half of the curves).
     assert!(d["caution"].is_null() || d["caution"].is_string());
+    // No specimen factors asked for (no replicates, the default scatter), so none left out.
+    assert_eq!(d["specimen_scatter_zero"], false);
     let cands = d["candidates"].as_array().unwrap();
     assert_eq!(cands.len(), creepfit::model::ext::CATALOGUE.len());
     for c in cands.iter().chain(std::iter::once(&d["base"])) {

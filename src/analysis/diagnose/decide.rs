@@ -290,6 +290,25 @@ pub fn specimen_shapes_caution(any_significant: bool, shape_sd_pct: f64) -> Opti
     })
 }
 
+/// Whether a diagnosis goes on without the specimen factors that `auto` chose: where the
+/// scatter is estimated beyond the stress trend (`beyond_trend`, which compares every model
+/// at the base's scatter) and the base fit puts every kind's scatter at zero (`scatter`: the
+/// REML estimate of each kind it kept, `None` when it kept none; zero is
+/// [`crate::likelihood::SCATTER_FLOOR`]). Every model at a zero scatter is the plain model,
+/// so the diagnosis is then the one without factors, as a mixed model's singular fit is
+/// simplified by dropping the variance components estimated at zero (Bates, Kliegl, Vasishth
+/// & Baayen 2015, "Parsimonious mixed models"). Kinds named in the configuration (`auto`
+/// false) are kept: the user asked for them.
+pub fn without_specimen_factors(
+    auto: bool,
+    beyond_trend: bool,
+    fitted: bool,
+    scatter: Option<&[f64]>,
+) -> bool {
+    let floor = crate::likelihood::SCATTER_FLOOR;
+    auto && beyond_trend && fitted && scatter.is_none_or(|s| s.iter().all(|t| *t <= 1.01 * floor))
+}
+
 /// The caution a diagnosis carries when the base fit's specimen factors may stand for a
 /// dependence the model misses: fitted without replicates (no two specimens share a
 /// temperature and stress, so a specimen's factor cannot be told from the stress dependence of
@@ -346,6 +365,30 @@ pub fn specimen_factors_caution(
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn factors_are_left_out_only_when_auto_chose_them_and_every_scatter_is_zero() {
+        let f = crate::likelihood::SCATTER_FLOOR;
+        // (auto, beyond_trend, fitted, scatter) → without factors
+        type Row<'a> = (bool, bool, bool, Option<&'a [f64]>, bool);
+        let table: [Row; 9] = [
+            (true, true, true, None, true),
+            (true, true, true, Some(&[f, f]), true),
+            (true, true, true, Some(&[f]), true),
+            (true, true, true, Some(&[f, 0.05]), false),
+            (true, true, true, Some(&[0.2]), false),
+            (true, true, false, None, false),
+            (true, false, true, None, false),
+            (false, true, true, None, false),
+            (false, true, true, Some(&[f, f]), false),
+        ];
+        for (auto, beyond, fitted, scatter, want) in table {
+            assert_eq!(
+                super::without_specimen_factors(auto, beyond, fitted, scatter),
+                want,
+                "{auto} {beyond} {fitted} {scatter:?}"
+            );
+        }
+    }
 
     /// (replicates, effects per kind, caution expected, text it must hold) as a table.
     #[test]

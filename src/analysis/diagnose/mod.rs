@@ -296,6 +296,15 @@ fn ext_options(ml: &MlOptions, base: Option<&MlFit>) -> MlOptions {
     }
 }
 
+/// Whether the diagnosis goes on without the specimen factors `auto` chose
+/// ([`decide::without_specimen_factors`]): beyond the stress trend with the base fit's
+/// scatter at zero for every kind.
+fn singular_scatter(auto: bool, ml: &MlOptions, base: Option<&MlFit>) -> bool {
+    let Some(base) = base else { return false };
+    let scatter = base.specimen.as_ref().map(|sp| sp.scatter.as_slice());
+    decide::without_specimen_factors(auto, ml.specimen.beyond_trend, ml.specimen.any(), scatter)
+}
+
 /// A base refit that beats the base fit by less than this (−2 ln L) does not replace it.
 const CROSS_TOL: f64 = 1e-3;
 
@@ -801,6 +810,11 @@ pub struct Diagnosis {
     /// convergence ([`decide::unconverged_fits_caution`]); joined by ". Also: "; `null`
     /// otherwise.
     pub caution: Option<String>,
+    /// Whether the diagnosis went on without the specimen factors that `specimen_effects =
+    /// "auto"` chose, because the base fit estimated every kind's scatter beyond the stress
+    /// trend at zero ([`decide::without_specimen_factors`]): every model was then fitted
+    /// without factors and the bootstrap drew identical specimens.
+    pub specimen_scatter_zero: bool,
     /// The settings used.
     pub settings: DiagnoseConfig,
     /// Wall time, s (not in `diagnosis.json`, whose content does not depend on how the run
@@ -1361,6 +1375,9 @@ pub fn diagnose_observed(
             .with_scatter(setup.specimen_scatter),
         hold_scatter: None,
     };
+    // Whether the configuration fits specimen factors (a base refitted without them,
+    // [`singular_scatter`], is journaled under a key of its own).
+    let setup_effects = ml.specimen.any();
     let specs = &setup.variants;
 
     // The initial guess (the family's procedure on its bare model, per temperature with the
@@ -1384,7 +1401,10 @@ pub fn diagnose_observed(
     hooks.phase("fits on the data", specs.len());
     // One model's fits: the base's optimum (`base`) seeds each extension's starts, so the
     // base is fitted first and the extensions, independent of each other, in parallel.
-    let fit_model = |i: usize, base: Option<&MlFit>| -> Result<(hooks::ModelFits, Vec<Vec<f64>>)> {
+    let fit_model = |i: usize,
+                     base: Option<&MlFit>,
+                     ml: &MlOptions|
+     -> Result<(hooks::ModelFits, Vec<Vec<f64>>)> {
         let spec = &specs[i];
         let mut starts = vec![spec.start_from_base(&khd_names, &guess.params)];
         if i > 0 {
@@ -1403,7 +1423,17 @@ pub fn diagnose_observed(
         }
         // Journaled per model: the fits take about half of a diagnosis (measured on Alloy
         // 617: 110 s of 235 s), too long to redo after an interruption.
-        let key = hooks::fits_key(i, &spec.name, &starts);
+        // A base refitted without the specimen factors the configuration asks for (their
+        // scatter at zero, [`singular_scatter`]) is journaled apart from the fit with them.
+        let key = if ml.specimen.any() == setup_effects {
+            hooks::fits_key(i, &spec.name, &starts)
+        } else {
+            hooks::fits_key(
+                i,
+                &format!("{}/without-specimen-factors", spec.name),
+                &starts,
+            )
+        };
         if let Some(done) = hooks.fits_done(&key) {
             return Ok((done, starts));
         }
@@ -1429,7 +1459,7 @@ pub fn diagnose_observed(
             .and_then(|f| f.specimen.as_ref())
             .map(EffectStart::from);
         // An extension's fits at the base's scatter where it is held ([`ext_options`]).
-        let ml = if i > 0 { ext_options(&ml, base) } else { ml };
+        let ml = if i > 0 { ext_options(ml, base) } else { *ml };
         let fitted = fit_all(
             spec,
             curves,
@@ -1488,10 +1518,30 @@ pub fn diagnose_observed(
         hooks.fits_finished(&key, &done)?;
         Ok((done, starts))
     };
-    let base_out = fit_model(0, None)?;
+    let base_out = fit_model(0, None, &ml)?;
+    // Every kind's scatter at zero: the diagnosis goes on without specimen factors, the
+    // base refitted plain ([`singular_scatter`]).
+    let singular = singular_scatter(
+        matches!(
+            setup.specimen_effects,
+            crate::config::SpecimenEffects::Auto(_)
+        ),
+        &ml,
+        base_out.0.best.as_ref(),
+    );
+    let (ml, base_out) = if singular {
+        let plain = MlOptions {
+            specimen: crate::likelihood::SpecimenOptions::NONE,
+            ..ml
+        };
+        let out = fit_model(0, None, &plain)?;
+        (plain, out)
+    } else {
+        (ml, base_out)
+    };
     let ext_out: Vec<_> = (1..specs.len())
         .into_par_iter()
-        .map(|i| fit_model(i, base_out.0.best.as_ref()))
+        .map(|i| fit_model(i, base_out.0.best.as_ref(), &ml))
         .collect::<Result<_>>()?;
     let mut recipes: Vec<Option<Recipe>> = Vec::with_capacity(specs.len());
     for (i, (done, starts)) in std::iter::once(base_out).chain(ext_out).enumerate() {
@@ -1812,7 +1862,16 @@ pub fn diagnose_observed(
             decides: in_family[n_ext + g],
         })
         .collect();
-    let decision = decision_words(&cands, &sel, &base_gof, &cause_gof, verdict, dc);
+    let mut decision = decision_words(&cands, &sel, &base_gof, &cause_gof, verdict, dc);
+    if singular {
+        decision.insert(
+            0,
+            "Specimen factors: the base fit estimates every kind's scatter beyond the stress \
+             trend at zero, so every model is compared at zero scatter, without specimen \
+             factors (the base refitted so), and the bootstrap draws identical specimens."
+                .into(),
+        );
+    }
     let failed_extension_refits = (0..n_ext)
         .map(|k| {
             (
@@ -1913,6 +1972,7 @@ pub fn diagnose_observed(
         },
         decision,
         caution,
+        specimen_scatter_zero: singular,
         settings: dc.clone(),
         wall_s: t0.elapsed().as_secs_f64(),
         phase_s: phase,

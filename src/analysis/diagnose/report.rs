@@ -440,7 +440,9 @@ fn specimens_md(d: &Diagnosis, setup: &DiagnoseSetup) -> String {
         );
         let auto = setup.specimen_effects
             == crate::config::SpecimenEffects::Auto(crate::config::AutoWord::Auto);
-        let why = if auto && !replicates {
+        let why = if d.specimen_scatter_zero {
+            "the base fit with specimen factors estimated their scatter beyond the stress trend at zero for every kind, so the diagnosis went on without them (every model at the base's zero scatter; the bootstrap draws identical specimens)".to_string()
+        } else if auto && !replicates {
             "no two specimens share a temperature and stress, so specimen-to-specimen scatter cannot be told from the stress dependence of the constants ([objective] specimen_effects fits it anyway)".to_string()
         } else {
             "the base fit found no scatter between specimens, or none was asked for".to_string()
