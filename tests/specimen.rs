@@ -1515,7 +1515,10 @@ fn auto_fits_specimen_factors_without_replicates_only_beyond_the_stress_trend() 
     let mut notes = Vec::new();
     for (name, cfg_text) in [
         ("beyond", text.clone()),
-        ("likelihood", text.replace(beyond, "")),
+        (
+            "likelihood",
+            text.replace(beyond, "specimen_scatter = \"likelihood\"\n"),
+        ),
     ] {
         let cfg = tmp.path().join(format!("{name}.toml"));
         std::fs::write(&cfg, cfg_text).unwrap();
@@ -1582,7 +1585,10 @@ fn a_zero_scatter_beyond_the_trend_gives_the_diagnosis_without_factors() {
     assert!(!text.contains("specimen_scatter"), "{text}");
     let mut runs = Vec::new();
     for (name, cfg_text) in [
-        ("likelihood", text.clone()),
+        (
+            "likelihood",
+            format!("{text}\n[objective]\nspecimen_scatter = \"likelihood\"\n"),
+        ),
         (
             "beyond",
             format!("{text}\n[objective]\nspecimen_scatter = \"beyond_stress_trend\"\n"),
