@@ -1635,3 +1635,96 @@ fn a_zero_scatter_beyond_the_trend_gives_the_diagnosis_without_factors() {
         assert_eq!(x["null_replicates"], y["null_replicates"], "{}", x["name"]);
     }
 }
+
+/// `profile` and `predict --intervals` simplify a zero scatter beyond the stress trend as
+/// `diagnose` does: the reference refitted without the factors `auto` chose, every profile of
+/// the plain likelihood, so that the intervals are the likelihood estimate's byte for byte
+/// and `summary.json` says so. The set is the identical world's 189002 (five specimens, one
+/// per stress, no scatter). Measured 2026-12-04 before the simplification: the profile with
+/// factors at zero scatter gave B's 95 % interval 0.17474–0.17479 where the plain likelihood
+/// gives 0.1629–0.1910, and with the estimate beyond the trend as the default the 16-set
+/// coverage battery of tests/profile.rs covered 76 of 102.
+#[test]
+fn a_zero_scatter_beyond_the_trend_gives_the_intervals_without_factors() {
+    use common::{creepfit, json};
+    let tmp = tempfile::TempDir::new().unwrap();
+    let sets = tmp.path().join("sets");
+    let o = creepfit(&[
+        "synth",
+        sets.to_str().unwrap(),
+        "--sets",
+        "1",
+        "--seed",
+        "189002",
+        "--scenario",
+        "constant_load",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let dir = sets.join("set-189002");
+    let text = std::fs::read_to_string(dir.join("config.toml")).unwrap();
+    let mut runs = Vec::new();
+    for how in ["likelihood", "beyond_stress_trend"] {
+        let cfg = dir.join(format!("{how}.toml"));
+        std::fs::write(
+            &cfg,
+            format!("{text}\n[objective]\nspecimen_scatter = \"{how}\"\n"),
+        )
+        .unwrap();
+        let prof = tmp.path().join(format!("profile-{how}"));
+        let o = creepfit(&[
+            "profile",
+            cfg.to_str().unwrap(),
+            "--out",
+            prof.to_str().unwrap(),
+            "--threads",
+            "2",
+            "-q",
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let pred = tmp.path().join(format!("predict-{how}"));
+        let o = creepfit(&[
+            "predict",
+            cfg.to_str().unwrap(),
+            "--constants",
+            prof.join("intervals.csv").to_str().unwrap(),
+            "--at",
+            "560:90",
+            "--intervals",
+            "--out",
+            pred.to_str().unwrap(),
+            "-q",
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        runs.push((prof, pred));
+    }
+    let read = |p: &std::path::Path| std::fs::read_to_string(p).unwrap();
+    let ((p_lik, q_lik), (p_bey, q_bey)) = (&runs[0], &runs[1]);
+    assert_eq!(
+        json(&p_lik.join("summary.json"))["reference"]["without_specimen_factors"],
+        false
+    );
+    assert_eq!(
+        json(&p_bey.join("summary.json"))["reference"]["without_specimen_factors"],
+        true
+    );
+    assert_eq!(
+        read(&p_bey.join("intervals.csv")),
+        read(&p_lik.join("intervals.csv"))
+    );
+    assert_eq!(
+        read(&p_bey.join("profiles.csv")),
+        read(&p_lik.join("profiles.csv"))
+    );
+    assert_eq!(
+        json(&q_lik.join("summary.json"))["refit"]["without_specimen_factors"],
+        false
+    );
+    assert_eq!(
+        json(&q_bey.join("summary.json"))["refit"]["without_specimen_factors"],
+        true
+    );
+    assert_eq!(
+        read(&q_bey.join("predictions.csv")),
+        read(&q_lik.join("predictions.csv"))
+    );
+}

@@ -768,6 +768,9 @@ pub struct LikelihoodSetup {
     /// The maximum-likelihood options (`[profile]`'s rupture-time floor, the specimen
     /// effects resolved on the data).
     pub ml: crate::likelihood::MlOptions,
+    /// Whether `specimen_effects = "auto"` chose the effects of `ml` (a zero scatter beyond
+    /// the stress trend then leaves them out, [`crate::likelihood::scatter_at_zero`]).
+    pub auto_effects: bool,
     /// `[profile]`: thresholds, calibration, steps.
     pub profile: ProfileConfig,
 }
@@ -1583,6 +1586,7 @@ impl RunConfig {
                 specimen: self.objective.specimen_options(&data.curves).0,
                 hold_scatter: None,
             },
+            auto_effects: matches!(self.objective.specimen_effects, SpecimenEffects::Auto(_)),
             profile: self.profile.clone(),
         }
     }

@@ -85,6 +85,15 @@ pub fn kind_index(kind: EffectKind) -> usize {
     }
 }
 
+/// Whether a fit's specimen scatter is zero for every kind: `scatter` is the REML estimate of
+/// each kind the fit kept (`None` when it kept none), zero being [`SCATTER_FLOOR`]. Where the
+/// scatter is estimated beyond the stress trend every model is compared at the base's scatter,
+/// and at zero that is the plain model: the analyses then go on without specimen factors
+/// (a singular fit simplified).
+pub fn scatter_at_zero(scatter: Option<&[f64]>) -> bool {
+    scatter.is_none_or(|s| s.iter().all(|t| *t <= 1.01 * SCATTER_FLOOR))
+}
+
 /// [`MlOptions::hold_scatter`] from a fit's specimen report: each kind's scatter, the floor
 /// for kinds it does not carry (dropped at zero scatter).
 pub fn held_scatter(sp: Option<&SpecimenFit>) -> [f64; 3] {

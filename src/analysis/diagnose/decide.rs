@@ -305,8 +305,7 @@ pub fn without_specimen_factors(
     fitted: bool,
     scatter: Option<&[f64]>,
 ) -> bool {
-    let floor = crate::likelihood::SCATTER_FLOOR;
-    auto && beyond_trend && fitted && scatter.is_none_or(|s| s.iter().all(|t| *t <= 1.01 * floor))
+    auto && beyond_trend && fitted && crate::likelihood::scatter_at_zero(scatter)
 }
 
 /// The caution a diagnosis carries when the base fit's specimen factors may stand for a

@@ -694,6 +694,7 @@ pub fn summary_json(cfg: &RunConfig, data: &Dataset, model: &dyn Model, run: &Pr
             "given_neg2ll": jnum(r.given_neg2ll),
             "delta_neg2ll": jnum(r.delta_neg2ll()),
             "specimen_effects": r.specimen_effects,
+            "without_specimen_factors": r.without_specimen_factors,
             "constants": all_names.iter().zip(r.given.iter().zip(&r.params)).map(|(n, (g, v))| json!({
                 "name": n,
                 "given": g,

@@ -249,6 +249,11 @@ fn measure(dir: &Path, seed: u64, s: &CoverageSettings, out: &mut SetCoverage) -
         &[load],
         &crate::progress::Hooks::default(),
     )?;
+    let ctx = if c.without_specimens {
+        ctx.without_specimens()
+    } else {
+        ctx
+    };
     let (reference, th, pth, profiles) = (
         c.reference,
         c.thresholds,

@@ -68,6 +68,10 @@ pub struct Context<'a> {
     /// to: the reference's once it is found ([`reference_from`]), new specimens' (zero, no
     /// constants) in a bootstrap replicate.
     pub effects: RwLock<Option<(EffectStart, Option<Vec<f64>>)>>,
+    /// Whether `specimen_effects = "auto"` chose the specimen effects of `ml`: with the scatter
+    /// estimated beyond the stress trend and found zero at the reference, the analyses go on
+    /// without them ([`Context::settles_without_specimens`]).
+    pub auto_effects: bool,
 }
 
 impl<'a> Context<'a> {
@@ -94,6 +98,37 @@ impl<'a> Context<'a> {
             warm,
             ml,
             effects: RwLock::new(None),
+            auto_effects: false,
+        }
+    }
+
+    /// Whether the analyses go on without the specimen factors, given the reference fit with
+    /// them: `auto` chose them, the scatter is estimated beyond the stress trend and the
+    /// reference puts every kind's at zero ([`crate::likelihood::scatter_at_zero`]; `diagnose`
+    /// decides the same, docs/SPECIMENS.md, "Session 65").
+    pub fn settles_without_specimens(&self, reference: &Reference) -> bool {
+        self.auto_effects
+            && self.ml.specimen.beyond_trend
+            && self.hierarchical()
+            && crate::likelihood::scatter_at_zero(
+                reference.specimen.as_ref().map(|sp| sp.scatter.as_slice()),
+            )
+    }
+
+    /// The same context without specimen effects: every fit plain.
+    pub fn without_specimens(&self) -> Context<'a> {
+        Context {
+            model: self.model,
+            curves: self.curves,
+            space: self.space.clone(),
+            settings: self.settings,
+            warm: self.warm,
+            ml: MlOptions {
+                specimen: crate::likelihood::SpecimenOptions::NONE,
+                ..self.ml
+            },
+            effects: RwLock::new(None),
+            auto_effects: false,
         }
     }
 
@@ -122,6 +157,7 @@ impl<'a> Context<'a> {
             warm: self.warm,
             ml: self.ml,
             effects: RwLock::new(fresh),
+            auto_effects: self.auto_effects,
         }
     }
 

@@ -496,6 +496,9 @@ pub struct Refit {
     /// The kinds of specimen effects the refit's likelihood (and every profile's) integrates
     /// out (empty: identical specimens); its constants are then the population's.
     pub specimen_effects: Vec<EffectKind>,
+    /// Whether the refit left out the specimen factors `auto` chose, their scatter beyond
+    /// the stress trend zero ([`super::Context::settles_without_specimens`]).
+    pub without_specimen_factors: bool,
 }
 
 impl Refit {
@@ -560,7 +563,18 @@ pub fn intervals_at_observed(
     hooks.observer.phase("maximum-likelihood refit", None);
     let ctx = super::report::context(setup, model, data);
     let f = ctx.fit(&ctx.space, params, false);
-    let reference = super::reference_from(&ctx, vec![f])?;
+    let mut reference = super::reference_from(&ctx, vec![f])?;
+    // Every kind's scatter at zero beyond the stress trend: refitted without the specimen
+    // factors, and the intervals of the plain likelihood ([`Context::settles_without_specimens`]).
+    let without_specimen_factors = ctx.settles_without_specimens(&reference);
+    let ctx = if without_specimen_factors {
+        let plain = ctx.without_specimens();
+        let f = plain.fit(&plain.space, params, false);
+        reference = super::reference_from(&plain, vec![f])?;
+        plain
+    } else {
+        ctx
+    };
     let refit = Refit {
         given: params.to_vec(),
         params: reference.params.clone(),
@@ -571,6 +585,7 @@ pub fn intervals_at_observed(
             .as_ref()
             .map(|s| s.kinds.clone())
             .unwrap_or_default(),
+        without_specimen_factors,
     };
     let pc = &setup.profile;
     let (th, calibration) = if pc.calibrate > 0 {

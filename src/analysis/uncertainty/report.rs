@@ -67,6 +67,9 @@ pub struct ProfileRun {
     /// constants), and −2 ln L at the given constants for the latter.
     pub reference_from: String,
     pub given_neg2ll: Option<f64>,
+    /// Whether the reference was refitted without the specimen factors `auto` chose, their
+    /// scatter beyond the stress trend zero ([`Core::without_specimens`]).
+    pub without_specimens: bool,
     /// The given constants the reference was refitted from (`--constants`), model order.
     pub given: Option<Vec<f64>>,
     /// The thresholds of the constants' (and combinations') intervals, those of the
@@ -91,13 +94,16 @@ pub fn context<'a>(
     model: &'a dyn crate::model::Model,
     data: &'a Dataset,
 ) -> Context<'a> {
-    Context::new(
-        model,
-        &data.curves,
-        setup.space.clone(),
-        setup.settings,
-        setup.ml,
-    )
+    Context {
+        auto_effects: setup.auto_effects,
+        ..Context::new(
+            model,
+            &data.curves,
+            setup.space.clone(),
+            setup.settings,
+            setup.ml,
+        )
+    }
 }
 
 /// −2 ln L at constants `x`, the error model estimated there (None where the model cannot
@@ -143,6 +149,12 @@ pub fn calibration_constants(ctx: &Context, reference: &Reference) -> Vec<usize>
 /// The reference, the thresholds and the profiles of every constant (see [`run`]).
 #[derive(Debug, Clone)]
 pub struct Core {
+    /// Whether the analyses went on without the specimen factors `auto` chose (their
+    /// scatter beyond the stress trend zero at the reference,
+    /// [`Context::settles_without_specimens`]): the reference was refitted without them and
+    /// every profile is of the plain likelihood; the caller goes on with
+    /// [`Context::without_specimens`].
+    pub without_specimens: bool,
     pub reference: Reference,
     pub reference_from: String,
     pub given_neg2ll: Option<f64>,
@@ -194,6 +206,38 @@ pub fn core(
             let st = starts(ctx, &given, pc.starts, pc.seed);
             (fit_reference(ctx, &st)?, "multistart".to_string(), None)
         }
+    };
+    // Every kind's scatter at zero beyond the stress trend: the reference again without the
+    // specimen factors, from the same starts, and everything after on the plain likelihood.
+    let plain;
+    let without_specimens = ctx.settles_without_specimens(&reference);
+    let ctx = if without_specimens {
+        plain = ctx.without_specimens();
+        reference = match given {
+            Some(x) => reference_from(&plain, vec![plain.fit(&plain.space, x, false)])?,
+            None => {
+                let guess = initial_guess(
+                    plain.model,
+                    plain.curves,
+                    &plain.space,
+                    plain.settings.omega_f,
+                    &plain.settings.ode,
+                );
+                let mut given: Vec<Vec<f64>> = vec![guess.params];
+                if let Some(s) = cfg.starts_all_given() {
+                    given.insert(0, s);
+                }
+                let st = starts(&plain, &given, pc.starts, pc.seed);
+                fit_reference(&plain, &st)?
+            }
+        };
+        &plain
+    } else {
+        ctx
+    };
+    let given_neg2ll = match (without_specimens, given) {
+        (true, Some(x)) => neg2ll_at(ctx, x),
+        _ => given_neg2ll,
     };
     let mut timings = Timings {
         fit: t0.elapsed().as_secs_f64(),
@@ -253,6 +297,7 @@ pub fn core(
             }
             _ => {
                 return Ok(Core {
+                    without_specimens,
                     reference,
                     reference_from: from,
                     given_neg2ll,
@@ -294,6 +339,11 @@ pub fn run_observed(
     let loads = loads(cfg, data, pc);
     let only: Vec<Load> = loads.iter().map(|l| l.1).collect();
     let c = core(&ctx, cfg, given, pc, &only, hooks)?;
+    let ctx = if c.without_specimens {
+        ctx.without_specimens()
+    } else {
+        ctx
+    };
     let (reference, thresholds, pth, mut timings) = (
         c.reference,
         c.thresholds,
@@ -348,6 +398,7 @@ pub fn run_observed(
         reference,
         reference_from: c.reference_from,
         given_neg2ll: c.given_neg2ll,
+        without_specimens: c.without_specimens,
         given: given.map(<[f64]>::to_vec),
         thresholds,
         prediction_thresholds: pth,
@@ -580,6 +631,7 @@ pub fn summary(cfg: &RunConfig, run: &ProfileRun) -> serde_json::Value {
         "data_hash": cfg.data_hash,
         "reference": {
             "from": run.reference_from,
+            "without_specimen_factors": run.without_specimens,
             "neg2ll": jnum(r.neg2ll),
             "given_neg2ll": run.given_neg2ll.map(jnum),
             "delta_neg2ll_given": run.given_neg2ll.map(|g| jnum(g - r.neg2ll)),
