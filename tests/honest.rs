@@ -1333,9 +1333,10 @@ fn a_likelihood_fit_whose_error_model_took_the_misfit_is_marked() {
 /// summary.json marks each such curve (`error_model.curves[].written_off`, from its sd and
 /// largest strain as written there). Data far from the seed's steel (`tests/data/far_material`,
 /// theta-projection curves whose rupture strains differ 8–28 % between specimens): fitted
-/// without specimen factors, 8 of its 17 curves are written off (measured 2026-12-03); with the
-/// specimens' rate and ductility factors (`specimen_scatter = "beyond_stress_trend"`, no
-/// replicates), none, and no caution.
+/// without specimen factors (`specimen_scatter = "likelihood"`, no replicates), 8 of its 17
+/// curves are written off (measured 2026-12-03); with the specimens' rate and ductility
+/// factors (the default since 2026-12-04, `specimen_scatter = "beyond_stress_trend"`), none,
+/// and no caution.
 #[test]
 fn a_likelihood_fit_that_writes_curves_off_as_noise_is_marked() {
     let dir = TempDir::new().unwrap();
@@ -1355,7 +1356,16 @@ fn a_likelihood_fit_that_writes_curves_off_as_noise_is_marked() {
         curves.iter().filter(|c| c["written_off"] == true).count()
     };
     let cfg = dir.path().join("far.toml");
-    std::fs::write(&cfg, &text).unwrap();
+    // Without factors: the likelihood's own scatter estimate fits none without replicates
+    // (the default since 2026-12-04, beyond the stress trend, fits them: below).
+    std::fs::write(
+        &cfg,
+        text.replace(
+            "[objective]\n",
+            "[objective]\nspecimen_scatter = \"likelihood\"\n",
+        ),
+    )
+    .unwrap();
     let out = dir.path().join("fit");
     let stdout = ok(&["fit", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()]);
     let s = json(&out.join("summary.json"));
@@ -1370,15 +1380,9 @@ fn a_likelihood_fit_that_writes_curves_off_as_noise_is_marked() {
         ],
     );
     has(&stdout, &["caution: the likelihood's reading error writes"]);
+    // The default: the scatter beyond the stress trend.
     let cfg = dir.path().join("far_beyond.toml");
-    std::fs::write(
-        &cfg,
-        text.replace(
-            "[objective]\n",
-            "[objective]\nspecimen_scatter = \"beyond_stress_trend\"\n",
-        ),
-    )
-    .unwrap();
+    std::fs::write(&cfg, &text).unwrap();
     let out = dir.path().join("fit_beyond");
     ok(&["fit", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()]);
     let s = json(&out.join("summary.json"));

@@ -359,7 +359,13 @@ fn predict_intervals_add_their_columns() {
         std::fs::read_to_string("configs/560C.toml")
             .unwrap()
             .replace("../data/", &format!("{}/data/", root().display()))
-            .replace("[objective]", "[objective]\nspecimen_effects = [\"rate\"]"),
+            // The likelihood's own scatter estimate: beyond the stress trend (the default
+            // since 2026-12-04) three specimens at three stresses leave one degree of
+            // freedom, the scatter goes to zero and the refit is that of identical specimens.
+            .replace(
+                "[objective]",
+                "[objective]\nspecimen_effects = [\"rate\"]\nspecimen_scatter = \"likelihood\"",
+            ),
     )
     .unwrap();
     let out_sp = tmp.path().join("out_sp");

@@ -192,10 +192,10 @@ pub enum Command {
         /// `auto` in `specimens`, all three in `shapes`).
         #[arg(long, value_enum, value_delimiter = ',')]
         specimen_effects: Option<Vec<crate::likelihood::EffectKind>>,
-        /// `[objective] specimen_scatter` of every set's configuration (`likelihood`, the
-        /// default, or `beyond_stress_trend`): the battery measures that estimate's
-        /// calibration.
-        #[arg(long, value_enum, default_value = "likelihood")]
+        /// `[objective] specimen_scatter` of every set's configuration
+        /// (`beyond_stress_trend`, the default, or `likelihood`): the battery measures that
+        /// estimate's calibration.
+        #[arg(long, value_enum, default_value = "beyond_stress_trend")]
         specimen_scatter: crate::likelihood::SpecimenScatter,
         /// `[diagnose] bootstrap_extended` of every set's configuration: the battery
         /// measures the calibration of sampling a test close to significance on to so many

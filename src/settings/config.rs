@@ -223,7 +223,7 @@ impl Default for ObjectiveConfig {
             lifetime_term: LifetimeTerm::Late,
             omega_f: 1.0 / 3.0,
             specimen_effects: SpecimenEffects::Auto(AutoWord::Auto),
-            specimen_scatter: SpecimenScatter::Likelihood,
+            specimen_scatter: SpecimenScatter::BeyondStressTrend,
         }
     }
 }
@@ -2265,8 +2265,9 @@ rtol = 1e-8
         assert!(!list.resolve(&three, beyond).0.ductility);
     }
 
-    /// `specimen_scatter`: the likelihood's by default, the estimate beyond the stress trend
-    /// by name (carried into the resolved options), anything else refused.
+    /// `specimen_scatter`: the estimate beyond the stress trend by default (since
+    /// 2026-12-04), the likelihood's by name (carried into the resolved options), anything
+    /// else refused.
     #[test]
     fn specimen_scatter_parses_and_reaches_the_resolved_options() {
         let cfg = |extra: &str| {
@@ -2277,12 +2278,12 @@ rtol = 1e-8
         let default = cfg("").unwrap();
         assert_eq!(
             default.objective.specimen_scatter,
-            SpecimenScatter::Likelihood
+            SpecimenScatter::BeyondStressTrend
         );
-        assert!(!default.objective.specimen_options(&[]).0.beyond_trend);
-        let beyond = cfg("specimen_scatter = \"beyond_stress_trend\"\n").unwrap();
-        let (o, _) = beyond.objective.specimen_options(&[]);
+        let (o, _) = default.objective.specimen_options(&[]);
         assert!(o.rate && o.beyond_trend, "{o:?}");
+        let lik = cfg("specimen_scatter = \"likelihood\"\n").unwrap();
+        assert!(!lik.objective.specimen_options(&[]).0.beyond_trend);
         assert!(cfg("specimen_scatter = \"trend\"\n").is_err());
     }
 

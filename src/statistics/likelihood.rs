@@ -188,17 +188,17 @@ impl EffectKind {
 #[value(rename_all = "snake_case")]
 pub enum SpecimenScatter {
     /// Maximum likelihood over all the factors.
-    #[default]
     Likelihood,
     /// Restricted likelihood beyond a within-temperature trend with ln σ; every model of a
     /// diagnosis at the base's scatter.
+    #[default]
     BeyondStressTrend,
 }
 
 impl SpecimenScatter {
-    /// Whether this is the default (`likelihood`).
+    /// Whether this is the default (`beyond_stress_trend`).
     pub fn is_default(&self) -> bool {
-        *self == SpecimenScatter::Likelihood
+        *self == SpecimenScatter::BeyondStressTrend
     }
 }
 
