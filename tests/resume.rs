@@ -461,3 +461,64 @@ fn progress_is_drawn_on_a_terminal_and_silenced_by_quiet() {
         assert!(drawn.contains(phase), "no {phase:?} drawn: {drawn}");
     }
 }
+
+/// The diagnosis that goes on without the specimen factors `auto` chose (their scatter beyond
+/// the stress trend zero at the base: docs/SPECIMENS.md, "Session 65") resumes like any other:
+/// the base with factors and the base refitted without them are journaled under their own
+/// keys, and a run stopped after the first, then after the second, then finished writes the
+/// uninterrupted run's files byte for byte. The set is the identical world's 189002 (five
+/// specimens, one per stress, no scatter), with the default scatter estimate.
+#[test]
+fn a_diagnosis_without_the_zero_scatter_factors_resumes_to_the_same_files() {
+    let d = TempDir::new().unwrap();
+    let set = common::synth_set(d.path(), 189002, "constant_load");
+    let cfg = set.join("config.toml");
+    let run = |out: &Path, extra: &[&str]| -> Output {
+        let mut args = vec![
+            "diagnose",
+            cfg.to_str().unwrap(),
+            "--starts",
+            "2",
+            "--bootstrap",
+            "19",
+            "--alpha",
+            "0.5",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        creepfit(&args)
+    };
+    let plain = d.path().join("plain");
+    ok(&run(&plain, &["--threads", "2", "-q"]));
+    let j: serde_json::Value =
+        serde_json::from_slice(&bytes(&plain.join("diagnosis.json"))).unwrap();
+    assert_eq!(j["specimen_scatter_zero"], true, "{}", j["decision"]);
+    let all = keys(&plain);
+    let without = all
+        .iter()
+        .position(|k| k.starts_with("fits/0/base/without-specimen-factors/"))
+        .unwrap_or_else(|| panic!("{all:?}"));
+    // Stopped right after the base with factors, then right after the base without them.
+    let resumed = d.path().join("resumed");
+    let o = run(
+        &resumed,
+        &["--threads", "1", "--stop-after", &without.to_string(), "-q"],
+    );
+    interrupted(&o, &resumed.join("journal.jsonl"));
+    assert_eq!(keys(&resumed), all[..without]);
+    let o = run(&resumed, &["--threads", "1", "--stop-after", "1", "-q"]);
+    interrupted(&o, &resumed.join("journal.jsonl"));
+    assert_eq!(keys(&resumed), all[..=without]);
+    ok(&run(&resumed, &["--threads", "2", "-q"]));
+    assert_eq!(
+        timings(&resumed)["journal_records_resumed"],
+        without as u64 + 1
+    );
+    for f in ["diagnosis.json", "report.md", "residuals_base.png"] {
+        assert!(
+            bytes(&plain.join(f)) == bytes(&resumed.join(f)),
+            "{f} differs after resuming"
+        );
+    }
+}

@@ -339,7 +339,10 @@ pub fn battery(
     if let Some(k) = &overrides.effects {
         id["specimen_effects"] = serde_json::json!(k);
     }
-    if !overrides.scatter.is_default() {
+    // Recorded for the estimate beyond the stress trend only, default or not: batteries
+    // with the likelihood's own estimate (the default before 2026-12-04) never recorded it,
+    // and one of them must not be resumed with the other estimate, nor the reverse.
+    if !overrides.scatter.is_likelihood() {
         id["specimen_scatter"] = serde_json::json!(overrides.scatter);
     }
     if let Some(most) = overrides.bootstrap_extended {

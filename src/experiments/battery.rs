@@ -375,7 +375,7 @@ pub fn run_one_diagnosed(
 pub struct SetOverrides {
     /// `[objective] specimen_effects` (else the world's: `auto` in `specimens`).
     pub effects: Option<Vec<EffectKind>>,
-    /// `[objective] specimen_scatter` (written only when not the default).
+    /// `[objective] specimen_scatter` (written into every set's configuration).
     pub scatter: crate::likelihood::SpecimenScatter,
     /// `[diagnose] bootstrap_extended` (written only when given).
     pub bootstrap_extended: Option<usize>,
@@ -423,10 +423,8 @@ pub fn run_one_diagnosed_with(
         if let Some(k) = &overrides.effects {
             set.config_toml = crate::synth::with_specimen_effects(&set.config_toml, k);
         }
-        if !overrides.scatter.is_default() {
-            set.config_toml =
-                crate::synth::with_specimen_scatter(&set.config_toml, overrides.scatter);
-        }
+        // Always written: the set's configuration reads the same under any later default.
+        set.config_toml = crate::synth::with_specimen_scatter(&set.config_toml, overrides.scatter);
         if let Some(most) = overrides.bootstrap_extended {
             set.config_toml = crate::synth::with_bootstrap_extended(&set.config_toml, most);
         }

@@ -114,14 +114,16 @@ pub struct ObjectiveConfig {
     /// `["rate", "ductility"]`, `["rate", "ductility", "coarsening"]`, `[]`) asks for exactly
     /// those (`coarsening`: a factor on the softening constant Kc, only by name).
     pub specimen_effects: SpecimenEffects,
-    /// How the specimens' scatter is estimated. `"likelihood"` (default): by maximum
-    /// likelihood over all the specimens' factors. `"beyond_stress_trend"`: by restricted
-    /// likelihood from how the factors differ beyond a straight line in ln σ at each
-    /// temperature, and `diagnose` compares every model at the base model's scatter, so that
-    /// an effect that follows stress shows as misfit of the base instead of as a larger
-    /// scatter (docs/SPECIMENS.md, "The scatter beyond the stress trend"). Left out of the
-    /// run's identity at its default, so that runs without it keep their run ids.
-    #[serde(skip_serializing_if = "SpecimenScatter::is_default")]
+    /// How the specimens' scatter is estimated. `"beyond_stress_trend"` (default since
+    /// 2026-12-04): by restricted likelihood from how the factors differ beyond a straight
+    /// line in ln σ at each temperature, and `diagnose` compares every model at the base
+    /// model's scatter, so that an effect that follows stress shows as misfit of the base
+    /// instead of as a larger scatter (docs/SPECIMENS.md, "The scatter beyond the stress
+    /// trend"). `"likelihood"`: by maximum likelihood over all the specimens' factors (the
+    /// default before). Left out of the run's identity when `likelihood`, as every run before
+    /// the change recorded it, so that those runs keep their run ids and a folder of one
+    /// estimate is never resumed with the other.
+    #[serde(skip_serializing_if = "SpecimenScatter::is_likelihood")]
     pub specimen_scatter: SpecimenScatter,
 }
 
@@ -2285,6 +2287,13 @@ rtol = 1e-8
         let lik = cfg("specimen_scatter = \"likelihood\"\n").unwrap();
         assert!(!lik.objective.specimen_options(&[]).0.beyond_trend);
         assert!(cfg("specimen_scatter = \"trend\"\n").is_err());
+        // In a run's identity the estimate beyond the trend is written and the likelihood's
+        // is not, as every run before the default changed recorded it: a folder of one is
+        // never resumed with the other.
+        let written =
+            |c: &RunConfig| serde_json::to_value(&c.objective).unwrap()["specimen_scatter"].clone();
+        assert_eq!(written(&default), "beyond_stress_trend");
+        assert!(written(&lik).is_null());
     }
 
     #[test]

@@ -196,9 +196,10 @@ pub enum SpecimenScatter {
 }
 
 impl SpecimenScatter {
-    /// Whether this is the default (`beyond_stress_trend`).
-    pub fn is_default(&self) -> bool {
-        *self == SpecimenScatter::BeyondStressTrend
+    /// Whether this is the likelihood's own estimate (the default before 2026-12-04: what a
+    /// run identity without the key means).
+    pub fn is_likelihood(&self) -> bool {
+        *self == SpecimenScatter::Likelihood
     }
 }
 

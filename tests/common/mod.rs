@@ -76,3 +76,23 @@ impl creepfit::progress::Observer for TestProgress {
         self.line(line);
     }
 }
+
+/// One generated set of `creepfit synth` (world `identical`, the default) with seed `seed` and
+/// hidden effect `scenario`, written under `dir/sets`: its folder (config.toml, curves.csv,
+/// ruptures.csv, truth.json).
+pub fn synth_set(dir: &Path, seed: u64, scenario: &str) -> PathBuf {
+    let sets = dir.join("sets");
+    let seed_text = seed.to_string();
+    let o = creepfit(&[
+        "synth",
+        sets.to_str().unwrap(),
+        "--sets",
+        "1",
+        "--seed",
+        &seed_text,
+        "--scenario",
+        scenario,
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    sets.join(format!("set-{seed}"))
+}

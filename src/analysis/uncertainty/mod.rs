@@ -28,6 +28,7 @@ pub mod predict;
 pub mod profile;
 pub mod report;
 
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::RwLock;
 
 use nalgebra::DMatrix;
@@ -72,6 +73,12 @@ pub struct Context<'a> {
     /// estimated beyond the stress trend and found zero at the reference, the analyses go on
     /// without them ([`Context::settles_without_specimens`]).
     pub auto_effects: bool,
+    /// Whether the reference of the hierarchical fits sits at zero scatter (the fit of
+    /// identical specimens won, or every kind's scatter at its floor): its −2 ln L is then the
+    /// model without effects, which the hierarchical fits reach only in the limit, so every
+    /// fit after it is also fitted without effects and the better one kept
+    /// ([`Context::fit_row`]). Set by [`Context::start_effects_at`].
+    pub zero_scatter_reference: AtomicBool,
 }
 
 impl<'a> Context<'a> {
@@ -99,6 +106,7 @@ impl<'a> Context<'a> {
             ml,
             effects: RwLock::new(None),
             auto_effects: false,
+            zero_scatter_reference: AtomicBool::new(false),
         }
     }
 
@@ -129,6 +137,7 @@ impl<'a> Context<'a> {
             },
             effects: RwLock::new(None),
             auto_effects: false,
+            zero_scatter_reference: AtomicBool::new(false),
         }
     }
 
@@ -158,6 +167,7 @@ impl<'a> Context<'a> {
             ml: self.ml,
             effects: RwLock::new(fresh),
             auto_effects: self.auto_effects,
+            zero_scatter_reference: AtomicBool::new(false),
         }
     }
 
@@ -208,6 +218,10 @@ impl<'a> Context<'a> {
     /// Hierarchical fits start from the effects of `fit`, which belong to constants `params`,
     /// from now on (nothing without effects).
     pub fn start_effects_at(&self, fit: Option<&SpecimenFit>, params: &[f64]) {
+        if self.hierarchical() {
+            let zero = crate::likelihood::scatter_at_zero(fit.map(|sp| sp.scatter.as_slice()));
+            self.zero_scatter_reference.store(zero, Ordering::Relaxed);
+        }
         if let Some(sp) = fit {
             let mut w = self.effects.write().unwrap_or_else(|e| e.into_inner());
             *w = Some((EffectStart::from(sp), Some(params.to_vec())));
@@ -269,7 +283,12 @@ impl<'a> Context<'a> {
             ..self.ml
         };
         let effects = self.effect_start_for(start);
-        crate::likelihood::ml_fit_row(
+        let held = crate::likelihood::Held {
+            pinned,
+            row,
+            scaled: true,
+        };
+        let h = crate::likelihood::ml_fit_row(
             self.model,
             self.curves,
             space,
@@ -277,12 +296,36 @@ impl<'a> Context<'a> {
             effects.as_ref(),
             s,
             &opts,
-            &crate::likelihood::Held {
-                pinned,
-                row,
-                scaled: true,
+            &held,
+        );
+        if !self.zero_scatter_reference.load(Ordering::Relaxed) {
+            return h;
+        }
+        // The reference at zero scatter: the profile over the scatter includes its boundary,
+        // the model without effects, whose −2 ln L the hierarchical fit approaches but does
+        // not reach at its floor (the Laplace log-determinant there is not zero).
+        let plain = crate::likelihood::ml_fit_row(
+            self.model,
+            self.curves,
+            space,
+            start,
+            None,
+            s,
+            &MlOptions {
+                specimen: crate::likelihood::SpecimenOptions::NONE,
+                ..opts
             },
-        )
+            &held,
+        );
+        if plain.ok() && (!h.ok() || plain.neg2ll < h.neg2ll) {
+            MlFit {
+                iterations: plain.iterations + h.iterations,
+                evaluations: plain.evaluations + h.evaluations,
+                ..plain
+            }
+        } else {
+            h
+        }
     }
 
     /// The longest measured life among the curves, h (rupture time or last measured time).
