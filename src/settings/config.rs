@@ -192,7 +192,7 @@ impl SpecimenEffects {
                 {
                     (
                         SpecimenOptions::BOTH,
-                        Some(format!("no two specimens share a temperature and stress: each specimen's creep rate and ductility factors are fitted, their scatter estimated from how they differ beyond a straight line in ln stress at each temperature ({dof} degrees of freedom at most); a stress dependence the model misses can still go into the factors (the Specimens section of a diagnosis tests whether they follow stress)")),
+                        Some(format!("no two specimens share a temperature and stress: each specimen's creep rate and ductility factors are fitted, their scatter estimated from how they differ beyond a straight line in ln stress at each temperature ({dof} degrees of freedom at most); a stress or temperature dependence the model misses can still go into the factors (the Specimens section of a diagnosis tests whether they follow stress within temperatures; their mean per temperature is in summary.json → specimens.by_temperature)")),
                     )
                 } else {
                     (
