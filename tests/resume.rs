@@ -59,9 +59,14 @@ fn side_of(key: &str) -> Option<&str> {
 /// A small diagnosis of the seed's 560 °C data: 2 random starts per model, 19 replicates
 /// (α = 0.5 so that 19 replicates can reject over the 8 tests).
 fn diagnose(out: &Path, extra: &[&str]) -> Output {
+    diagnose_config(Path::new("configs/560C.toml"), out, extra)
+}
+
+/// The same small diagnosis of the configuration `cfg`.
+fn diagnose_config(cfg: &Path, out: &Path, extra: &[&str]) -> Output {
     let mut args = vec![
         "diagnose",
-        "configs/560C.toml",
+        cfg.to_str().unwrap(),
         "--starts",
         "2",
         "--bootstrap",
@@ -473,22 +478,7 @@ fn a_diagnosis_without_the_zero_scatter_factors_resumes_to_the_same_files() {
     let d = TempDir::new().unwrap();
     let set = common::synth_set(d.path(), 189002, "constant_load");
     let cfg = set.join("config.toml");
-    let run = |out: &Path, extra: &[&str]| -> Output {
-        let mut args = vec![
-            "diagnose",
-            cfg.to_str().unwrap(),
-            "--starts",
-            "2",
-            "--bootstrap",
-            "19",
-            "--alpha",
-            "0.5",
-            "--out",
-            out.to_str().unwrap(),
-        ];
-        args.extend_from_slice(extra);
-        creepfit(&args)
-    };
+    let run = |out: &Path, extra: &[&str]| diagnose_config(&cfg, out, extra);
     let plain = d.path().join("plain");
     ok(&run(&plain, &["--threads", "2", "-q"]));
     let j: serde_json::Value =
