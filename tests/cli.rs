@@ -723,8 +723,10 @@ fn specimen_factors_by_temperature_and_campaign() {
        // temperature's ln stresses and ln factors centred on their means, then Σxy / Σx².
     assert!(stdout.contains("factor against ln stress"), "{stdout}");
     let st = col("stress_MPa");
+    assert!(stdout.contains("factors between temperatures"), "{stdout}");
     for kind in ["rate", "ductility"] {
-        let (mut sxx, mut sxy) = (0.0, 0.0);
+        let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
+        let mut all: Vec<(f64, f64)> = Vec::new();
         let mut temps: Vec<&str> = rows.iter().map(|r| r[t].as_str()).collect();
         temps.sort_unstable();
         temps.dedup();
@@ -747,7 +749,41 @@ fn specimen_factors_by_temperature_and_campaign() {
             let my = pts.iter().map(|p| p.1).sum::<f64>() / n;
             sxx += pts.iter().map(|p| (p.0 - mx).powi(2)).sum::<f64>();
             sxy += pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum::<f64>();
+            syy += pts.iter().map(|p| (p.1 - my).powi(2)).sum::<f64>();
+            all.extend(pts);
         }
+        // The levels between temperatures: the covariance analysis in closed form,
+        // F = ((RSS₁ − RSS_T)/(T − 1)) / (RSS_T/(n − T − 1)), RSS_T the residual of a level
+        // per temperature and the pooled slope, RSS₁ that of one level and one slope.
+        let n = all.len() as f64;
+        let (mx, my) = (
+            all.iter().map(|p| p.0).sum::<f64>() / n,
+            all.iter().map(|p| p.1).sum::<f64>() / n,
+        );
+        let txx: f64 = all.iter().map(|p| (p.0 - mx).powi(2)).sum();
+        let txy: f64 = all.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+        let tyy: f64 = all.iter().map(|p| (p.1 - my).powi(2)).sum();
+        let rss_t = syy - sxy * sxy / sxx;
+        let rss_1 = tyy - txy * txy / txx;
+        let df2 = all.len() - temps.len() - 1;
+        let want_f = ((rss_1 - rss_t) / (temps.len() - 1) as f64) / (rss_t / df2 as f64);
+        let lv = &sp_json["temperature_levels"][kind];
+        let f = lv["f"].as_f64().unwrap();
+        assert!(
+            (f / want_f - 1.0).abs() < 1e-6,
+            "{kind}: F {f} against {want_f}"
+        );
+        assert_eq!(lv["df"], serde_json::json!([temps.len() - 1, df2]), "{lv}");
+        let p = lv["p_value"].as_f64().unwrap();
+        assert_eq!(
+            lv["follows_temperature"].as_bool().unwrap(),
+            p < 0.01,
+            "{lv}"
+        );
+        assert_eq!(
+            lv["mean_ln_by_temperature"].as_array().unwrap().len(),
+            temps.len()
+        );
         let trend = &sp_json["stress_trend"][kind];
         let got = trend["slope_per_ln_stress"].as_f64().unwrap();
         assert!(

@@ -514,6 +514,9 @@ pub struct FitSpecimens {
     /// Per kind, how the factors follow stress within temperatures (empty without specimen
     /// effects): a stress dependence the constants miss shows here.
     pub stress_trend: Vec<crate::likelihood::StressTrend>,
+    /// Per kind, how the factors differ between temperatures (empty without specimen
+    /// effects or with one temperature): a temperature dependence the laws miss shows here.
+    pub temperature_levels: Vec<crate::likelihood::TemperatureLevels>,
 }
 
 impl FitSpecimens {
@@ -920,6 +923,7 @@ pub fn run_fit_observed(
             by_temperature: Vec::new(),
             by_campaign: Vec::new(),
             stress_trend: Vec::new(),
+            temperature_levels: Vec::new(),
         };
         if kinds.any() {
             let opts = crate::likelihood::MlOptions {
@@ -1060,6 +1064,7 @@ pub fn run_fit_observed(
                         sp.by_campaign.clear();
                     }
                     sp.stress_trend = f.stress_trend(curves);
+                    sp.temperature_levels = f.temperature_levels(curves);
                 }
                 if 2 * replicate_curves < curves.len() {
                     sp.add_note(format!(

@@ -630,7 +630,7 @@ impl ScatterMethod {
                 "estimated by the Laplace criterion at the fitted effects (the linear mixed model of the fit's linearisation stopped where that criterion still fell, or its step did not pay)"
             }
             ScatterMethod::BeyondStressTrend => {
-                "estimated by restricted likelihood from how the specimens' factors differ beyond a straight line in ln σ at each temperature ([objective] specimen_scatter = \"beyond_stress_trend\"): a trend of the factors with stress is not counted as scatter, and costs the fit its penalty at this scatter"
+                "estimated by restricted likelihood from how the specimens' factors differ beyond a level and a straight line in ln σ at each temperature ([objective] specimen_scatter = \"beyond_stress_trend\"): a trend of the factors with stress, or a difference between temperatures, is not counted as scatter, and costs the fit its penalty at this scatter"
             }
         }
     }

@@ -192,7 +192,7 @@ impl SpecimenEffects {
                 {
                     (
                         SpecimenOptions::BOTH,
-                        Some(format!("no two specimens share a temperature and stress: each specimen's creep rate and ductility factors are fitted, their scatter estimated from how they differ beyond a straight line in ln stress at each temperature ({dof} degrees of freedom at most); a stress or temperature dependence the model misses can still go into the factors (the Specimens section of a diagnosis tests whether they follow stress within temperatures; their mean per temperature is in summary.json → specimens.by_temperature)")),
+                        Some(format!("no two specimens share a temperature and stress: each specimen's creep rate and ductility factors are fitted, their scatter estimated from how they differ beyond a level and a straight line in ln stress at each temperature ({dof} degrees of freedom at most); a stress or temperature dependence the model misses can still go into the factors, at the cost of their penalty at that scatter (the Specimens section of a diagnosis tests whether they follow stress within temperatures and whether they differ between temperatures; their mean per temperature is in summary.json → specimens.by_temperature)")),
                     )
                 } else {
                     (

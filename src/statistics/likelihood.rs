@@ -317,10 +317,84 @@ pub struct EffectLayout {
     /// Per curve, its rows [start, end) among the data residuals (strains and lifetime).
     pub rows: Vec<(usize, usize)>,
     /// Directions of the effects whose scatter is not estimated (empty unless
-    /// [`SpecimenOptions::beyond_trend`]): per kind (its index in `kinds`) and temperature
-    /// with two stresses or more, the curves' weights of [`stress_trend_weights`]. In the
-    /// linear mixed model of the scatter each is a fixed effect ([`EffectLayout::lmm`]).
+    /// [`SpecimenOptions::beyond_trend`]): per kind (its index in `kinds`), each temperature
+    /// with two stresses or more (the curves' weights of [`stress_trend_weights`]) and, with
+    /// two temperatures or more, the contrasts of their levels
+    /// ([`temperature_level_weights`]). In the linear mixed model of the scatter each is a
+    /// fixed effect ([`EffectLayout::lmm`]).
     pub trend: Vec<(usize, Vec<(usize, f64)>)>,
+}
+
+/// Of `cols`, the indices of those that leave the span of `x`'s columns and of the columns
+/// kept before them by more than [`SPAN_TOLERANCE`] of their norm (modified Gram–Schmidt,
+/// twice). A trend direction the constants already carry (a temperature's level where the
+/// rate follows an Arrhenius law) adds nothing to the fixed effects; kept, it would make
+/// their information singular, and the ridge that keeps its factorisation defined would
+/// give the restricted likelihood a spurious dependence on the scatter.
+fn beyond_span(x: &DMatrix<f64>, cols: &[Vec<f64>]) -> Vec<usize> {
+    let mut basis: Vec<Vec<f64>> = Vec::new();
+    let dot = |a: &[f64], b: &[f64]| -> f64 { a.iter().zip(b).map(|(u, v)| u * v).sum() };
+    let add = |c: &[f64], basis: &mut Vec<Vec<f64>>| -> bool {
+        let norm0 = dot(c, c).sqrt();
+        if !(norm0 > 0.0) {
+            return false;
+        }
+        let mut v = c.to_vec();
+        for _ in 0..2 {
+            for q in basis.iter() {
+                let d = dot(&v, q);
+                v.iter_mut().zip(q).for_each(|(a, b)| *a -= d * b);
+            }
+        }
+        let norm = dot(&v, &v).sqrt();
+        if norm > SPAN_TOLERANCE * norm0 {
+            v.iter_mut().for_each(|a| *a /= norm);
+            basis.push(v);
+            true
+        } else {
+            false
+        }
+    };
+    for c in x.column_iter() {
+        add(c.as_slice(), &mut basis);
+    }
+    (0..cols.len())
+        .filter(|&j| add(&cols[j], &mut basis))
+        .collect()
+}
+
+/// Relative norm below which a trend direction counts as inside the constants' span
+/// ([`beyond_span`]): its information is then ≤ 1e-8 of its own, far above the 1e-12 ridge of
+/// the linear mixed model's factorisation.
+const SPAN_TOLERANCE: f64 = 1e-4;
+
+/// With two test temperatures or more, one direction per temperature but the first (in
+/// increasing order): the curves' weights 1{T_i = T} − n_T/n, of unit norm. They span how
+/// the effects' means differ between temperatures, orthogonal to their common level (which
+/// the constants carry) and to every within-temperature stress trend: factors that follow
+/// temperature are a temperature dependence the model lacks, not specimen scatter, exactly
+/// as factors that follow stress ([`crate::specimen::dof_beyond_trend`] counts them out).
+pub fn temperature_level_weights(curves: &[Curve]) -> Vec<Vec<(usize, f64)>> {
+    let mut temps: Vec<f64> = curves.iter().map(|c| c.temperature_c).collect();
+    temps.sort_by(f64::total_cmp);
+    temps.dedup();
+    let n = curves.len() as f64;
+    temps
+        .iter()
+        .skip(1)
+        .map(|&t| {
+            let share = curves.iter().filter(|c| c.temperature_c == t).count() as f64 / n;
+            let w: Vec<f64> = curves
+                .iter()
+                .map(|c| f64::from(u8::from(c.temperature_c == t)) - share)
+                .collect();
+            let norm = w.iter().map(|v| v * v).sum::<f64>().sqrt();
+            w.into_iter()
+                .enumerate()
+                .map(|(i, v)| (i, v / norm))
+                .collect()
+        })
+        .collect()
 }
 
 /// Per temperature whose curves were tested at more than one stress: the curves' weights
@@ -352,9 +426,11 @@ pub fn stress_trend_weights(curves: &[Curve]) -> Vec<Vec<(usize, f64)>> {
 }
 
 impl EffectLayout {
-    /// This layout with [`EffectLayout::trend`] set for every kind on `curves`.
+    /// This layout with [`EffectLayout::trend`] set for every kind on `curves`: the
+    /// within-temperature stress trends and the temperatures' level contrasts.
     pub fn with_trend(mut self, curves: &[Curve]) -> EffectLayout {
-        let groups = stress_trend_weights(curves);
+        let mut groups = stress_trend_weights(curves);
+        groups.extend(temperature_level_weights(curves));
         self.trend = (0..self.kinds.len())
             .flat_map(|k| groups.iter().map(move |w| (k, w.clone())))
             .collect();
@@ -383,19 +459,29 @@ impl EffectLayout {
         if self.trend.is_empty() {
             return Lmm::from_jacobian(jac, r, &self.rows, nt, kk, eta);
         }
-        let g = self.trend.len();
         let ne = self.n_effects();
         let m = jac.nrows();
+        let cols: Vec<Vec<f64>> = self
+            .trend
+            .iter()
+            .map(|(k, w)| {
+                let mut c = vec![0.0; m];
+                for (i, wi) in w {
+                    let (a, b) = self.rows[*i];
+                    for (row, v) in c.iter_mut().enumerate().take(b).skip(a) {
+                        *v += wi * jac[(row, nt + k * n + i)];
+                    }
+                }
+                c
+            })
+            .collect();
+        let keep = beyond_span(&jac.columns(0, nt).into_owned(), &cols);
+        let g = keep.len();
         let mut aug = DMatrix::<f64>::zeros(m, nt + g + ne);
         aug.columns_mut(0, nt).copy_from(&jac.columns(0, nt));
         aug.columns_mut(nt + g, ne).copy_from(&jac.columns(nt, ne));
-        for (j, (k, w)) in self.trend.iter().enumerate() {
-            for (i, wi) in w {
-                let (a, b) = self.rows[*i];
-                for row in a..b {
-                    aug[(row, nt + j)] += wi * jac[(row, nt + k * n + i)];
-                }
-            }
+        for (j, &c) in keep.iter().enumerate() {
+            aug.column_mut(nt + j).copy_from_slice(&cols[c]);
         }
         Lmm::from_jacobian(&aug, r, &self.rows, nt + g, kk, eta)
     }
@@ -1122,6 +1208,94 @@ pub fn within_group_slope(x: &[f64], y: &[f64], group: &[usize]) -> (f64, f64, u
     (b, se, df)
 }
 
+/// How one kind of specimen factor differs between test temperatures: the ln factors'
+/// (conditional modes') mean per temperature, and the F-test of equal levels in the
+/// covariance analysis with a pooled slope on ln σ ([`StressTrend`]'s model against one
+/// intercept). The hierarchical model draws every specimen's factor from one distribution at
+/// every temperature; levels far apart are a temperature dependence the constants' laws
+/// miss and the factors take up (on the seed's steel the ductility factors are ~0.6 at
+/// 560 °C and ~1.6 at 590 °C: a rupture strain that grows with temperature, which the KHD
+/// model's one ω_f/C does not carry).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct TemperatureLevels {
+    /// The kind of factor.
+    pub kind: EffectKind,
+    /// Per temperature (°C, increasing): the mean of its specimens' ln factors.
+    pub mean_ln: Vec<(f64, f64)>,
+    /// The F statistic of equal levels (NaN where the test cannot be made: too few
+    /// specimens, or the kind's scatter at its floor, where the factors are zero).
+    pub f: f64,
+    /// Its degrees of freedom: temperatures − 1, and specimens − temperatures − 1.
+    pub df: (usize, usize),
+    /// Its p-value (NaN where `f` is).
+    pub p_value: f64,
+}
+
+impl TemperatureLevels {
+    /// Whether the factors follow temperature: p below [`STRESS_TREND_ALPHA`], the stress
+    /// trend's level (false where the test could not be made).
+    pub fn follows_temperature(&self) -> bool {
+        self.p_value < STRESS_TREND_ALPHA
+    }
+}
+
+/// The F statistic of equal group levels for `y` with a pooled slope on `x` (covariance
+/// analysis: one intercept per group against one in all), and its degrees of freedom
+/// (groups − 1, n − groups − 1); NaN with fewer than two groups or no residual degree of
+/// freedom.
+pub fn between_group_f(x: &[f64], y: &[f64], group: &[usize]) -> (f64, usize, usize) {
+    let mut ids: Vec<usize> = group.to_vec();
+    ids.sort_unstable();
+    ids.dedup();
+    let (n, g) = (y.len(), ids.len());
+    let df2 = n.saturating_sub(g + 1);
+    if g < 2 || df2 == 0 {
+        return (f64::NAN, g.saturating_sub(1), df2);
+    }
+    // Residual sum of squares of least squares on the columns `cols` (rank-revealing SVD).
+    let rss = |cols: &[Vec<f64>]| -> f64 {
+        let a = DMatrix::from_fn(n, cols.len(), |i, c| cols[c][i]);
+        let b = nalgebra::DVector::from_column_slice(y);
+        let sol = a
+            .clone()
+            .svd(true, true)
+            .solve(&b, 1e-12)
+            .expect("U and V computed");
+        (&b - &a * sol).norm_squared()
+    };
+    let indicators: Vec<Vec<f64>> = ids
+        .iter()
+        .map(|id| {
+            group
+                .iter()
+                .map(|gi| f64::from(u8::from(gi == id)))
+                .collect()
+        })
+        .collect();
+    let mut full = indicators;
+    full.push(x.to_vec());
+    let rss_full = rss(&full);
+    let rss_one = rss(&[vec![1.0; n], x.to_vec()]);
+    let f = ((rss_one - rss_full).max(0.0) / (g - 1) as f64) / (rss_full / df2 as f64);
+    (f, g - 1, df2)
+}
+
+/// Upper tail of the F distribution with (`d1`, `d2`) degrees of freedom at `f` (NaN for NaN
+/// or a zero degree of freedom; 0 for an infinite `f`).
+pub fn f_upper(f: f64, d1: usize, d2: usize) -> f64 {
+    use statrs::distribution::{ContinuousCDF, FisherSnedecor};
+    if f.is_nan() || d1 == 0 || d2 == 0 {
+        return f64::NAN;
+    }
+    if f.is_infinite() {
+        return 0.0;
+    }
+    match FisherSnedecor::new(d1 as f64, d2 as f64) {
+        Ok(d) => d.sf(f),
+        Err(_) => f64::NAN,
+    }
+}
+
 /// Two-sided p-value of a t statistic with `df` degrees of freedom (NaN for NaN or df 0; 0
 /// for an infinite t, a slope without scatter about it).
 pub fn t_two_sided(t: f64, df: usize) -> f64 {
@@ -1139,6 +1313,58 @@ pub fn t_two_sided(t: f64, df: usize) -> f64 {
 }
 
 impl SpecimenFit {
+    /// Per kind, how the specimens' ln factors differ between temperatures
+    /// ([`TemperatureLevels`]; empty with one temperature); `curves` are the curves the fit
+    /// was made on, in its order.
+    pub fn temperature_levels(&self, curves: &[Curve]) -> Vec<TemperatureLevels> {
+        let mut temps: Vec<f64> = curves.iter().map(|c| c.temperature_c).collect();
+        temps.sort_by(f64::total_cmp);
+        temps.dedup();
+        if temps.len() < 2 {
+            return Vec::new();
+        }
+        let x: Vec<f64> = curves.iter().map(|c| c.stress_mpa.ln()).collect();
+        let group: Vec<usize> = curves
+            .iter()
+            .map(|c| {
+                temps
+                    .iter()
+                    .position(|t| *t == c.temperature_c)
+                    .unwrap_or(0)
+            })
+            .collect();
+        self.kinds
+            .iter()
+            .zip(&self.effects)
+            .enumerate()
+            .map(|(k, (&kind, eta))| {
+                let mean_ln = temps
+                    .iter()
+                    .enumerate()
+                    .map(|(g, &t)| {
+                        let v: Vec<f64> = (0..eta.len())
+                            .filter(|&i| group[i] == g)
+                            .map(|i| eta[i])
+                            .collect();
+                        (t, v.iter().sum::<f64>() / v.len() as f64)
+                    })
+                    .collect();
+                let (mut f, d1, d2) = between_group_f(&x, eta, &group);
+                // At the scatter's floor the factors are zero but for rounding: no levels.
+                if self.scatter[k] <= crate::specimen::SCATTER_FLOOR * (1.0 + 1e-9) {
+                    f = f64::NAN;
+                }
+                TemperatureLevels {
+                    kind,
+                    mean_ln,
+                    f,
+                    df: (d1, d2),
+                    p_value: f_upper(f, d1, d2),
+                }
+            })
+            .collect()
+    }
+
     /// Per kind, how the specimens' ln factors follow ln σ within temperatures
     /// ([`StressTrend`]); `curves` are the curves the fit was made on, in its order.
     pub fn stress_trend(&self, curves: &[Curve]) -> Vec<StressTrend> {
@@ -3011,12 +3237,14 @@ mod tests {
         assert!((dot - b * spread).abs() < 1e-12, "{dot}");
     }
 
-    /// The scatter beyond the stress trend against the closed form of a balanced one-way
+    /// The scatter beyond the trend against the closed form of a balanced one-way
     /// random-effects model: 8 specimens at two temperatures, 40 whitened readings each
     /// (unit variance), an intercept as the constant, each specimen's effect a strong trend
-    /// with ln σ plus its own part u_i. The restricted likelihood of the curve means with q
-    /// fixed columns gives τ̂² = RSS/(n − q) − 1/m: with the trends as fixed effects (q = 3)
-    /// the scatter is that of u alone; without them (q = 1) the trend is counted as scatter.
+    /// with ln σ, a level that differs between the temperatures, plus its own part u_i. The
+    /// restricted likelihood of the curve means with q fixed columns gives
+    /// τ̂² = RSS/(n − q) − 1/m: with the trends and the level contrast as fixed effects
+    /// (q = 4) the scatter is that of u alone; with the stress trends alone (q = 3) the
+    /// level is counted as scatter, and without any (q = 1) the trends are too.
     #[test]
     fn the_scatter_beyond_the_trend_is_the_restricted_anova_estimate() {
         use rand::SeedableRng;
@@ -3028,13 +3256,17 @@ mod tests {
         let (n, m) = (curves.len(), 40usize);
         let u = [0.30, -0.20, 0.10, -0.25, -0.10, 0.25, -0.30, 0.20];
         let slope = |t: f64| if t < 875.0 { 4.0 } else { -3.0 };
+        let level = |t: f64| if t < 875.0 { 0.0 } else { 1.0 };
         let groups = stress_trend_weights(&curves);
+        let levels = temperature_level_weights(&curves);
+        assert_eq!(levels.len(), 1);
         let mut eta = vec![0.0; n];
         for g in &groups {
             let x: Vec<f64> = g.iter().map(|(i, _)| curves[*i].stress_mpa.ln()).collect();
             let xm = x.iter().sum::<f64>() / x.len() as f64;
             for ((i, _), xi) in g.iter().zip(&x) {
-                eta[*i] = slope(curves[*i].temperature_c) * (xi - xm) + u[*i];
+                let t = curves[*i].temperature_c;
+                eta[*i] = slope(t) * (xi - xm) + level(t) + u[*i];
             }
         }
         // Jacobian: the intercept, then one effect column per curve; residuals r = −y at
@@ -3069,17 +3301,13 @@ mod tests {
             let rss = (&y - &x * beta).norm_squared();
             (rss / (n - q) as f64 - 1.0 / m as f64).max(0.0).sqrt()
         };
-        let ones = vec![1.0; n];
-        let trend_cols: Vec<Vec<f64>> = groups
-            .iter()
-            .map(|g| {
-                let mut c = vec![0.0; n];
-                for (i, w) in g {
-                    c[*i] = *w;
-                }
-                c
-            })
-            .collect();
+        let column = |g: &Vec<(usize, f64)>| {
+            let mut c = vec![0.0; n];
+            for (i, w) in g {
+                c[*i] = *w;
+            }
+            c
+        };
         let zero = vec![0.0; n];
         let plain = layout.lmm(&jac, &r, &zero).estimate(&[0.1], true)[0];
         let beyond = layout
@@ -3087,22 +3315,163 @@ mod tests {
             .with_trend(&curves)
             .lmm(&jac, &r, &zero)
             .estimate(&[0.1], true)[0];
+        let stress_only = EffectLayout {
+            trend: groups.iter().map(|w| (0, w.clone())).collect(),
+            ..layout.clone()
+        }
+        .lmm(&jac, &r, &zero)
+        .estimate(&[0.1], true)[0];
+        let ones = vec![1.0; n];
         let want_plain = closed(std::slice::from_ref(&ones));
-        let mut all = vec![ones];
-        all.extend(trend_cols);
-        let want_beyond = closed(&all);
-        assert!(
-            (plain / want_plain - 1.0).abs() < 0.01,
-            "{plain} {want_plain}"
-        );
-        assert!(
-            (beyond / want_beyond - 1.0).abs() < 0.01,
-            "{beyond} {want_beyond}"
-        );
-        // The trend is ~1 in ln factor across each temperature's stresses; u's sd is 0.25.
+        let mut cols = vec![ones];
+        cols.extend(groups.iter().map(column));
+        let want_stress_only = closed(&cols);
+        cols.extend(levels.iter().map(column));
+        let want_beyond = closed(&cols);
+        for (got, want) in [
+            (plain, want_plain),
+            (stress_only, want_stress_only),
+            (beyond, want_beyond),
+        ] {
+            assert!((got / want - 1.0).abs() < 0.01, "{got} {want}");
+        }
+        // The trend is ~1 in ln factor across each temperature's stresses and the level 1
+        // between them; u's sd is 0.25.
         assert!(plain > 2.0 * beyond, "{plain} {beyond}");
-        let u_sd = (u.iter().map(|v| v * v).sum::<f64>() / (n - 3) as f64).sqrt();
+        assert!(stress_only > 1.5 * beyond, "{stress_only} {beyond}");
+        let u_sd = (u.iter().map(|v| v * v).sum::<f64>() / (n - 4) as f64).sqrt();
         assert!((beyond - u_sd).abs() < 0.1, "{beyond} {u_sd}");
+    }
+
+    /// A level contrast the constants already carry (an intercept and a temperature law
+    /// spanning both temperatures' levels, as A and its activation energy do) changes
+    /// nothing: the fixed columns' span is the same, and the scatter with the contrast is the
+    /// one without it.
+    #[test]
+    fn a_level_contrast_the_constants_span_leaves_the_scatter_alone() {
+        use rand::SeedableRng;
+        use rand_distr::{Distribution, StandardNormal};
+        let conds = [(850.0, 30.0), (850.0, 35.0), (850.0, 40.0)]
+            .into_iter()
+            .chain([(900.0, 20.0), (900.0, 24.0), (900.0, 28.0), (900.0, 32.0)]);
+        let curves: Vec<Curve> = conds.map(|(t, s)| two_point_curve(t, s, None)).collect();
+        let (n, m) = (curves.len(), 30usize);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(71);
+        let eta: Vec<f64> = (0..n)
+            .map(|i| {
+                let z: f64 = StandardNormal.sample(&mut rng);
+                0.2 * z
+                    + if curves[i].temperature_c > 875.0 {
+                        0.7
+                    } else {
+                        0.0
+                    }
+            })
+            .collect();
+        let mut jac = DMatrix::<f64>::zeros(n * m, 2 + n);
+        let mut r = vec![0.0; n * m];
+        for i in 0..n {
+            for row in i * m..(i + 1) * m {
+                jac[(row, 0)] = 1.0;
+                // An Arrhenius-like column: the level at the second temperature.
+                jac[(row, 1)] = if curves[i].temperature_c > 875.0 {
+                    -0.3
+                } else {
+                    0.2
+                };
+                jac[(row, 2 + i)] = 1.0;
+                let e: f64 = StandardNormal.sample(&mut rng);
+                r[row] = -(eta[i] + e);
+            }
+        }
+        let layout = EffectLayout {
+            kinds: vec![(EffectKind::Rate, 0, 0)],
+            trend: stress_trend_weights(&curves)
+                .into_iter()
+                .map(|w| (0, w))
+                .collect(),
+            n_curves: n,
+            n_theta: 2,
+            m_data: n * m,
+            rows: (0..n).map(|i| (i * m, (i + 1) * m)).collect(),
+        };
+        let zero = vec![0.0; n];
+        let without = layout.lmm(&jac, &r, &zero).estimate(&[0.1], true)[0];
+        let lmm = layout.clone().with_trend(&curves).lmm(&jac, &r, &zero);
+        // The contrast is left out of the fixed effects: the constants carry it.
+        assert_eq!(lmm.p, 2 + 2);
+        let with = lmm.estimate(&[0.1], true)[0];
+        assert!(without > 0.05, "{without}");
+        assert!((with / without - 1.0).abs() < 1e-3, "{with} {without}");
+    }
+
+    /// The F-test of equal temperature levels with a pooled stress slope: on null data
+    /// (one level, a slope, normal scatter; stresses that differ between the groups) over
+    /// 4,000 sets its rejections at 5 % and 1 % are within binomial limits of those rates
+    /// (the statistic's null law is exact); with the same stresses in every group it is the
+    /// one-way analysis of variance's F with the slope taken out of the residual (closed
+    /// form), and levels 1.5 sd apart are rejected as often as the noncentral F says.
+    #[test]
+    fn temperature_levels_f_test_holds_its_level_and_sees_a_level() {
+        use rand::SeedableRng;
+        use rand_distr::{Distribution, StandardNormal};
+        let group = [0usize, 0, 0, 1, 1, 1, 1, 2, 2];
+        let x = [4.4, 4.6, 4.7, 4.2, 4.3, 4.5, 4.6, 3.9, 4.1];
+        let balanced = [0usize, 0, 0, 1, 1, 1, 2, 2, 2];
+        let xb = [4.2, 4.4, 4.6, 4.2, 4.4, 4.6, 4.2, 4.4, 4.6];
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(2026_1204);
+        let (mut r05, mut r01, mut power) = (0, 0, 0);
+        let sets = 4000;
+        for _ in 0..sets {
+            let e: Vec<f64> = (0..9).map(|_| StandardNormal.sample(&mut rng)).collect();
+            let y: Vec<f64> = (0..9).map(|i| 0.3 - 2.0 * x[i] + e[i]).collect();
+            let (f, d1, d2) = between_group_f(&x, &y, &group);
+            assert_eq!((d1, d2), (2, 5));
+            let p = f_upper(f, d1, d2);
+            r05 += usize::from(p < 0.05);
+            r01 += usize::from(p < 0.01);
+            let shifted: Vec<f64> = (0..9)
+                .map(|i| 0.3 - 2.0 * xb[i] + 1.5 * balanced[i] as f64 + e[i])
+                .collect();
+            let (f, d1, d2) = between_group_f(&xb, &shifted, &balanced);
+            power += usize::from(f_upper(f, d1, d2) < 0.05);
+        }
+        // Binomial 99.9 % limits: 5 % of 4,000 is 200 ± 45, 1 % is 40 ± 21.
+        assert!((155..=245).contains(&r05), "{r05}");
+        assert!((19..=61).contains(&r01), "{r01}");
+        // The power is the noncentral F's (2, 5) tail beyond the 5 % critical value, with
+        // λ = Σ n_g (μ_g − μ̄)² = 3·(1.5² + 0 + 1.5²): a Poisson mixture of beta tails.
+        let crit = {
+            use statrs::distribution::{ContinuousCDF, FisherSnedecor};
+            FisherSnedecor::new(2.0, 5.0).unwrap().inverse_cdf(0.95)
+        };
+        let (lam, xq) = (13.5f64, 2.0 * crit / (2.0 * crit + 5.0));
+        let mut term = (-lam / 2.0).exp();
+        let mut exact = 0.0;
+        for j in 0..200 {
+            exact += term * (1.0 - statrs::function::beta::beta_reg(1.0 + j as f64, 2.5, xq));
+            term *= lam / 2.0 / (j + 1) as f64;
+        }
+        let got = power as f64 / sets as f64;
+        let sd = (exact * (1.0 - exact) / sets as f64).sqrt();
+        assert!((got - exact).abs() < 3.3 * sd, "{got} {exact}");
+        // The closed form with the same stresses in every group: the slope is orthogonal to
+        // the levels, so F = (SSB/2) / ((SSW − S²xy/Sxx)/5) with within-group sums.
+        let yb = [1.0, 1.3, 0.7, 2.0, 2.5, 2.3, 0.1, 0.4, 0.2];
+        let (f, d1, d2) = between_group_f(&xb, &yb, &balanced);
+        let mean = |v: &[f64], g: usize| (0..3).map(|k| v[3 * g + k]).sum::<f64>() / 3.0;
+        let grand = yb.iter().sum::<f64>() / 9.0;
+        let ssb: f64 = (0..3).map(|g| 3.0 * (mean(&yb, g) - grand).powi(2)).sum();
+        let ssw: f64 = (0..9).map(|i| (yb[i] - mean(&yb, i / 3)).powi(2)).sum();
+        let sxx: f64 = (0..9).map(|i| (xb[i] - mean(&xb, i / 3)).powi(2)).sum();
+        let sxy: f64 = (0..9)
+            .map(|i| (xb[i] - mean(&xb, i / 3)) * (yb[i] - mean(&yb, i / 3)))
+            .sum();
+        let want = (ssb / 2.0) / ((ssw - sxy * sxy / sxx) / 5.0);
+        assert_eq!((d1, d2), (2, 5));
+        assert!((f / want - 1.0).abs() < 1e-9, "{f} {want}");
+        // One group: no test.
+        assert!(between_group_f(&x, &x, &[0; 9]).0.is_nan());
     }
 
     fn two_point_curve(t: f64, s: f64, specimen: Option<&str>) -> crate::data::Curve {

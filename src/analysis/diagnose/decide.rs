@@ -336,10 +336,11 @@ pub fn specimen_factors_caution(
     if !replicates && !kinds.is_empty() && beyond_trend {
         parts.push(
             "no two specimens share a temperature and stress: the specimens' scatter is \
-             estimated beyond a straight line in ln σ, but their fitted factors can still \
+             estimated beyond a level and a straight line in ln σ per temperature, but \
+             their fitted factors can still \
              take up a stress or temperature dependence the model misses, which the tests \
              cannot see (the Specimens section says whether they follow stress within \
-             temperatures; `fit` with the likelihood objective gives their mean per \
+             temperatures and whether they differ between temperatures; `fit` with the likelihood objective gives their mean per \
              temperature in summary.json, specimens.by_temperature)"
                 .to_string(),
         );
@@ -434,7 +435,9 @@ mod tests {
         let beyond =
             super::specimen_factors_caution(false, true, &["rate"], &[vec![0.2, 0.0]]).unwrap();
         assert!(
-            beyond.contains("beyond a straight line") && !beyond.contains("fitting none"),
+            beyond.contains("beyond a level and a straight line")
+                && beyond.contains("differ between temperatures")
+                && !beyond.contains("fitting none"),
             "{beyond}"
         );
         assert!(super::specimen_factors_caution(true, true, &["rate"], &[vec![0.2]]).is_none());

@@ -701,6 +701,10 @@ pub struct Candidate {
     /// ([`crate::likelihood::StressTrend`]; empty without effects): information beside the
     /// tests, not part of the decision.
     pub specimen_stress_trend: Vec<crate::likelihood::StressTrend>,
+    /// Per kind of specimen effect, how the factors differ between temperatures
+    /// ([`crate::likelihood::TemperatureLevels`]; empty without effects or with one
+    /// temperature): information beside the tests, not part of the decision.
+    pub specimen_temperature_levels: Vec<crate::likelihood::TemperatureLevels>,
     /// Per-curve explanation.
     pub curves: Vec<CurveSignature>,
 }
@@ -940,6 +944,7 @@ fn candidate(
         noise: None,
         specimen: None,
         specimen_stress_trend: vec![],
+        specimen_temperature_levels: vec![],
         curves: vec![],
     };
     if let Some(f) = fit {
@@ -969,6 +974,11 @@ fn candidate(
             .specimen
             .as_ref()
             .map(|s| s.stress_trend(curves))
+            .unwrap_or_default();
+        c.specimen_temperature_levels = f
+            .specimen
+            .as_ref()
+            .map(|s| s.temperature_levels(curves))
             .unwrap_or_default();
         c.curves = signatures(curves, f);
     }

@@ -762,6 +762,40 @@ pub fn p_text(p: f64) -> String {
     }
 }
 
+/// One line on how a kind's ln factors differ between temperatures
+/// ([`crate::likelihood::TemperatureLevels`]), without a leading dash: the means per
+/// temperature, the F-test and, where it is called, what that means.
+pub fn temperature_levels_text(t: &crate::likelihood::TemperatureLevels) -> String {
+    let means: Vec<String> = t
+        .mean_ln
+        .iter()
+        .map(|(temp, m)| format!("{m:+.2} at {temp} °C"))
+        .collect();
+    let test = if t.f.is_finite() {
+        format!(
+            "F-test of equal levels beside a common slope on ln stress: p {}, {} and {} degrees of freedom; called at p < {}",
+            p_text(t.p_value),
+            t.df.0,
+            t.df.1,
+            crate::likelihood::STRESS_TREND_ALPHA
+        )
+    } else if t.df.1 == 0 {
+        "no test: too few specimens beside the levels and the slope".to_string()
+    } else {
+        "no test: the scatter is at its floor, the factors are zero".to_string()
+    };
+    let flag = if t.follows_temperature() {
+        ": **they follow temperature**, a temperature dependence the constants' laws miss and the factors take up, which goodness-of-fit tests cannot see"
+    } else {
+        ""
+    };
+    format!(
+        "The ln {} factors between temperatures: mean {} ({test}){flag}",
+        t.kind.name(),
+        means.join(", ")
+    )
+}
+
 /// The kinds of specimen effect, in the order of `specimens.csv` and `summary.json`.
 const EFFECT_KINDS: [(crate::likelihood::EffectKind, &str); 3] = [
     (crate::likelihood::EffectKind::Rate, "rate"),
@@ -817,6 +851,24 @@ pub fn specimens_json(sp: &crate::fit::FitSpecimens) -> Value {
                     "follows_stress": t.follows_stress(),
                     "specimens": t.specimens,
                     "temperatures": t.temperatures,
+                })
+            ))
+            .collect::<serde_json::Map<String, Value>>(),
+        "temperature_levels": sp
+            .temperature_levels
+            .iter()
+            .map(|t| (
+                t.kind.name().to_string(),
+                json!({
+                    "mean_ln_by_temperature": t
+                        .mean_ln
+                        .iter()
+                        .map(|(temp, m)| json!({"temperature_C": temp, "mean_ln": jnum(*m)}))
+                        .collect::<Vec<_>>(),
+                    "f": jnum(t.f),
+                    "df": [t.df.0, t.df.1],
+                    "p_value": jnum(t.p_value),
+                    "follows_temperature": t.follows_temperature(),
                 })
             ))
             .collect::<serde_json::Map<String, Value>>(),

@@ -256,6 +256,12 @@ fn print_specimens(sp: &crate::fit::FitSpecimens) {
             crate::likelihood::STRESS_TREND_ALPHA
         );
     }
+    for t in &sp.temperature_levels {
+        println!(
+            "specimens: {}",
+            tables::temperature_levels_text(t).replace("**", "")
+        );
+    }
     if let Some(n) = &sp.note {
         println!("specimens: {n}");
     }
