@@ -331,7 +331,7 @@ pub struct EffectLayout {
 /// rate follows an Arrhenius law) adds nothing to the fixed effects; kept, it would make
 /// their information singular, and the ridge that keeps its factorisation defined would
 /// give the restricted likelihood a spurious dependence on the scatter.
-fn beyond_span(x: &DMatrix<f64>, cols: &[Vec<f64>]) -> Vec<usize> {
+fn beyond_span(x: nalgebra::DMatrixView<f64>, cols: &[Vec<f64>]) -> Vec<usize> {
     let mut basis: Vec<Vec<f64>> = Vec::new();
     let dot = |a: &[f64], b: &[f64]| -> f64 { a.iter().zip(b).map(|(u, v)| u * v).sum() };
     let add = |c: &[f64], basis: &mut Vec<Vec<f64>>| -> bool {
@@ -475,7 +475,7 @@ impl EffectLayout {
                 c
             })
             .collect();
-        let keep = beyond_span(&jac.columns(0, nt).into_owned(), &cols);
+        let keep = beyond_span(jac.columns(0, nt), &cols);
         let g = keep.len();
         let mut aug = DMatrix::<f64>::zeros(m, nt + g + ne);
         aug.columns_mut(0, nt).copy_from(&jac.columns(0, nt));

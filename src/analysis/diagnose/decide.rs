@@ -337,10 +337,10 @@ pub fn specimen_factors_caution(
         parts.push(
             "no two specimens share a temperature and stress: the specimens' scatter is \
              estimated beyond a level and a straight line in ln σ per temperature, but \
-             their fitted factors can still \
-             take up a stress or temperature dependence the model misses, which the tests \
-             cannot see (the Specimens section says whether they follow stress within \
-             temperatures and whether they differ between temperatures; `fit` with the likelihood objective gives their mean per \
+             their fitted factors can still take up a stress or temperature dependence the \
+             model misses, which the tests cannot see (the Specimens section says whether \
+             they follow stress within temperatures and whether they differ between \
+             temperatures; `fit` with the likelihood objective gives their mean per \
              temperature in summary.json, specimens.by_temperature)"
                 .to_string(),
         );
