@@ -14,7 +14,7 @@ bin=target/release/creepfit
 echo "# $(lscpu | sed -n 's/^Model name: *//p'), $(nproc) cores; load before: $(cut -d' ' -f1-3 /proc/loadavg)"
 # A 5-curve set with a catalogued effect (the bootstrap cannot stop early).
 "$bin" synth "$out/sets" --sets 1 --seed 7 --scenario dislocation_damage > /dev/null
-printf '%-28s %8s %8s %10s %8s %10s %8s  %s\n' data wall_s user_s max_rss_MB lm_runs lm_iters at_limit verdict
+printf '%-28s %8s %8s %10s %8s %10s %8s %10s  %s\n' data wall_s user_s max_rss_MB lm_runs lm_iters at_limit lm_evals verdict
 for cfg in configs/560C.toml configs/590C.toml "$out/sets/set-7/config.toml" \
            configs/alloy617-750C.toml configs/alloy617-850C.toml \
            configs/alloy617-900C.toml configs/alloy617-950C.toml; do
@@ -24,9 +24,10 @@ for cfg in configs/560C.toml configs/590C.toml "$out/sets/set-7/config.toml" \
         "$bin" diagnose "$cfg" --threads 2 --out "$out/$tag" > "$out/$tag.log" 2>&1
     read -r wall user rss < "$out/$tag.time"
     verdict=$(python3 -c "import json,sys; d=json.load(open('$out/$tag/diagnosis.json')); print(d['verdict'], d['cause'] or '', d['bootstrap']['replicates'], 'replicates')")
-    # The Levenberg–Marquardt work (timings.json `phase_lm`): runs, iterations, runs at the limit.
-    lm=$(python3 -c "import json; t=json.load(open('$out/$tag/timings.json'))['phase_lm']['total']; print(t['runs'], t['iterations'], t['runs_at_limit'])")
-    read -r runs iters limit <<< "$lm"
-    printf '%-28s %8s %8s %10.0f %8s %10s %8s  %s\n' "$name" "$wall" "$user" "$(echo "$rss/1024" | bc -l)" "$runs" "$iters" "$limit" "$verdict"
+    # The Levenberg–Marquardt work (timings.json `phase_lm`): runs, iterations, runs at the
+    # limit, evaluations (an iteration's cost: rejected trials and probes count too).
+    lm=$(python3 -c "import json; t=json.load(open('$out/$tag/timings.json'))['phase_lm']['total']; print(t['runs'], t['iterations'], t['runs_at_limit'], t['evaluations'])")
+    read -r runs iters limit evals <<< "$lm"
+    printf '%-28s %8s %8s %10.0f %8s %10s %8s %10s  %s\n' "$name" "$wall" "$user" "$(echo "$rss/1024" | bc -l)" "$runs" "$iters" "$limit" "$evals" "$verdict"
 done
 echo "# load after: $(cut -d' ' -f1-3 /proc/loadavg)"

@@ -629,7 +629,8 @@ fn alloy617_config(dir: &Path, effects: bool) -> PathBuf {
 
 /// `fit` of the Alloy 617 data with specimen effects: summary.json's mean ln factors per
 /// temperature and per campaign are the means of specimens.csv's factors over those groups,
-/// with their standard errors, and the printout gives them.
+/// with their standard errors, its tests of the factors against stress, temperature and
+/// campaign are those of the file's factors, and the printout gives them.
 #[test]
 fn specimen_factors_by_temperature_and_campaign() {
     let dir = TempDir::new().unwrap();
@@ -802,6 +803,60 @@ fn specimen_factors_by_temperature_and_campaign() {
             p < 0.01,
             "{kind}"
         );
+    }
+    // The levels between campaigns beyond a level per temperature and the pooled slope:
+    // F = ((RSS_T − RSS_TC)/1) / (RSS_TC/(n − T − 2)), both residuals from the normal
+    // equations of the dummy-variable regressions, recomputed from the file.
+    assert!(stdout.contains("factors between campaigns"), "{stdout}");
+    let mut temps: Vec<&str> = rows.iter().map(|r| r[t].as_str()).collect();
+    temps.sort_unstable();
+    temps.dedup();
+    let design = |with_campaign: bool| {
+        let cols = temps.len() + 1 + usize::from(with_campaign);
+        nalgebra::DMatrix::<f64>::from_fn(rows.len(), cols, |i, c| {
+            let r = &rows[i];
+            if c < temps.len() {
+                f64::from(u8::from(r[t] == temps[c]))
+            } else if c == temps.len() {
+                r[st].parse::<f64>().unwrap().ln()
+            } else {
+                f64::from(u8::from(r[sp].starts_with("KAERI2-")))
+            }
+        })
+    };
+    let rss = |x: &nalgebra::DMatrix<f64>, y: &nalgebra::DVector<f64>| {
+        let beta = (x.transpose() * x).try_inverse().unwrap() * (x.transpose() * y);
+        (y - x * beta).norm_squared()
+    };
+    for kind in ["rate", "ductility"] {
+        let y = nalgebra::DVector::<f64>::from_iterator(
+            rows.len(),
+            rows.iter().map(|r| {
+                r[col(&format!("{kind}_factor"))]
+                    .parse::<f64>()
+                    .unwrap()
+                    .ln()
+            }),
+        );
+        let (rss_t, rss_tc) = (rss(&design(false), &y), rss(&design(true), &y));
+        let df2 = rows.len() - temps.len() - 2;
+        let want_f = (rss_t - rss_tc) / (rss_tc / df2 as f64);
+        let lv = &sp_json["campaign_levels"][kind];
+        let f = lv["f"].as_f64().unwrap();
+        assert!(
+            (f / want_f - 1.0).abs() < 1e-6,
+            "{kind}: F {f} against {want_f}"
+        );
+        assert_eq!(lv["df"], serde_json::json!([1, df2]), "{lv}");
+        let p = lv["p_value"].as_f64().unwrap();
+        assert_eq!(lv["differ"].as_bool().unwrap(), p < 0.01, "{lv}");
+        let names: Vec<&str> = lv["mean_ln_by_campaign"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|g| g["campaign"].as_str().unwrap())
+            .collect();
+        assert_eq!(names, ["INL2", "KAERI2"], "{lv}");
     }
 }
 

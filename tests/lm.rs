@@ -702,7 +702,7 @@ fn the_gain_to_come_stop_ends_a_linear_crawl_within_its_tail() {
 }
 
 #[test]
-fn lm_counts_count_runs_iterations_and_runs_at_the_limit() {
+fn lm_counts_count_runs_iterations_evaluations_and_runs_at_the_limit() {
     // Exactly, on a counter of its own: one run stopped by the limit, one converged.
     let (lb, ub) = free(2);
     let capped = LmOptions {
@@ -724,8 +724,11 @@ fn lm_counts_count_runs_iterations_and_runs_at_the_limit() {
             iterations: 3 + full.iterations as u64,
             runs_at_limit: 1,
             iterations_at_limit: 3,
+            evaluations: (short.evaluations + full.evaluations) as u64,
         }
     );
+    // An iteration evaluates at least once (its trial point), and the start once more.
+    assert!(short.evaluations > short.iterations, "{short:?}");
     // The process's counter: other tests of this binary run beside this one, so the
     // difference is at least this run's.
     let before = LmCounts::now();
@@ -735,4 +738,5 @@ fn lm_counts_count_runs_iterations_and_runs_at_the_limit() {
     assert!(d.runs >= 1 && d.runs_at_limit >= 1, "{d:?}");
     assert!(d.iterations >= 3 && d.iterations_at_limit >= 3, "{d:?}");
     assert!(d.runs_at_limit <= d.runs && d.iterations_at_limit <= d.iterations);
+    assert!(d.evaluations > d.iterations, "{d:?}");
 }

@@ -103,7 +103,13 @@ fn an_interrupted_diagnosis_resumes_to_the_same_files() {
     // The Levenberg–Marquardt work per phase: the phases add up to the whole.
     let lm = &timings(&plain)["phase_lm"];
     let count = |phase: &str, what: &str| lm[phase][what].as_u64().unwrap();
-    for what in ["runs", "iterations", "runs_at_limit", "iterations_at_limit"] {
+    for what in [
+        "runs",
+        "iterations",
+        "runs_at_limit",
+        "iterations_at_limit",
+        "evaluations",
+    ] {
         let phases: u64 = ["fits", "null_bootstrap", "cause_bootstrap", "loo"]
             .iter()
             .map(|p| count(p, what))

@@ -517,6 +517,9 @@ pub struct FitSpecimens {
     /// Per kind, how the factors differ between temperatures (empty without specimen
     /// effects or with one temperature): a temperature dependence the laws miss shows here.
     pub temperature_levels: Vec<crate::likelihood::TemperatureLevels>,
+    /// Per kind, how the factors differ between test campaigns beyond temperature and stress
+    /// (empty without specimen effects or two campaigns): a heat or laboratory shows here.
+    pub campaign_levels: Vec<crate::likelihood::CampaignLevels>,
 }
 
 impl FitSpecimens {
@@ -924,6 +927,7 @@ pub fn run_fit_observed(
             by_campaign: Vec::new(),
             stress_trend: Vec::new(),
             temperature_levels: Vec::new(),
+            campaign_levels: Vec::new(),
         };
         if kinds.any() {
             let opts = crate::likelihood::MlOptions {
@@ -1065,6 +1069,7 @@ pub fn run_fit_observed(
                     }
                     sp.stress_trend = f.stress_trend(curves);
                     sp.temperature_levels = f.temperature_levels(curves);
+                    sp.campaign_levels = f.campaign_levels(curves);
                 }
                 if 2 * replicate_curves < curves.len() {
                     sp.add_note(format!(

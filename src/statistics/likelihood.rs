@@ -1239,45 +1239,103 @@ impl TemperatureLevels {
     }
 }
 
-/// The F statistic of equal group levels for `y` with a pooled slope on `x` (covariance
-/// analysis: one intercept per group against one in all), and its degrees of freedom
-/// (groups − 1, n − groups − 1); NaN with fewer than two groups or no residual degree of
-/// freedom.
-pub fn between_group_f(x: &[f64], y: &[f64], group: &[usize]) -> (f64, usize, usize) {
+/// How one kind's specimen ln factors differ between test campaigns (laboratories, heats or
+/// batches of specimens: [`crate::data::campaign_of`]) beyond what temperature and stress
+/// explain: the mean per campaign, and an F-test of equal campaign levels beside a level per
+/// temperature and a common slope on ln σ (covariance analysis; the campaigns compared within
+/// the temperatures they share). Called, the specimens of one campaign resemble each other
+/// more than those of another: a heat or laboratory effect, which iid specimen factors read as
+/// scatter between specimens and which a prediction for a new campaign must carry on top.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct CampaignLevels {
+    /// The kind of factor.
+    pub kind: EffectKind,
+    /// Per campaign (in name order): the mean of its specimens' ln factors.
+    pub mean_ln: Vec<(String, f64)>,
+    /// The F statistic of equal campaign levels (NaN where the test cannot be made: the
+    /// campaigns confounded with the temperatures, too few specimens, or the kind's scatter
+    /// at its floor, where the factors are zero).
+    pub f: f64,
+    /// Its degrees of freedom: the campaign levels the temperatures leave free, and the
+    /// specimens less the rank of levels and slope.
+    pub df: (usize, usize),
+    /// Its p-value (NaN where `f` is).
+    pub p_value: f64,
+}
+
+impl CampaignLevels {
+    /// Whether the campaigns differ: p below [`STRESS_TREND_ALPHA`], the stress trend's level
+    /// (false where the test could not be made).
+    pub fn differ(&self) -> bool {
+        self.p_value < STRESS_TREND_ALPHA
+    }
+}
+
+/// The F statistic of the columns `extra` beyond the columns `base` in the least-squares fit
+/// of `y`, ((RSS_base − RSS_full)/d₁)/(RSS_full/d₂), with d₁ = rank(full) − rank(base) and
+/// d₂ = n − rank(full) (ranks from the singular values, so that columns the others span count
+/// nothing); NaN where d₁ or d₂ is 0.
+pub fn nested_f(y: &[f64], base: &[Vec<f64>], extra: &[Vec<f64>]) -> (f64, usize, usize) {
+    let n = y.len();
+    let b = nalgebra::DVector::from_column_slice(y);
+    // Residual sum of squares and rank of least squares on the columns `cols` (SVD).
+    let fit = |cols: &[&Vec<f64>]| -> (f64, usize) {
+        if cols.is_empty() {
+            return (b.norm_squared(), 0);
+        }
+        let a = DMatrix::from_fn(n, cols.len(), |i, c| cols[c][i]);
+        let svd = a.clone().svd(true, true);
+        let top = svd.singular_values.iter().fold(0.0f64, |m, v| m.max(*v));
+        let rank = svd
+            .singular_values
+            .iter()
+            .filter(|v| **v > 1e-10 * top)
+            .count();
+        let sol = svd.solve(&b, 1e-10 * top).expect("U and V computed");
+        ((&b - &a * sol).norm_squared(), rank)
+    };
+    let base_cols: Vec<&Vec<f64>> = base.iter().collect();
+    let full_cols: Vec<&Vec<f64>> = base.iter().chain(extra).collect();
+    let (rss_base, r_base) = fit(&base_cols);
+    let (rss_full, r_full) = fit(&full_cols);
+    let (d1, d2) = (r_full - r_base, n.saturating_sub(r_full));
+    if d1 == 0 || d2 == 0 {
+        return (f64::NAN, d1, d2);
+    }
+    let f = ((rss_base - rss_full).max(0.0) / d1 as f64) / (rss_full / d2 as f64);
+    (f, d1, d2)
+}
+
+/// The indicator columns of `group`'s distinct values (in increasing order).
+fn indicators(group: &[usize]) -> Vec<Vec<f64>> {
     let mut ids: Vec<usize> = group.to_vec();
     ids.sort_unstable();
     ids.dedup();
-    let (n, g) = (y.len(), ids.len());
-    let df2 = n.saturating_sub(g + 1);
-    if g < 2 || df2 == 0 {
-        return (f64::NAN, g.saturating_sub(1), df2);
-    }
-    // Residual sum of squares of least squares on the columns `cols` (rank-revealing SVD).
-    let rss = |cols: &[Vec<f64>]| -> f64 {
-        let a = DMatrix::from_fn(n, cols.len(), |i, c| cols[c][i]);
-        let b = nalgebra::DVector::from_column_slice(y);
-        let sol = a
-            .clone()
-            .svd(true, true)
-            .solve(&b, 1e-12)
-            .expect("U and V computed");
-        (&b - &a * sol).norm_squared()
-    };
-    let indicators: Vec<Vec<f64>> = ids
-        .iter()
+    ids.iter()
         .map(|id| {
             group
                 .iter()
                 .map(|gi| f64::from(u8::from(gi == id)))
                 .collect()
         })
-        .collect();
-    let mut full = indicators;
-    full.push(x.to_vec());
-    let rss_full = rss(&full);
-    let rss_one = rss(&[vec![1.0; n], x.to_vec()]);
-    let f = ((rss_one - rss_full).max(0.0) / (g - 1) as f64) / (rss_full / df2 as f64);
-    (f, g - 1, df2)
+        .collect()
+}
+
+/// The F statistic of equal group levels for `y` with a pooled slope on `x` (covariance
+/// analysis: one intercept per group against one in all), and its degrees of freedom
+/// (groups − 1, n − groups − 1); NaN with fewer than two groups or no residual degree of
+/// freedom.
+pub fn between_group_f(x: &[f64], y: &[f64], group: &[usize]) -> (f64, usize, usize) {
+    let levels = indicators(group);
+    let n = y.len();
+    if levels.len() < 2 {
+        return (
+            f64::NAN,
+            levels.len().saturating_sub(1),
+            n.saturating_sub(levels.len() + 1),
+        );
+    }
+    nested_f(y, &[vec![1.0; n], x.to_vec()], &levels)
 }
 
 /// Upper tail of the F distribution with (`d1`, `d2`) degrees of freedom at `f` (NaN for NaN
@@ -1355,6 +1413,69 @@ impl SpecimenFit {
                     f = f64::NAN;
                 }
                 TemperatureLevels {
+                    kind,
+                    mean_ln,
+                    f,
+                    df: (d1, d2),
+                    p_value: f_upper(f, d1, d2),
+                }
+            })
+            .collect()
+    }
+
+    /// Per kind, how the specimens' ln factors differ between test campaigns beyond a level
+    /// per temperature and a common slope on ln σ ([`CampaignLevels`]); empty unless every
+    /// curve names a campaign, two or more campaigns are named and one of them holds two
+    /// specimens or more (labels without a campaign prefix are each their own). `curves` are
+    /// the curves the fit was made on, in its order.
+    pub fn campaign_levels(&self, curves: &[Curve]) -> Vec<CampaignLevels> {
+        let Some(camps) = curves
+            .iter()
+            .map(|c| c.campaign())
+            .collect::<Option<Vec<_>>>()
+        else {
+            return Vec::new();
+        };
+        let mut names: Vec<&str> = camps.clone();
+        names.sort_unstable();
+        names.dedup();
+        let size = |n: &str| camps.iter().filter(|c| **c == n).count();
+        if names.len() < 2 || names.iter().all(|n| size(n) < 2) {
+            return Vec::new();
+        }
+        let campaign: Vec<usize> = camps
+            .iter()
+            .map(|c| names.iter().position(|n| n == c).unwrap_or(0))
+            .collect();
+        let temperature: Vec<usize> = curves
+            .iter()
+            .map(|c| c.temperature_c.to_bits() as usize)
+            .collect();
+        let mut base = indicators(&temperature);
+        base.push(curves.iter().map(|c| c.stress_mpa.ln()).collect());
+        let extra = indicators(&campaign);
+        self.kinds
+            .iter()
+            .zip(&self.effects)
+            .enumerate()
+            .map(|(k, (&kind, eta))| {
+                let mean_ln = names
+                    .iter()
+                    .enumerate()
+                    .map(|(g, name)| {
+                        let v: Vec<f64> = (0..eta.len())
+                            .filter(|&i| campaign[i] == g)
+                            .map(|i| eta[i])
+                            .collect();
+                        (name.to_string(), v.iter().sum::<f64>() / v.len() as f64)
+                    })
+                    .collect();
+                let (mut f, d1, d2) = nested_f(eta, &base, &extra);
+                // At the scatter's floor the factors are zero but for rounding: no levels.
+                if self.scatter[k] <= crate::specimen::SCATTER_FLOOR * (1.0 + 1e-9) {
+                    f = f64::NAN;
+                }
+                CampaignLevels {
                     kind,
                     mean_ln,
                     f,
@@ -3472,6 +3593,169 @@ mod tests {
         assert!((f / want - 1.0).abs() < 1e-9, "{f} {want}");
         // One group: no test.
         assert!(between_group_f(&x, &x, &[0; 9]).0.is_nan());
+    }
+
+    /// The campaign test on the Alloy 617 layout (INL2 pairs at 750, 850 and 950 °C, KAERI2
+    /// single specimens at 850, 900 and 950 °C): its level under the null of a temperature
+    /// level and a stress slope the campaigns share, its power against a campaign shift (the
+    /// noncentral F's), the closed form of the nested fits, and where no test can be made.
+    #[test]
+    fn campaign_levels_f_test_holds_its_level_and_sees_a_campaign() {
+        use super::{EffectKind, SpecimenFit};
+        use rand::SeedableRng;
+        use rand_distr::{Distribution, StandardNormal};
+        let layout: [(f64, f64, &str); 14] = [
+            (750.0, 118.0, "INL2-a"),
+            (750.0, 118.0, "INL2-b"),
+            (750.0, 137.0, "INL2-a"),
+            (850.0, 43.0, "INL2-a"),
+            (850.0, 43.0, "INL2-b"),
+            (850.0, 54.0, "INL2-a"),
+            (850.0, 35.0, "KAERI2-a"),
+            (850.0, 50.0, "KAERI2-a"),
+            (900.0, 25.0, "KAERI2-a"),
+            (900.0, 40.0, "KAERI2-a"),
+            (950.0, 29.0, "INL2-a"),
+            (950.0, 29.0, "INL2-b"),
+            (950.0, 20.0, "KAERI2-a"),
+            (950.0, 30.0, "KAERI2-a"),
+        ];
+        let curves: Vec<crate::data::Curve> = layout
+            .iter()
+            .map(|&(t, s, sp)| two_point_curve(t, s, Some(sp)))
+            .collect();
+        let fit_of = |rate: Vec<f64>| SpecimenFit {
+            kinds: vec![EffectKind::Rate],
+            scatter: vec![0.3],
+            scatter_lo95: vec![0.1],
+            scatter_hi95: vec![0.6],
+            scatter_dof: vec![8.0],
+            effects_sd: vec![vec![0.05; rate.len()]],
+            effects: vec![rate],
+            neg2ll_effects: 0.0,
+            scatter_method: Default::default(),
+            dropped: vec![],
+        };
+        let level = |t: f64| match t as i64 {
+            750 => 0.4,
+            850 => -0.2,
+            900 => 0.1,
+            _ => -0.5,
+        };
+        let null_mean: Vec<f64> = layout
+            .iter()
+            .map(|&(t, s, _)| level(t) - 0.8 * s.ln())
+            .collect();
+        let kaeri: Vec<f64> = layout
+            .iter()
+            .map(|&(_, _, sp)| f64::from(u8::from(sp.starts_with("KAERI2"))))
+            .collect();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(202_612_042);
+        let (mut r05, mut r01, mut power) = (0, 0, 0);
+        let sets = 4000;
+        for _ in 0..sets {
+            let e: Vec<f64> = (0..14).map(|_| StandardNormal.sample(&mut rng)).collect();
+            let y: Vec<f64> = (0..14).map(|i| null_mean[i] + e[i]).collect();
+            let c = &fit_of(y).campaign_levels(&curves)[0];
+            // Two campaigns: one level beyond the four temperatures' and the slope; 14
+            // specimens less those 6 columns.
+            assert_eq!(c.df, (1, 8));
+            r05 += usize::from(c.p_value < 0.05);
+            r01 += usize::from(c.p_value < 0.01);
+            let y: Vec<f64> = (0..14)
+                .map(|i| null_mean[i] + 1.5 * kaeri[i] + e[i])
+                .collect();
+            power += usize::from(fit_of(y).campaign_levels(&curves)[0].p_value < 0.05);
+        }
+        // Binomial 99.9 % limits: 5 % of 4,000 is 200 ± 45, 1 % is 40 ± 21.
+        assert!((155..=245).contains(&r05), "{r05}");
+        assert!((19..=61).contains(&r01), "{r01}");
+        // Power: the noncentral F (1, 8) beyond its 5 % critical value, λ = δ²·‖M k‖² with M
+        // the residual maker of the null's columns and k the KAERI2 indicator.
+        let cols = |extra: bool| {
+            let mut m = nalgebra::DMatrix::<f64>::zeros(14, if extra { 6 } else { 5 });
+            for (i, &(t, s, _)) in layout.iter().enumerate() {
+                let ti = [750.0, 850.0, 900.0, 950.0]
+                    .iter()
+                    .position(|v| *v == t)
+                    .unwrap();
+                m[(i, ti)] = 1.0;
+                m[(i, 4)] = s.ln();
+                if extra {
+                    m[(i, 5)] = kaeri[i];
+                }
+            }
+            m
+        };
+        let resid = |x: &nalgebra::DMatrix<f64>, v: &nalgebra::DVector<f64>| {
+            let xtx = (x.transpose() * x).try_inverse().unwrap();
+            v - x * (xtx * (x.transpose() * v))
+        };
+        let k = nalgebra::DVector::from_vec(kaeri.clone());
+        let lam = 1.5f64.powi(2) * resid(&cols(false), &k).norm_squared();
+        let crit = {
+            use statrs::distribution::{ContinuousCDF, FisherSnedecor};
+            FisherSnedecor::new(1.0, 8.0).unwrap().inverse_cdf(0.95)
+        };
+        let xq = crit / (crit + 8.0);
+        let mut term = (-lam / 2.0).exp();
+        let mut exact = 0.0;
+        for j in 0..300 {
+            exact += term * (1.0 - statrs::function::beta::beta_reg(0.5 + j as f64, 4.0, xq));
+            term *= lam / 2.0 / (j + 1) as f64;
+        }
+        let got = power as f64 / sets as f64;
+        let sd = (exact * (1.0 - exact) / sets as f64).sqrt();
+        assert!((got - exact).abs() < 3.3 * sd, "{got} {exact}");
+        // The closed form by the normal equations of both designs, on fixed factors.
+        let y: Vec<f64> = (0..14)
+            .map(|i| null_mean[i] + 0.3 * kaeri[i] + 0.1 * ((i * 7 % 5) as f64 - 2.0))
+            .collect();
+        let yv = nalgebra::DVector::from_vec(y.clone());
+        let (rss0, rss1) = (
+            resid(&cols(false), &yv).norm_squared(),
+            resid(&cols(true), &yv).norm_squared(),
+        );
+        let c = &fit_of(y.clone()).campaign_levels(&curves)[0];
+        let want = (rss0 - rss1) / (rss1 / 8.0);
+        assert!((c.f / want - 1.0).abs() < 1e-9, "{} {want}", c.f);
+        let mean = |pre: &str| {
+            let v: Vec<f64> = (0..14)
+                .filter(|&i| layout[i].2.starts_with(pre))
+                .map(|i| y[i])
+                .collect();
+            v.iter().sum::<f64>() / v.len() as f64
+        };
+        assert_eq!(c.mean_ln[0].0, "INL2");
+        assert!((c.mean_ln[0].1 - mean("INL2")).abs() < 1e-12);
+        assert!((c.mean_ln[1].1 - mean("KAERI2")).abs() < 1e-12);
+        // Campaigns confounded with temperatures (INL2 only at 750 °C, KAERI2 only at 900 °C):
+        // nothing beyond the temperature levels, no test.
+        let split: Vec<crate::data::Curve> = layout
+            .iter()
+            .map(|&(_, s, sp)| {
+                let t = if sp.starts_with("INL2") { 750.0 } else { 900.0 };
+                two_point_curve(t, s, Some(sp))
+            })
+            .collect();
+        let c = &fit_of(y.clone()).campaign_levels(&split)[0];
+        assert!(c.f.is_nan() && c.p_value.is_nan() && c.df.0 == 0, "{c:?}");
+        // Labels without campaigns (each specimen its own), or one unlabelled curve: none.
+        let own: Vec<crate::data::Curve> = layout
+            .iter()
+            .enumerate()
+            .map(|(i, &(t, s, _))| two_point_curve(t, s, Some(&format!("S{i}"))))
+            .collect();
+        assert!(fit_of(y.clone()).campaign_levels(&own).is_empty());
+        let mut one_unlabelled = curves.clone();
+        one_unlabelled[3].specimen = None;
+        assert!(fit_of(y.clone())
+            .campaign_levels(&one_unlabelled)
+            .is_empty());
+        // At the scatter's floor the factors are zero: no test.
+        let mut floor = fit_of(y);
+        floor.scatter = vec![crate::specimen::SCATTER_FLOOR];
+        assert!(floor.campaign_levels(&curves)[0].f.is_nan());
     }
 
     fn two_point_curve(t: f64, s: f64, specimen: Option<&str>) -> crate::data::Curve {

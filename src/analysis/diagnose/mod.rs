@@ -705,6 +705,10 @@ pub struct Candidate {
     /// ([`crate::likelihood::TemperatureLevels`]; empty without effects or with one
     /// temperature): information beside the tests, not part of the decision.
     pub specimen_temperature_levels: Vec<crate::likelihood::TemperatureLevels>,
+    /// Per kind of specimen effect, how the factors differ between test campaigns beyond
+    /// temperature and stress ([`crate::likelihood::CampaignLevels`]; empty without effects
+    /// or two campaigns): information beside the tests, not part of the decision.
+    pub specimen_campaign_levels: Vec<crate::likelihood::CampaignLevels>,
     /// Per-curve explanation.
     pub curves: Vec<CurveSignature>,
 }
@@ -945,6 +949,7 @@ fn candidate(
         specimen: None,
         specimen_stress_trend: vec![],
         specimen_temperature_levels: vec![],
+        specimen_campaign_levels: vec![],
         curves: vec![],
     };
     if let Some(f) = fit {
@@ -979,6 +984,11 @@ fn candidate(
             .specimen
             .as_ref()
             .map(|s| s.temperature_levels(curves))
+            .unwrap_or_default();
+        c.specimen_campaign_levels = f
+            .specimen
+            .as_ref()
+            .map(|s| s.campaign_levels(curves))
             .unwrap_or_default();
         c.curves = signatures(curves, f);
     }

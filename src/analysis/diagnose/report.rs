@@ -495,6 +495,9 @@ fn specimens_md(d: &Diagnosis, setup: &DiagnoseSetup) -> String {
     for t in &d.base.specimen_temperature_levels {
         s += &format!("- {}.\n", crate::report::tables::temperature_levels_text(t));
     }
+    for c in &d.base.specimen_campaign_levels {
+        s += &format!("- {}.\n", crate::report::tables::campaign_levels_text(c));
+    }
     s += "\nEach specimen's factor (its value over the population's; the null bootstrap draws new specimens from this scatter):\n\n| stress MPa | specimen |";
     for k in &sp.kinds {
         s += match k {

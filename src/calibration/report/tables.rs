@@ -796,6 +796,44 @@ pub fn temperature_levels_text(t: &crate::likelihood::TemperatureLevels) -> Stri
     )
 }
 
+/// One line on how a kind's ln factors differ between test campaigns
+/// ([`crate::likelihood::CampaignLevels`]), without a leading dash: the means per campaign,
+/// the F-test beyond the temperatures' levels and the stress slope and, where it is called,
+/// what that means.
+pub fn campaign_levels_text(c: &crate::likelihood::CampaignLevels) -> String {
+    let means: Vec<String> = c
+        .mean_ln
+        .iter()
+        .map(|(name, m)| format!("{m:+.2} for {name}"))
+        .collect();
+    let test = if c.f.is_finite() {
+        format!(
+            "F-test of equal campaign levels beside a level per temperature and a common slope on ln stress: p {}, {} and {} degrees of freedom; called at p < {}",
+            p_text(c.p_value),
+            c.df.0,
+            c.df.1,
+            crate::likelihood::STRESS_TREND_ALPHA
+        )
+    } else if c.df.0 == 0 {
+        "no test: the campaigns share no temperature, so their levels are the temperatures'"
+            .to_string()
+    } else if c.df.1 == 0 {
+        "no test: too few specimens beside the levels and the slope".to_string()
+    } else {
+        "no test: the scatter is at its floor, the factors are zero".to_string()
+    };
+    let flag = if c.differ() {
+        ": **the campaigns differ**, a heat or laboratory effect that the scatter between specimens mixes in; a prediction for a new campaign carries it on top of the scatter"
+    } else {
+        ""
+    };
+    format!(
+        "The ln {} factors between campaigns: mean {} ({test}){flag}",
+        c.kind.name(),
+        means.join(", ")
+    )
+}
+
 /// The kinds of specimen effect, in the order of `specimens.csv` and `summary.json`.
 const EFFECT_KINDS: [(crate::likelihood::EffectKind, &str); 3] = [
     (crate::likelihood::EffectKind::Rate, "rate"),
@@ -869,6 +907,24 @@ pub fn specimens_json(sp: &crate::fit::FitSpecimens) -> Value {
                     "df": [t.df.0, t.df.1],
                     "p_value": jnum(t.p_value),
                     "follows_temperature": t.follows_temperature(),
+                })
+            ))
+            .collect::<serde_json::Map<String, Value>>(),
+        "campaign_levels": sp
+            .campaign_levels
+            .iter()
+            .map(|c| (
+                c.kind.name().to_string(),
+                json!({
+                    "mean_ln_by_campaign": c
+                        .mean_ln
+                        .iter()
+                        .map(|(name, m)| json!({"campaign": name, "mean_ln": jnum(*m)}))
+                        .collect::<Vec<_>>(),
+                    "f": jnum(c.f),
+                    "df": [c.df.0, c.df.1],
+                    "p_value": jnum(c.p_value),
+                    "differ": c.differ(),
                 })
             ))
             .collect::<serde_json::Map<String, Value>>(),
@@ -1031,6 +1087,61 @@ pub const TIMINGS_FILE: &str = "timings.json";
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The campaign line's words for each case of the test, as a table: called, not called,
+    /// campaigns confounded with temperatures, too few specimens, the scatter at its floor.
+    #[test]
+    fn campaign_levels_text_says_why_there_is_no_test() {
+        use crate::likelihood::{CampaignLevels, EffectKind};
+        let line = |f: f64, df: (usize, usize), p: f64| {
+            campaign_levels_text(&CampaignLevels {
+                kind: EffectKind::Rate,
+                mean_ln: vec![("INL2".into(), 0.21), ("KAERI2".into(), -0.25)],
+                f,
+                df,
+                p_value: p,
+            })
+        };
+        // F, its degrees of freedom, p, words the line holds, whether it is called.
+        type Case<'a> = (f64, (usize, usize), f64, &'a str, bool);
+        let cases: [Case; 5] = [
+            (
+                9.1,
+                (1, 28),
+                0.005,
+                "p 0.005, 1 and 28 degrees of freedom",
+                true,
+            ),
+            (
+                7.4,
+                (1, 28),
+                0.011,
+                "p 0.011, 1 and 28 degrees of freedom",
+                false,
+            ),
+            (
+                f64::NAN,
+                (0, 29),
+                f64::NAN,
+                "the campaigns share no temperature",
+                false,
+            ),
+            (f64::NAN, (1, 0), f64::NAN, "too few specimens", false),
+            (
+                f64::NAN,
+                (1, 28),
+                f64::NAN,
+                "the scatter is at its floor",
+                false,
+            ),
+        ];
+        for (f, df, p, words, called) in cases {
+            let s = line(f, df, p);
+            assert!(s.starts_with("The ln rate factors between campaigns: mean +0.21 for INL2, -0.25 for KAERI2 ("), "{s}");
+            assert!(s.contains(words), "{s}");
+            assert_eq!(s.contains("**the campaigns differ**"), called, "{s}");
+        }
+    }
 
     #[test]
     fn csv_text_is_the_file_text() {

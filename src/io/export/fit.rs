@@ -262,6 +262,12 @@ fn print_specimens(sp: &crate::fit::FitSpecimens) {
             tables::temperature_levels_text(t).replace("**", "")
         );
     }
+    for c in &sp.campaign_levels {
+        println!(
+            "specimens: {}",
+            tables::campaign_levels_text(c).replace("**", "")
+        );
+    }
     if let Some(n) = &sp.note {
         println!("specimens: {n}");
     }

@@ -455,8 +455,8 @@ pub fn small_gain_to_come(f0: f64, f1: f64, f2: f64, delta: f64) -> bool {
     d2 * q / (1.0 - q) <= delta
 }
 
-/// The work of [`minimize`] runs: how many, their iterations, and how many of them ran to
-/// [`LmOptions::max_iterations`] (with those runs' iterations). Where a command's time goes is
+/// The work of [`minimize`] runs: how many, their iterations and evaluations, and how many of
+/// them ran to [`LmOptions::max_iterations`] (with those runs' iterations). Where a command's time goes is
 /// the count of its iterations; runs at the limit were stopped before any convergence test
 /// passed.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
@@ -469,6 +469,10 @@ pub struct LmCounts {
     pub runs_at_limit: u64,
     /// The iterations of those runs.
     pub iterations_at_limit: u64,
+    /// Evaluations of the residuals (with or without their Jacobian), as
+    /// [`LmReport::evaluations`] counts them: the cost of an iteration differs between
+    /// options (a geodesic acceleration's probe, rejected trials), its evaluations do not.
+    pub evaluations: u64,
 }
 
 impl LmCounts {
@@ -486,6 +490,7 @@ impl LmCounts {
             iterations_at_limit: self
                 .iterations_at_limit
                 .saturating_sub(earlier.iterations_at_limit),
+            evaluations: self.evaluations.saturating_sub(earlier.evaluations),
         }
     }
 }
@@ -493,13 +498,14 @@ impl LmCounts {
 /// A counter of [`LmCounts`] that any thread may add to (relaxed atomics: the counts are
 /// sums, the order of additions does not matter).
 #[derive(Debug, Default)]
-pub struct LmCounter([std::sync::atomic::AtomicU64; 4]);
+pub struct LmCounter([std::sync::atomic::AtomicU64; 5]);
 
 impl LmCounter {
     /// A counter at zero.
     pub const fn new() -> Self {
         use std::sync::atomic::AtomicU64;
         LmCounter([
+            AtomicU64::new(0),
             AtomicU64::new(0),
             AtomicU64::new(0),
             AtomicU64::new(0),
@@ -513,6 +519,7 @@ impl LmCounter {
         let it = report.iterations as u64;
         self.0[0].fetch_add(1, Relaxed);
         self.0[1].fetch_add(it, Relaxed);
+        self.0[4].fetch_add(report.evaluations as u64, Relaxed);
         if report.termination == Termination::IterationLimit {
             self.0[2].fetch_add(1, Relaxed);
             self.0[3].fetch_add(it, Relaxed);
@@ -527,6 +534,7 @@ impl LmCounter {
             iterations: self.0[1].load(Relaxed),
             runs_at_limit: self.0[2].load(Relaxed),
             iterations_at_limit: self.0[3].load(Relaxed),
+            evaluations: self.0[4].load(Relaxed),
         }
     }
 }
