@@ -215,6 +215,28 @@ pub fn campaign_of(specimen: &str) -> &str {
     specimen.split('-').next().unwrap_or(specimen)
 }
 
+/// Each curve's test campaign ([`Curve::campaign`]) where the labels name campaigns: every
+/// curve labelled, two campaigns or more, and one of them holding specimens at two test
+/// conditions (temperature, stress) or more. Labels that only pair replicates (`S4-a` and
+/// `S4-b` at one stress, as `synth` writes them) or name each specimen alone (`SX01`) name no
+/// campaigns: `None`. A campaign is a laboratory, heat or batch that tested several conditions.
+pub fn campaigns(curves: &[Curve]) -> Option<Vec<&str>> {
+    let names: Vec<&str> = curves.iter().map(Curve::campaign).collect::<Option<_>>()?;
+    let mut distinct = names.clone();
+    distinct.sort_unstable();
+    distinct.dedup();
+    let spans_conditions = |name: &str| {
+        let mut at = curves
+            .iter()
+            .zip(&names)
+            .filter(|(_, n)| **n == name)
+            .map(|(c, _)| (c.temperature_c, c.stress_mpa));
+        let first = at.next();
+        at.any(|cond| Some(cond) != first)
+    };
+    (distinct.len() >= 2 && distinct.iter().any(|n| spans_conditions(n))).then_some(names)
+}
+
 impl Curve {
     /// The minimum creep rate to compare predictions with: the measured one when the ruptures
     /// file gives it, else the estimate from the curve.
@@ -1561,6 +1583,73 @@ pub fn note_data(folder: &mut crate::output::RunFolder, data: &Dataset) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Which labels name campaigns, as a table: Alloy 617's, `synth`'s replicate pairs,
+    /// specimens each alone, one curve unlabelled, one-condition campaigns, a small campaign.
+    #[test]
+    fn campaigns_are_labels_that_span_conditions() {
+        let curve = |t: f64, s: f64, sp: Option<&str>| Curve {
+            temperature_c: t,
+            stress_mpa: s,
+            specimen: sp.map(str::to_string),
+            times_h: vec![0.0, 1.0],
+            strains: vec![0.0, 0.01],
+            rupture_time_h: Some(1.0),
+            rupture_strain: 0.01,
+            min_rate_measured: None,
+            min_rate_estimated: 0.01,
+        };
+        let set = |v: &[(f64, f64, Option<&str>)]| -> Vec<Curve> {
+            v.iter().map(|&(t, s, sp)| curve(t, s, sp)).collect()
+        };
+        let cases: Vec<(Vec<Curve>, Option<Vec<&str>>)> = vec![
+            (
+                set(&[
+                    (850.0, 43.0, Some("INL2-a")),
+                    (850.0, 43.0, Some("INL2-b")),
+                    (850.0, 35.0, Some("KAERI2-a")),
+                    (900.0, 25.0, Some("KAERI2-a")),
+                ]),
+                Some(vec!["INL2", "INL2", "KAERI2", "KAERI2"]),
+            ),
+            (
+                set(&[
+                    (600.0, 129.0, Some("S1-a")),
+                    (600.0, 147.0, Some("S2-a")),
+                    (600.0, 181.0, Some("S4-a")),
+                    (600.0, 181.0, Some("S4-b")),
+                ]),
+                None,
+            ),
+            (
+                set(&[(600.0, 129.0, Some("SX01")), (600.0, 147.0, Some("SX02"))]),
+                None,
+            ),
+            (
+                set(&[
+                    (850.0, 43.0, Some("A-1")),
+                    (850.0, 50.0, Some("A-2")),
+                    (850.0, 35.0, None),
+                ]),
+                None,
+            ),
+            (
+                set(&[(850.0, 43.0, Some("A-1")), (850.0, 50.0, Some("A-2"))]),
+                None,
+            ),
+            (
+                set(&[
+                    (850.0, 43.0, Some("A-1")),
+                    (900.0, 43.0, Some("A-2")),
+                    (850.0, 35.0, Some("B-1")),
+                ]),
+                Some(vec!["A", "A", "B"]),
+            ),
+        ];
+        for (i, (curves, want)) in cases.iter().enumerate() {
+            assert_eq!(&campaigns(curves), want, "case {i}");
+        }
+    }
     use std::fs::File;
     use std::io::Write;
     use std::path::PathBuf;

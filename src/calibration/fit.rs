@@ -509,7 +509,8 @@ pub struct FitSpecimens {
     /// The specimens' mean ln factors per temperature (empty without specimen effects or
     /// with one temperature): a temperature dependence the laws miss shows here.
     pub by_temperature: Vec<crate::likelihood::FactorGroup>,
-    /// The same per campaign ([`crate::data::campaign_of`]; empty unless two or more).
+    /// The same per campaign ([`crate::data::campaign_of`]; empty where the labels name no
+    /// campaigns, [`crate::data::campaigns`]).
     pub by_campaign: Vec<crate::likelihood::FactorGroup>,
     /// Per kind, how the factors follow stress within temperatures (empty without specimen
     /// effects): a stress dependence the constants miss shows here.
@@ -1061,10 +1062,11 @@ pub fn run_fit_observed(
                         sp.by_temperature.clear();
                     }
                     sp.by_campaign = f.by_group(curves, |c| c.campaign().map(str::to_string));
-                    // Campaigns only where some campaign holds two specimens or more: labels
-                    // without a campaign prefix (`SX01`, `SX02`) are each their own, and a
-                    // table of single specimens says nothing the factors do not.
-                    if sp.by_campaign.len() < 2 || sp.by_campaign.iter().all(|g| g.specimens < 2) {
+                    // Campaigns only where the labels name them (`data::campaigns`): labels
+                    // without a campaign prefix (`SX01`, `SX02`) are each their own, and
+                    // replicate pairs (`S4-a`, `S4-b`) are one test condition: tables of
+                    // either say nothing the factors do not.
+                    if crate::data::campaigns(curves).is_none() {
                         sp.by_campaign.clear();
                     }
                     sp.stress_trend = f.stress_trend(curves);
