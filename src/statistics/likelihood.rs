@@ -1424,32 +1424,31 @@ impl SpecimenFit {
     }
 
     /// Per kind, how the specimens' ln factors differ between test campaigns beyond a level
-    /// per temperature and a common slope on ln σ ([`CampaignLevels`]); empty unless every
-    /// curve names a campaign, two or more campaigns are named and one of them holds two
-    /// specimens or more (labels without a campaign prefix are each their own). `curves` are
-    /// the curves the fit was made on, in its order.
+    /// per temperature and a common slope on ln σ ([`CampaignLevels`]); empty where the labels
+    /// name no campaigns ([`crate::data::campaigns`]). `curves` are the curves the fit was
+    /// made on, in its order.
     pub fn campaign_levels(&self, curves: &[Curve]) -> Vec<CampaignLevels> {
-        let Some(camps) = curves
-            .iter()
-            .map(|c| c.campaign())
-            .collect::<Option<Vec<_>>>()
-        else {
+        let Some(camps) = crate::data::campaigns(curves) else {
             return Vec::new();
         };
         let mut names: Vec<&str> = camps.clone();
         names.sort_unstable();
         names.dedup();
-        let size = |n: &str| camps.iter().filter(|c| **c == n).count();
-        if names.len() < 2 || names.iter().all(|n| size(n) < 2) {
-            return Vec::new();
-        }
         let campaign: Vec<usize> = camps
             .iter()
             .map(|c| names.iter().position(|n| n == c).unwrap_or(0))
             .collect();
+        let mut temps: Vec<f64> = curves.iter().map(|c| c.temperature_c).collect();
+        temps.sort_by(f64::total_cmp);
+        temps.dedup();
         let temperature: Vec<usize> = curves
             .iter()
-            .map(|c| c.temperature_c.to_bits() as usize)
+            .map(|c| {
+                temps
+                    .iter()
+                    .position(|t| *t == c.temperature_c)
+                    .unwrap_or(0)
+            })
             .collect();
         let mut base = indicators(&temperature);
         base.push(curves.iter().map(|c| c.stress_mpa.ln()).collect());
@@ -3747,6 +3746,16 @@ mod tests {
             .map(|(i, &(t, s, _))| two_point_curve(t, s, Some(&format!("S{i}"))))
             .collect();
         assert!(fit_of(y.clone()).campaign_levels(&own).is_empty());
+        // `synth`'s replicate pairs (`S4-a`, `S4-b` at one stress) name conditions, not
+        // campaigns: between them the test would be one of the stress trend's lack of fit.
+        let pairs: Vec<crate::data::Curve> = layout
+            .iter()
+            .map(|&(t, s, _)| {
+                let label = format!("S{t}x{s}-a");
+                two_point_curve(t, s, Some(&label))
+            })
+            .collect();
+        assert!(fit_of(y.clone()).campaign_levels(&pairs).is_empty());
         let mut one_unlabelled = curves.clone();
         one_unlabelled[3].specimen = None;
         assert!(fit_of(y.clone())
