@@ -1322,9 +1322,9 @@ fn indicators(group: &[usize]) -> Vec<Vec<f64>> {
 }
 
 /// The F statistic of equal group levels for `y` with a pooled slope on `x` (covariance
-/// analysis: one intercept per group against one in all), and its degrees of freedom
-/// (groups − 1, n − groups − 1); NaN with fewer than two groups or no residual degree of
-/// freedom.
+/// analysis: one intercept per group against one in all; [`nested_f`]), and its degrees of
+/// freedom (groups − 1, n − groups − 1 where x is not constant within every group; the ranks
+/// otherwise); NaN with fewer than two groups or no residual degree of freedom.
 pub fn between_group_f(x: &[f64], y: &[f64], group: &[usize]) -> (f64, usize, usize) {
     let levels = indicators(group);
     let n = y.len();
