@@ -238,6 +238,23 @@ pub fn campaigns(curves: &[Curve]) -> Option<Vec<&str>> {
 }
 
 impl Curve {
+    /// A curve of two readings (0 and 1 h, 0 and 1 % strain, ruptured at 1 h) at `t` °C and
+    /// `s` MPa: for tests of what depends on the conditions and labels only.
+    #[cfg(test)]
+    pub(crate) fn two_point(t: f64, s: f64, specimen: Option<&str>) -> Curve {
+        Curve {
+            temperature_c: t,
+            stress_mpa: s,
+            specimen: specimen.map(str::to_string),
+            times_h: vec![0.0, 1.0],
+            strains: vec![0.0, 0.01],
+            rupture_time_h: Some(1.0),
+            rupture_strain: 0.01,
+            min_rate_measured: None,
+            min_rate_estimated: 0.01,
+        }
+    }
+
     /// The minimum creep rate to compare predictions with: the measured one when the ruptures
     /// file gives it, else the estimate from the curve.
     pub fn min_rate(&self) -> f64 {
@@ -1588,19 +1605,10 @@ mod tests {
     /// specimens each alone, one curve unlabelled, one-condition campaigns, a small campaign.
     #[test]
     fn campaigns_are_labels_that_span_conditions() {
-        let curve = |t: f64, s: f64, sp: Option<&str>| Curve {
-            temperature_c: t,
-            stress_mpa: s,
-            specimen: sp.map(str::to_string),
-            times_h: vec![0.0, 1.0],
-            strains: vec![0.0, 0.01],
-            rupture_time_h: Some(1.0),
-            rupture_strain: 0.01,
-            min_rate_measured: None,
-            min_rate_estimated: 0.01,
-        };
         let set = |v: &[(f64, f64, Option<&str>)]| -> Vec<Curve> {
-            v.iter().map(|&(t, s, sp)| curve(t, s, sp)).collect()
+            v.iter()
+                .map(|&(t, s, sp)| Curve::two_point(t, s, sp))
+                .collect()
         };
         let cases: Vec<(Vec<Curve>, Option<Vec<&str>>)> = vec![
             (

@@ -2202,17 +2202,7 @@ rtol = 1e-8
     #[test]
     fn auto_fits_effects_without_replicates_only_beyond_the_trend_with_the_freedom() {
         use crate::likelihood::{SpecimenOptions, SpecimenScatter};
-        let curve = |t: f64, s: f64| crate::data::Curve {
-            temperature_c: t,
-            stress_mpa: s,
-            specimen: None,
-            times_h: vec![0.0, 1.0],
-            strains: vec![0.0, 0.01],
-            rupture_time_h: Some(1.0),
-            rupture_strain: 0.01,
-            min_rate_measured: None,
-            min_rate_estimated: 0.01,
-        };
+        let curve = |t: f64, s: f64| crate::data::Curve::two_point(t, s, None);
         let seven: Vec<_> = (0..7)
             .map(|k| curve(900.0, 25.0 + 5.0 * k as f64))
             .collect();

@@ -1208,68 +1208,54 @@ pub fn within_group_slope(x: &[f64], y: &[f64], group: &[usize]) -> (f64, f64, u
     (b, se, df)
 }
 
-/// How one kind of specimen factor differs between test temperatures: the ln factors'
-/// (conditional modes') mean per temperature, and the F-test of equal levels in the
-/// covariance analysis with a pooled slope on ln σ ([`StressTrend`]'s model against one
-/// intercept). The hierarchical model draws every specimen's factor from one distribution at
-/// every temperature; levels far apart are a temperature dependence the constants' laws
-/// miss and the factors take up (on the seed's steel the ductility factors are ~0.6 at
-/// 560 °C and ~1.6 at 590 °C: a rupture strain that grows with temperature, which the KHD
-/// model's one ω_f/C does not carry).
+/// How one kind of specimen factor differs between groups of specimens: test temperatures
+/// ([`TemperatureLevels`], `G` the temperature in °C) or test campaigns ([`CampaignLevels`], `G`
+/// the campaign's name). The ln factors' (conditional modes') mean per group, and an F-test of
+/// equal group levels in a covariance analysis beside a slope on ln σ (and, for campaigns, a
+/// level per temperature). Called at p < [`STRESS_TREND_ALPHA`], like the stress trend.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
-pub struct TemperatureLevels {
+pub struct GroupLevels<G> {
     /// The kind of factor.
     pub kind: EffectKind,
-    /// Per temperature (°C, increasing): the mean of its specimens' ln factors.
-    pub mean_ln: Vec<(f64, f64)>,
-    /// The F statistic of equal levels (NaN where the test cannot be made: too few
-    /// specimens, or the kind's scatter at its floor, where the factors are zero).
+    /// Per group (temperatures increasing, campaigns in name order): the mean of its
+    /// specimens' ln factors.
+    pub mean_ln: Vec<(G, f64)>,
+    /// The F statistic of equal levels (NaN where the test cannot be made: the groups
+    /// confounded with the other columns, too few specimens, or the kind's scatter at its
+    /// floor, where the factors are zero).
     pub f: f64,
-    /// Its degrees of freedom: temperatures − 1, and specimens − temperatures − 1.
+    /// Its degrees of freedom: the group levels the other columns leave free, and the
+    /// specimens less the rank of all columns.
     pub df: (usize, usize),
     /// Its p-value (NaN where `f` is).
     pub p_value: f64,
 }
 
-impl TemperatureLevels {
-    /// Whether the factors follow temperature: p below [`STRESS_TREND_ALPHA`], the stress
-    /// trend's level (false where the test could not be made).
-    pub fn follows_temperature(&self) -> bool {
-        self.p_value < STRESS_TREND_ALPHA
-    }
-}
-
-/// How one kind's specimen ln factors differ between test campaigns (laboratories, heats or
-/// batches of specimens: [`crate::data::campaign_of`]) beyond what temperature and stress
-/// explain: the mean per campaign, and an F-test of equal campaign levels beside a level per
-/// temperature and a common slope on ln σ (covariance analysis; the campaigns compared within
-/// the temperatures they share). Called, the specimens of one campaign resemble each other
-/// more than those of another: a heat or laboratory effect, which iid specimen factors read as
-/// scatter between specimens and which a prediction for a new campaign must carry on top.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
-pub struct CampaignLevels {
-    /// The kind of factor.
-    pub kind: EffectKind,
-    /// Per campaign (in name order): the mean of its specimens' ln factors.
-    pub mean_ln: Vec<(String, f64)>,
-    /// The F statistic of equal campaign levels (NaN where the test cannot be made: the
-    /// campaigns confounded with the temperatures, too few specimens, or the kind's scatter
-    /// at its floor, where the factors are zero).
-    pub f: f64,
-    /// Its degrees of freedom: the campaign levels the temperatures leave free, and the
-    /// specimens less the rank of levels and slope.
-    pub df: (usize, usize),
-    /// Its p-value (NaN where `f` is).
-    pub p_value: f64,
-}
-
-impl CampaignLevels {
-    /// Whether the campaigns differ: p below [`STRESS_TREND_ALPHA`], the stress trend's level
+impl<G> GroupLevels<G> {
+    /// Whether the groups differ: p below [`STRESS_TREND_ALPHA`], the stress trend's level
     /// (false where the test could not be made).
     pub fn differ(&self) -> bool {
         self.p_value < STRESS_TREND_ALPHA
     }
 }
+
+/// How one kind of specimen factor differs between test temperatures: the F-test of equal
+/// levels beside a pooled slope on ln σ ([`StressTrend`]'s model against one intercept). The
+/// hierarchical model draws every specimen's factor from one distribution at every
+/// temperature; levels far apart are a temperature dependence the constants' laws miss and
+/// the factors take up (on the seed's steel the ductility factors are ~0.6 at 560 °C and ~1.6
+/// at 590 °C: a rupture strain that grows with temperature, which the KHD model's one ω_f/C
+/// does not carry).
+pub type TemperatureLevels = GroupLevels<f64>;
+
+/// How one kind's specimen ln factors differ between test campaigns (laboratories, heats or
+/// batches of specimens: [`crate::data::campaign_of`]) beyond what temperature and stress
+/// explain: an F-test of equal campaign levels beside a level per temperature and a common
+/// slope on ln σ (the campaigns compared within the temperatures they share). Called, the
+/// specimens of one campaign resemble each other more than those of another: a heat or
+/// laboratory effect, which iid specimen factors read as scatter between specimens and which a
+/// prediction for a new campaign must carry on top.
+pub type CampaignLevels = GroupLevels<String>;
 
 /// The F statistic of the columns `extra` beyond the columns `base` in the least-squares fit
 /// of `y`, ((RSS_base − RSS_full)/d₁)/(RSS_full/d₂), with d₁ = rank(full) − rank(base) and
@@ -1304,6 +1290,23 @@ pub fn nested_f(y: &[f64], base: &[Vec<f64>], extra: &[Vec<f64>]) -> (f64, usize
     }
     let f = ((rss_base - rss_full).max(0.0) / d1 as f64) / (rss_full / d2 as f64);
     (f, d1, d2)
+}
+
+/// The curves' distinct test temperatures (°C, increasing) and each curve's index into them.
+fn temperature_index(curves: &[Curve]) -> (Vec<f64>, Vec<usize>) {
+    let mut temps: Vec<f64> = curves.iter().map(|c| c.temperature_c).collect();
+    temps.sort_by(f64::total_cmp);
+    temps.dedup();
+    let index = curves
+        .iter()
+        .map(|c| {
+            temps
+                .iter()
+                .position(|t| *t == c.temperature_c)
+                .unwrap_or(0)
+        })
+        .collect();
+    (temps, index)
 }
 
 /// The indicator columns of `group`'s distinct values (in increasing order).
@@ -1375,52 +1378,12 @@ impl SpecimenFit {
     /// ([`TemperatureLevels`]; empty with one temperature); `curves` are the curves the fit
     /// was made on, in its order.
     pub fn temperature_levels(&self, curves: &[Curve]) -> Vec<TemperatureLevels> {
-        let mut temps: Vec<f64> = curves.iter().map(|c| c.temperature_c).collect();
-        temps.sort_by(f64::total_cmp);
-        temps.dedup();
+        let (temps, group) = temperature_index(curves);
         if temps.len() < 2 {
             return Vec::new();
         }
         let x: Vec<f64> = curves.iter().map(|c| c.stress_mpa.ln()).collect();
-        let group: Vec<usize> = curves
-            .iter()
-            .map(|c| {
-                temps
-                    .iter()
-                    .position(|t| *t == c.temperature_c)
-                    .unwrap_or(0)
-            })
-            .collect();
-        self.kinds
-            .iter()
-            .zip(&self.effects)
-            .enumerate()
-            .map(|(k, (&kind, eta))| {
-                let mean_ln = temps
-                    .iter()
-                    .enumerate()
-                    .map(|(g, &t)| {
-                        let v: Vec<f64> = (0..eta.len())
-                            .filter(|&i| group[i] == g)
-                            .map(|i| eta[i])
-                            .collect();
-                        (t, v.iter().sum::<f64>() / v.len() as f64)
-                    })
-                    .collect();
-                let (mut f, d1, d2) = between_group_f(&x, eta, &group);
-                // At the scatter's floor the factors are zero but for rounding: no levels.
-                if self.scatter[k] <= crate::specimen::SCATTER_FLOOR * (1.0 + 1e-9) {
-                    f = f64::NAN;
-                }
-                TemperatureLevels {
-                    kind,
-                    mean_ln,
-                    f,
-                    df: (d1, d2),
-                    p_value: f_upper(f, d1, d2),
-                }
-            })
-            .collect()
+        self.group_levels(&temps, &group, |eta| between_group_f(&x, eta, &group))
     }
 
     /// Per kind, how the specimens' ln factors differ between test campaigns beyond a level
@@ -1438,21 +1401,23 @@ impl SpecimenFit {
             .iter()
             .map(|c| names.iter().position(|n| n == c).unwrap_or(0))
             .collect();
-        let mut temps: Vec<f64> = curves.iter().map(|c| c.temperature_c).collect();
-        temps.sort_by(f64::total_cmp);
-        temps.dedup();
-        let temperature: Vec<usize> = curves
-            .iter()
-            .map(|c| {
-                temps
-                    .iter()
-                    .position(|t| *t == c.temperature_c)
-                    .unwrap_or(0)
-            })
-            .collect();
+        let (_, temperature) = temperature_index(curves);
         let mut base = indicators(&temperature);
         base.push(curves.iter().map(|c| c.stress_mpa.ln()).collect());
         let extra = indicators(&campaign);
+        let names: Vec<String> = names.iter().map(|n| n.to_string()).collect();
+        self.group_levels(&names, &campaign, |eta| nested_f(eta, &base, &extra))
+    }
+
+    /// Per kind, the mean ln factor of each group (`group[i]` the index into `names` of curve
+    /// i) and the F-test `test` makes of the kind's ln factors; no test (NaN) at the scatter's
+    /// floor, where the factors are zero but for rounding.
+    fn group_levels<G: Clone>(
+        &self,
+        names: &[G],
+        group: &[usize],
+        test: impl Fn(&[f64]) -> (f64, usize, usize),
+    ) -> Vec<GroupLevels<G>> {
         self.kinds
             .iter()
             .zip(&self.effects)
@@ -1463,18 +1428,17 @@ impl SpecimenFit {
                     .enumerate()
                     .map(|(g, name)| {
                         let v: Vec<f64> = (0..eta.len())
-                            .filter(|&i| campaign[i] == g)
+                            .filter(|&i| group[i] == g)
                             .map(|i| eta[i])
                             .collect();
-                        (name.to_string(), v.iter().sum::<f64>() / v.len() as f64)
+                        (name.clone(), v.iter().sum::<f64>() / v.len() as f64)
                     })
                     .collect();
-                let (mut f, d1, d2) = nested_f(eta, &base, &extra);
-                // At the scatter's floor the factors are zero but for rounding: no levels.
+                let (mut f, d1, d2) = test(eta);
                 if self.scatter[k] <= crate::specimen::SCATTER_FLOOR * (1.0 + 1e-9) {
                     f = f64::NAN;
                 }
-                CampaignLevels {
+                GroupLevels {
                     kind,
                     mean_ln,
                     f,
@@ -3329,12 +3293,12 @@ mod tests {
     #[test]
     fn stress_trend_weights_are_the_within_temperature_regression() {
         let curves = vec![
-            two_point_curve(850.0, 30.0, None),
-            two_point_curve(850.0, 43.0, None),
-            two_point_curve(850.0, 43.0, None),
-            two_point_curve(900.0, 20.0, None),
-            two_point_curve(950.0, 15.0, None),
-            two_point_curve(950.0, 25.0, None),
+            crate::data::Curve::two_point(850.0, 30.0, None),
+            crate::data::Curve::two_point(850.0, 43.0, None),
+            crate::data::Curve::two_point(850.0, 43.0, None),
+            crate::data::Curve::two_point(900.0, 20.0, None),
+            crate::data::Curve::two_point(950.0, 15.0, None),
+            crate::data::Curve::two_point(950.0, 25.0, None),
         ];
         let w = stress_trend_weights(&curves);
         // 900 °C has one curve: no group.
@@ -3372,7 +3336,9 @@ mod tests {
         let stresses = [(850.0, 30.0), (850.0, 35.0), (850.0, 40.0), (850.0, 45.0)]
             .into_iter()
             .chain([(900.0, 20.0), (900.0, 24.0), (900.0, 28.0), (900.0, 32.0)]);
-        let curves: Vec<Curve> = stresses.map(|(t, s)| two_point_curve(t, s, None)).collect();
+        let curves: Vec<Curve> = stresses
+            .map(|(t, s)| crate::data::Curve::two_point(t, s, None))
+            .collect();
         let (n, m) = (curves.len(), 40usize);
         let u = [0.30, -0.20, 0.10, -0.25, -0.10, 0.25, -0.30, 0.20];
         let slope = |t: f64| if t < 875.0 { 4.0 } else { -3.0 };
@@ -3474,7 +3440,9 @@ mod tests {
         let conds = [(850.0, 30.0), (850.0, 35.0), (850.0, 40.0)]
             .into_iter()
             .chain([(900.0, 20.0), (900.0, 24.0), (900.0, 28.0), (900.0, 32.0)]);
-        let curves: Vec<Curve> = conds.map(|(t, s)| two_point_curve(t, s, None)).collect();
+        let curves: Vec<Curve> = conds
+            .map(|(t, s)| crate::data::Curve::two_point(t, s, None))
+            .collect();
         let (n, m) = (curves.len(), 30usize);
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(71);
         let eta: Vec<f64> = (0..n)
@@ -3621,7 +3589,7 @@ mod tests {
         ];
         let curves: Vec<crate::data::Curve> = layout
             .iter()
-            .map(|&(t, s, sp)| two_point_curve(t, s, Some(sp)))
+            .map(|&(t, s, sp)| crate::data::Curve::two_point(t, s, Some(sp)))
             .collect();
         let fit_of = |rate: Vec<f64>| SpecimenFit {
             kinds: vec![EffectKind::Rate],
@@ -3734,7 +3702,7 @@ mod tests {
             .iter()
             .map(|&(_, s, sp)| {
                 let t = if sp.starts_with("INL2") { 750.0 } else { 900.0 };
-                two_point_curve(t, s, Some(sp))
+                crate::data::Curve::two_point(t, s, Some(sp))
             })
             .collect();
         let c = &fit_of(y.clone()).campaign_levels(&split)[0];
@@ -3743,7 +3711,7 @@ mod tests {
         let own: Vec<crate::data::Curve> = layout
             .iter()
             .enumerate()
-            .map(|(i, &(t, s, _))| two_point_curve(t, s, Some(&format!("S{i}"))))
+            .map(|(i, &(t, s, _))| crate::data::Curve::two_point(t, s, Some(&format!("S{i}"))))
             .collect();
         assert!(fit_of(y.clone()).campaign_levels(&own).is_empty());
         // `synth`'s replicate pairs (`S4-a`, `S4-b` at one stress) name conditions, not
@@ -3752,7 +3720,7 @@ mod tests {
             .iter()
             .map(|&(t, s, _)| {
                 let label = format!("S{t}x{s}-a");
-                two_point_curve(t, s, Some(&label))
+                crate::data::Curve::two_point(t, s, Some(&label))
             })
             .collect();
         assert!(fit_of(y.clone()).campaign_levels(&pairs).is_empty());
@@ -3765,20 +3733,6 @@ mod tests {
         let mut floor = fit_of(y);
         floor.scatter = vec![crate::specimen::SCATTER_FLOOR];
         assert!(floor.campaign_levels(&curves)[0].f.is_nan());
-    }
-
-    fn two_point_curve(t: f64, s: f64, specimen: Option<&str>) -> crate::data::Curve {
-        crate::data::Curve {
-            temperature_c: t,
-            stress_mpa: s,
-            specimen: specimen.map(str::to_string),
-            times_h: vec![0.0, 1.0],
-            strains: vec![0.0, 0.01],
-            rupture_time_h: Some(1.0),
-            rupture_strain: 0.01,
-            min_rate_measured: None,
-            min_rate_estimated: 0.01,
-        }
     }
 
     /// Group means and standard errors of known factors, as a table.
@@ -3823,7 +3777,7 @@ mod tests {
     #[test]
     fn stress_trend_reads_the_factors_against_ln_stress_per_temperature() {
         use super::{EffectKind, SpecimenFit};
-        let curve = |t: f64, s: f64| two_point_curve(t, s, None);
+        let curve = |t: f64, s: f64| crate::data::Curve::two_point(t, s, None);
         let curves = [
             curve(850.0, 40.0),
             curve(900.0, 25.0),
@@ -3927,7 +3881,7 @@ mod tests {
             scatter_method: Default::default(),
             dropped: vec![],
         };
-        let curve = |t: f64, sp: &str| two_point_curve(t, 100.0, Some(sp));
+        let curve = |t: f64, sp: &str| crate::data::Curve::two_point(t, 100.0, Some(sp));
         let curves = [
             curve(850.0, "A-1"),
             curve(900.0, "B-1"),

@@ -198,6 +198,15 @@ pub enum World {
     /// configurations fit all three kinds of specimen effects, as the shipped Alloy 617
     /// configurations do.
     Shapes,
+    /// The specimens world with its specimens from two test campaigns (heats or
+    /// laboratories, `A` and `B`): each campaign carries its own log-normal factor on the
+    /// creep rate (sd 10–40 % between campaigns) on top of each specimen's. The tests
+    /// alternate between the campaigns in stress order (a replicate pair is split between
+    /// them), labelled `A-1`, `B-1`, `A-2`, … Everything else is the specimens world's for the
+    /// same seed (the campaign factors drawn last from the same stream), and the sets'
+    /// configurations are too (`auto` specimen effects, which read the campaign factor as part
+    /// of each specimen's).
+    Campaigns,
 }
 
 impl World {
@@ -226,14 +235,24 @@ pub struct SpecimenTruth {
     pub coarsening_effects: Vec<f64>,
     /// Per curve: the specimen label written to the files.
     pub labels: Vec<String>,
+    /// sd of the ln creep-rate factor between campaigns (0: none; world `campaigns` only).
+    #[serde(default)]
+    pub campaign_sd: f64,
+    /// Per curve: the ln creep-rate factor of its campaign, included in `rate_effects` (empty
+    /// without campaigns).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub campaign_effects: Vec<f64>,
     /// Growth of the reading error with strain: sd × (1 + g ε/ε_f).
     pub error_growth: f64,
 }
 
 impl SpecimenTruth {
-    /// The true scatter per kind: rate, ductility, and coarsening in world `shapes`.
+    /// The true scatter per kind: rate, ductility, and coarsening in world `shapes`. In world
+    /// `campaigns` the rate's is that of a new specimen from a new campaign,
+    /// √(specimen sd² + campaign sd²): what iid specimen factors stand for.
     pub fn scatter_true(&self) -> Vec<f64> {
-        let mut v = vec![self.rate_sd, self.ductility_sd];
+        let rate = self.rate_sd.hypot(self.campaign_sd);
+        let mut v = vec![rate, self.ductility_sd];
         if !self.coarsening_effects.is_empty() {
             v.push(self.coarsening_sd);
         }
@@ -461,6 +480,23 @@ fn draw_specimens(stresses: &[f64], seed: u64, world: World) -> (Vec<f64>, Speci
     } else {
         (0.0, vec![])
     };
+    let mut rate_effects: Vec<f64> = rate_effects;
+    let (campaign_sd, campaign_effects) = if world == World::Campaigns {
+        let sd = 0.1 + 0.3 * rng.gen::<f64>();
+        let levels = [sd * normal(&mut rng), sd * normal(&mut rng)];
+        let mut count = [0usize; 2];
+        let mut effects = Vec::with_capacity(tests.len());
+        for (k, label) in labels.iter_mut().enumerate() {
+            let c = k % 2;
+            count[c] += 1;
+            *label = format!("{}-{}", ["A", "B"][c], count[c]);
+            rate_effects[k] += levels[c];
+            effects.push(levels[c]);
+        }
+        (sd, effects)
+    } else {
+        (0.0, vec![])
+    };
     (
         tests,
         SpecimenTruth {
@@ -471,6 +507,8 @@ fn draw_specimens(stresses: &[f64], seed: u64, world: World) -> (Vec<f64>, Speci
             coarsening_sd,
             coarsening_effects,
             labels,
+            campaign_sd,
+            campaign_effects,
             error_growth,
         },
     )
@@ -498,7 +536,7 @@ fn generate_inner(
         .collect();
     let (tests, specimens) = match world {
         World::Identical => (stresses.clone(), None),
-        World::Specimens | World::Shapes => {
+        World::Specimens | World::Shapes | World::Campaigns => {
             let (t, sp) = draw_specimens(&stresses, seed, world);
             (t, Some(sp))
         }
@@ -1014,6 +1052,48 @@ mod tests {
                 .config_toml
                 .contains("specimen_effects = [\"rate\", \"ductility\", \"coarsening\"]"));
             assert!(!a.config_toml.contains("specimen_effects"));
+        }
+    }
+
+    /// World `campaigns` is the specimens world of the same seed with each specimen's rate
+    /// factor moved by its campaign's: campaigns alternate in stress order, both span two
+    /// conditions (so `data::campaigns` names them), the lives shift with the campaign factor,
+    /// and the rate's true scatter is a new specimen's from a new campaign.
+    #[test]
+    fn the_campaigns_world_is_the_specimens_world_with_a_factor_per_campaign() {
+        for seed in [3101_u64, 3102, 3103, 3104] {
+            let a = generate_in("t", "none", None, seed, World::Specimens).unwrap();
+            let b = generate_in("t", "none", None, seed, World::Campaigns).unwrap();
+            let (sa, sb) = (
+                a.truth.specimens.clone().unwrap(),
+                b.truth.specimens.clone().unwrap(),
+            );
+            assert_eq!(a.truth.stresses, b.truth.stresses);
+            assert_eq!(sa.ductility_effects, sb.ductility_effects);
+            assert!(sa.campaign_effects.is_empty() && sa.campaign_sd == 0.0);
+            assert!((0.1..=0.4).contains(&sb.campaign_sd));
+            let n = sb.labels.len();
+            assert_eq!(sb.campaign_effects.len(), n);
+            for k in 0..n {
+                let (c, other) = if k % 2 == 0 { ("A", 1) } else { ("B", 0) };
+                assert_eq!(sb.labels[k], format!("{c}-{}", k / 2 + 1));
+                assert_eq!(sb.campaign_effects[k], sb.campaign_effects[k % 2]);
+                assert_ne!(sb.campaign_effects[k], sb.campaign_effects[other]);
+                let shift = sb.rate_effects[k] - sa.rate_effects[k];
+                assert!((shift - sb.campaign_effects[k]).abs() < 1e-12);
+                // A × e^η: a faster creep rate shortens the life.
+                let ratio = b.truth.true_rupture_h[k] / a.truth.true_rupture_h[k];
+                assert!((ratio - 1.0) * shift < 0.0, "seed {seed} specimen {k}");
+            }
+            let rate = sb.scatter_true()[0];
+            assert!((rate - sb.rate_sd.hypot(sb.campaign_sd)).abs() < 1e-12);
+            let dir = tempfile::tempdir().unwrap();
+            write_set(&b, dir.path()).unwrap();
+            let (_, data) =
+                crate::config::load(&dir.path().join("config.toml"), &Default::default()).unwrap();
+            let named = crate::data::campaigns(&data.curves).expect("the campaigns are named");
+            assert!(named.iter().all(|c| *c == "A" || *c == "B"));
+            assert_eq!(a.config_toml, b.config_toml);
         }
     }
 

@@ -784,7 +784,7 @@ pub fn temperature_levels_text(t: &crate::likelihood::TemperatureLevels) -> Stri
     } else {
         "no test: the scatter is at its floor, the factors are zero".to_string()
     };
-    let flag = if t.follows_temperature() {
+    let flag = if t.differ() {
         ": **they follow temperature**, a temperature dependence the constants' laws miss and the factors take up, which goodness-of-fit tests cannot see"
     } else {
         ""
@@ -892,43 +892,48 @@ pub fn specimens_json(sp: &crate::fit::FitSpecimens) -> Value {
                 })
             ))
             .collect::<serde_json::Map<String, Value>>(),
-        "temperature_levels": sp
-            .temperature_levels
-            .iter()
-            .map(|t| (
+        "temperature_levels": group_levels_json(
+            &sp.temperature_levels,
+            ("mean_ln_by_temperature", "temperature_C"),
+            "follows_temperature"
+        ),
+        "campaign_levels": group_levels_json(
+            &sp.campaign_levels,
+            ("mean_ln_by_campaign", "campaign"),
+            "differ"
+        ),
+    })
+}
+
+/// `specimens.temperature_levels` / `campaign_levels`: per kind the mean ln factor of each
+/// group (in the list `means.0`, the group under the key `means.1`), the F-test and whether
+/// the groups differ (under the key `called`).
+fn group_levels_json<G: serde::Serialize>(
+    levels: &[crate::likelihood::GroupLevels<G>],
+    means: (&str, &str),
+    called: &str,
+) -> Value {
+    levels
+        .iter()
+        .map(|t| {
+            let by_group: Vec<Value> = t
+                .mean_ln
+                .iter()
+                .map(|(g, m)| json!({ means.1: g, "mean_ln": jnum(*m) }))
+                .collect();
+            (
                 t.kind.name().to_string(),
                 json!({
-                    "mean_ln_by_temperature": t
-                        .mean_ln
-                        .iter()
-                        .map(|(temp, m)| json!({"temperature_C": temp, "mean_ln": jnum(*m)}))
-                        .collect::<Vec<_>>(),
+                    means.0: by_group,
                     "f": jnum(t.f),
                     "df": [t.df.0, t.df.1],
                     "p_value": jnum(t.p_value),
-                    "follows_temperature": t.follows_temperature(),
-                })
-            ))
-            .collect::<serde_json::Map<String, Value>>(),
-        "campaign_levels": sp
-            .campaign_levels
-            .iter()
-            .map(|c| (
-                c.kind.name().to_string(),
-                json!({
-                    "mean_ln_by_campaign": c
-                        .mean_ln
-                        .iter()
-                        .map(|(name, m)| json!({"campaign": name, "mean_ln": jnum(*m)}))
-                        .collect::<Vec<_>>(),
-                    "f": jnum(c.f),
-                    "df": [c.df.0, c.df.1],
-                    "p_value": jnum(c.p_value),
-                    "differ": c.differ(),
-                })
-            ))
-            .collect::<serde_json::Map<String, Value>>(),
-    })
+                    called: t.differ(),
+                }),
+            )
+        })
+        .collect::<serde_json::Map<String, Value>>()
+        .into()
 }
 
 /// `specimens.by_temperature` / `by_campaign`: per group its name, specimens, and per kind
