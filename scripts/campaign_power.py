@@ -37,6 +37,13 @@ def summary(out):
         d2 = sorted(r["df"][1] for r in b)[len(b) // 2]
         print(f"| {lo}–{hi if hi < 1e9 else '∞'} | {len(b)} | {c1} ({100*c1/len(b):.0f} %) | "
               f"{c5} ({100*c5/len(b):.0f} %) | (1, {d2}) |")
+    det = [r for r in tested if r.get("detectable") is not None]
+    if det:
+        big = [r for r in det if abs(r["contrast"]) >= r["detectable"]]
+        small = [r for r in det if abs(r["contrast"]) < r["detectable"]]
+        print(f"true contrast at least the stated detectable difference: called in "
+              f"{sum(r['p'] < 0.01 for r in big)} of {len(big)}; below it: "
+              f"{sum(r['p'] < 0.01 for r in small)} of {len(small)}")
     sign = [r for r in tested if r["p"] < 0.01]
     right = sum((r["est_contrast"] > 0) == (r["contrast"] > 0) for r in sign)
     print(f"called with the true sign: {right} of {len(sign)}")
@@ -85,6 +92,7 @@ def main():
                 "f": lv["f"] if lv else None,
                 "df": lv["df"] if lv else None,
                 "est_contrast": means.get("A", 0.0) - means.get("B", 0.0) if lv else None,
+                "detectable": lv.get("detectable_difference_ln") if lv else None,
                 "sd": sc.get("sd_ln"), "sd_lo": sc.get("sd_ln_lo95"), "sd_hi": sc.get("sd_ln_hi95"),
             })
         results.write(json.dumps(row) + "\n")

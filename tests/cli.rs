@@ -850,6 +850,17 @@ fn specimen_factors_by_temperature_and_campaign() {
         assert_eq!(lv["df"], serde_json::json!([1, df2]), "{lv}");
         let p = lv["p_value"].as_f64().unwrap();
         assert_eq!(lv["differ"].as_bool().unwrap(), p < 0.01, "{lv}");
+        // The difference the test calls with 80 % probability: σ̂·√(λ*/‖M k‖²), σ̂² the full
+        // regression's residual variance and ‖M k‖² the KAERI2 indicator's residual sum of
+        // squares on the temperatures and the slope.
+        let k = design(true).column(temps.len() + 1).into_owned();
+        let lam = creepfit::likelihood::noncentrality_for_power(1, df2, 0.01, 0.8);
+        let want_d = (rss_tc / df2 as f64 * lam / rss(&design(false), &k)).sqrt();
+        let d = lv["detectable_difference_ln"].as_f64().unwrap();
+        assert!(
+            (d / want_d - 1.0).abs() < 1e-6,
+            "{kind}: {d} against {want_d}"
+        );
         let names: Vec<&str> = lv["mean_ln_by_campaign"]
             .as_array()
             .unwrap()

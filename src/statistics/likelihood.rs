@@ -1229,7 +1229,16 @@ pub struct GroupLevels<G> {
     pub df: (usize, usize),
     /// Its p-value (NaN where `f` is).
     pub p_value: f64,
+    /// With two groups (one degree of freedom between them): the difference of their levels
+    /// (ln factor) that the test calls with probability [`DETECT_POWER`] at its level, given
+    /// the scatter about the levels that the factors show ([`NestedTest::detectable`]). NaN
+    /// with more groups or where there is no test. Read beside a test not called: a smaller
+    /// difference would have gone unseen more often than not.
+    pub detectable_ln: f64,
 }
+
+/// The power at which [`GroupLevels::detectable_ln`] states the difference a test can see.
+pub const DETECT_POWER: f64 = 0.8;
 
 impl<G> GroupLevels<G> {
     /// Whether the groups differ: p below [`STRESS_TREND_ALPHA`], the stress trend's level
@@ -1257,15 +1266,45 @@ pub type TemperatureLevels = GroupLevels<f64>;
 /// prediction for a new campaign must carry on top.
 pub type CampaignLevels = GroupLevels<String>;
 
+/// The F-test of the columns `extra` beyond the columns `base` in a least-squares fit
+/// ([`nested_test`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NestedTest {
+    /// ((RSS_base − RSS_full)/d₁)/(RSS_full/d₂); NaN where d₁ or d₂ is 0.
+    pub f: f64,
+    /// d₁ = rank(full) − rank(base).
+    pub d1: usize,
+    /// d₂ = n − rank(full).
+    pub d2: usize,
+    /// With d₁ = 1: the coefficient δ of an extra column (the last that leaves the base's
+    /// span) at which the test rejects at [`STRESS_TREND_ALPHA`] with probability
+    /// [`DETECT_POWER`], at the residual scatter σ̂² = RSS_full/d₂: δ = σ̂·√(λ*/‖M k‖²), with λ*
+    /// the noncentrality of that power ([`noncentrality_for_power`]) and M k the column's
+    /// residual on the base columns. With indicator columns of two groups and a level in the
+    /// base, δ is the difference of the two groups' levels. NaN otherwise.
+    pub detectable: f64,
+}
+
 /// The F statistic of the columns `extra` beyond the columns `base` in the least-squares fit
 /// of `y`, ((RSS_base − RSS_full)/d₁)/(RSS_full/d₂), with d₁ = rank(full) − rank(base) and
 /// d₂ = n − rank(full) (ranks from the singular values, so that columns the others span count
 /// nothing); NaN where d₁ or d₂ is 0.
 pub fn nested_f(y: &[f64], base: &[Vec<f64>], extra: &[Vec<f64>]) -> (f64, usize, usize) {
+    let t = nested(y, base, extra, false);
+    (t.f, t.d1, t.d2)
+}
+
+/// [`nested_f`] with the difference the test can detect ([`NestedTest::detectable`]).
+pub fn nested_test(y: &[f64], base: &[Vec<f64>], extra: &[Vec<f64>]) -> NestedTest {
+    nested(y, base, extra, true)
+}
+
+/// [`nested_test`]; the detectable difference (a root search) only where `detect`.
+fn nested(y: &[f64], base: &[Vec<f64>], extra: &[Vec<f64>], detect: bool) -> NestedTest {
     let n = y.len();
-    let b = nalgebra::DVector::from_column_slice(y);
-    // Residual sum of squares and rank of least squares on the columns `cols` (SVD).
-    let fit = |cols: &[&Vec<f64>]| -> (f64, usize) {
+    // Residual sum of squares and rank of least squares of `v` on the columns `cols` (SVD).
+    let fit = |v: &[f64], cols: &[&Vec<f64>]| -> (f64, usize) {
+        let b = nalgebra::DVector::from_column_slice(v);
         if cols.is_empty() {
             return (b.norm_squared(), 0);
         }
@@ -1282,14 +1321,89 @@ pub fn nested_f(y: &[f64], base: &[Vec<f64>], extra: &[Vec<f64>]) -> (f64, usize
     };
     let base_cols: Vec<&Vec<f64>> = base.iter().collect();
     let full_cols: Vec<&Vec<f64>> = base.iter().chain(extra).collect();
-    let (rss_base, r_base) = fit(&base_cols);
-    let (rss_full, r_full) = fit(&full_cols);
+    let (rss_base, r_base) = fit(y, &base_cols);
+    let (rss_full, r_full) = fit(y, &full_cols);
     let (d1, d2) = (r_full - r_base, n.saturating_sub(r_full));
     if d1 == 0 || d2 == 0 {
-        return (f64::NAN, d1, d2);
+        return NestedTest {
+            f: f64::NAN,
+            d1,
+            d2,
+            detectable: f64::NAN,
+        };
     }
     let f = ((rss_base - rss_full).max(0.0) / d1 as f64) / (rss_full / d2 as f64);
-    (f, d1, d2)
+    let detectable = if d1 == 1 && detect {
+        // The extra direction beyond the base is one line: any extra column's residual on
+        // the base spans it; the last one's coefficient is the contrast reported.
+        let beyond = extra
+            .iter()
+            .rev()
+            .map(|k| fit(k, &base_cols).0)
+            .find(|r| *r > 1e-12 * n as f64)
+            .unwrap_or(f64::NAN);
+        let lam = noncentrality_for_power(1, d2, STRESS_TREND_ALPHA, DETECT_POWER);
+        (rss_full / d2 as f64 * lam / beyond).sqrt()
+    } else {
+        f64::NAN
+    };
+    NestedTest {
+        f,
+        d1,
+        d2,
+        detectable,
+    }
+}
+
+/// Upper tail of the noncentral F distribution with (`d1`, `d2`) degrees of freedom and
+/// noncentrality `lam` at `f`: the Poisson(λ/2) mixture of the central tails,
+/// Σ_j e^{−λ/2}(λ/2)^j/j! · (1 − I_x(d₁/2 + j, d₂/2)), x = d₁f/(d₁f + d₂), summed until the
+/// Poisson weights left are below 1e-14.
+pub fn noncentral_f_upper(f: f64, d1: usize, d2: usize, lam: f64) -> f64 {
+    if f.is_nan() || d1 == 0 || d2 == 0 || !(lam >= 0.0) {
+        return f64::NAN;
+    }
+    let (a, b) = (d1 as f64 / 2.0, d2 as f64 / 2.0);
+    let x = d1 as f64 * f / (d1 as f64 * f + d2 as f64);
+    let half = lam / 2.0;
+    let mut weight = (-half).exp();
+    let (mut sum, mut used) = (0.0, 0.0);
+    for j in 0..100_000 {
+        sum += weight * (1.0 - statrs::function::beta::beta_reg(a + j as f64, b, x));
+        used += weight;
+        if 1.0 - used < 1e-14 && j as f64 > half {
+            break;
+        }
+        weight *= half / (j + 1) as f64;
+    }
+    sum
+}
+
+/// The noncentrality λ at which the F-test with (`d1`, `d2`) degrees of freedom at level
+/// `alpha` rejects with probability `power` (bisection on [`noncentral_f_upper`] beyond the
+/// central critical value; NaN for a zero degree of freedom).
+pub fn noncentrality_for_power(d1: usize, d2: usize, alpha: f64, power: f64) -> f64 {
+    use statrs::distribution::{ContinuousCDF, FisherSnedecor};
+    if d1 == 0 || d2 == 0 {
+        return f64::NAN;
+    }
+    let Ok(central) = FisherSnedecor::new(d1 as f64, d2 as f64) else {
+        return f64::NAN;
+    };
+    let crit = central.inverse_cdf(1.0 - alpha);
+    let (mut lo, mut hi) = (0.0f64, 1.0f64);
+    while noncentral_f_upper(crit, d1, d2, hi) < power && hi < 1e6 {
+        hi *= 2.0;
+    }
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if noncentral_f_upper(crit, d1, d2, mid) < power {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
 }
 
 /// The curves' distinct test temperatures (°C, increasing) and each curve's index into them.
@@ -1329,16 +1443,23 @@ fn indicators(group: &[usize]) -> Vec<Vec<f64>> {
 /// freedom (groups − 1, n − groups − 1 where x is not constant within every group; the ranks
 /// otherwise); NaN with fewer than two groups or no residual degree of freedom.
 pub fn between_group_f(x: &[f64], y: &[f64], group: &[usize]) -> (f64, usize, usize) {
+    let t = between_group_test(x, y, group);
+    (t.f, t.d1, t.d2)
+}
+
+/// [`between_group_f`] as a [`NestedTest`] (with the difference it can detect).
+fn between_group_test(x: &[f64], y: &[f64], group: &[usize]) -> NestedTest {
     let levels = indicators(group);
     let n = y.len();
     if levels.len() < 2 {
-        return (
-            f64::NAN,
-            levels.len().saturating_sub(1),
-            n.saturating_sub(levels.len() + 1),
-        );
+        return NestedTest {
+            f: f64::NAN,
+            d1: levels.len().saturating_sub(1),
+            d2: n.saturating_sub(levels.len() + 1),
+            detectable: f64::NAN,
+        };
     }
-    nested_f(y, &[vec![1.0; n], x.to_vec()], &levels)
+    nested_test(y, &[vec![1.0; n], x.to_vec()], &levels)
 }
 
 /// Upper tail of the F distribution with (`d1`, `d2`) degrees of freedom at `f` (NaN for NaN
@@ -1383,7 +1504,7 @@ impl SpecimenFit {
             return Vec::new();
         }
         let x: Vec<f64> = curves.iter().map(|c| c.stress_mpa.ln()).collect();
-        self.group_levels(&temps, &group, |eta| between_group_f(&x, eta, &group))
+        self.group_levels(&temps, &group, |eta| between_group_test(&x, eta, &group))
     }
 
     /// Per kind, how the specimens' ln factors differ between test campaigns beyond a level
@@ -1406,7 +1527,7 @@ impl SpecimenFit {
         base.push(curves.iter().map(|c| c.stress_mpa.ln()).collect());
         let extra = indicators(&campaign);
         let names: Vec<String> = names.iter().map(|n| n.to_string()).collect();
-        self.group_levels(&names, &campaign, |eta| nested_f(eta, &base, &extra))
+        self.group_levels(&names, &campaign, |eta| nested_test(eta, &base, &extra))
     }
 
     /// Per kind, the mean ln factor of each group (`group[i]` the index into `names` of curve
@@ -1416,7 +1537,7 @@ impl SpecimenFit {
         &self,
         names: &[G],
         group: &[usize],
-        test: impl Fn(&[f64]) -> (f64, usize, usize),
+        test: impl Fn(&[f64]) -> NestedTest,
     ) -> Vec<GroupLevels<G>> {
         self.kinds
             .iter()
@@ -1434,16 +1555,18 @@ impl SpecimenFit {
                         (name.clone(), v.iter().sum::<f64>() / v.len() as f64)
                     })
                     .collect();
-                let (mut f, d1, d2) = test(eta);
+                let mut t = test(eta);
                 if self.scatter[k] <= crate::specimen::SCATTER_FLOOR * (1.0 + 1e-9) {
-                    f = f64::NAN;
+                    t.f = f64::NAN;
+                    t.detectable = f64::NAN;
                 }
                 GroupLevels {
                     kind,
                     mean_ln,
-                    f,
-                    df: (d1, d2),
-                    p_value: f_upper(f, d1, d2),
+                    f: t.f,
+                    df: (t.d1, t.d2),
+                    p_value: f_upper(t.f, t.d1, t.d2),
+                    detectable_ln: t.detectable,
                 }
             })
             .collect()
@@ -3560,6 +3683,98 @@ mod tests {
         assert!((f / want - 1.0).abs() < 1e-9, "{f} {want}");
         // One group: no test.
         assert!(between_group_f(&x, &x, &[0; 9]).0.is_nan());
+    }
+
+    /// The noncentral F's tail: the central one at λ = 0; for d₂ → ∞ and d₁ = 1 the normal
+    /// closed form, √λ* = z₀.₉₉₅ + z₀.₈ where the test at 1 % has 80 % power.
+    #[test]
+    fn noncentral_f_tail_and_the_noncentrality_of_a_power() {
+        for (f, d1, d2) in [(2.5, 1, 4), (0.7, 3, 10), (8.0, 2, 28)] {
+            let (a, b) = (noncentral_f_upper(f, d1, d2, 0.0), f_upper(f, d1, d2));
+            assert!((a - b).abs() < 1e-12, "{a} {b}");
+        }
+        // Monotone in λ.
+        let tails: Vec<f64> = [0.0, 1.0, 5.0, 20.0]
+            .iter()
+            .map(|l| noncentral_f_upper(7.0, 1, 6, *l))
+            .collect();
+        assert!(tails.windows(2).all(|w| w[0] < w[1]), "{tails:?}");
+        let lam = noncentrality_for_power(1, 10_000_000, 0.01, 0.8);
+        let want = (2.575_829_3_f64 + 0.841_621_2).powi(2);
+        assert!((lam - want).abs() < 0.01, "{lam} {want}");
+        // And the tail there is the power asked, at the test's own critical value.
+        use statrs::distribution::{ContinuousCDF, FisherSnedecor};
+        let crit = FisherSnedecor::new(1.0, 3.0).unwrap().inverse_cdf(0.99);
+        let lam3 = noncentrality_for_power(1, 3, 0.01, 0.8);
+        assert!((noncentral_f_upper(crit, 1, 3, lam3) - 0.8).abs() < 1e-9);
+        assert!(noncentrality_for_power(1, 0, 0.01, 0.8).is_nan());
+    }
+
+    /// The difference a two-group test detects: the closed form with a level only
+    /// (σ̂·√(λ*(1/n_A + 1/n_B)), σ̂ the pooled sd within the groups), and its power on 4,000
+    /// generated data sets of the campaigns world's layout (6 specimens at one temperature,
+    /// the campaigns alternating in stress order, a stress slope): a shift of that size with
+    /// the true σ is called at 1 % in 80 % of them.
+    #[test]
+    fn the_detectable_difference_is_called_with_its_power() {
+        use rand::SeedableRng;
+        use rand_distr::{Distribution, StandardNormal};
+        let y = [0.1, -0.3, 0.4, 0.0, 1.2, 0.8, 1.5];
+        let group = [0usize, 0, 0, 0, 1, 1, 1];
+        let ones = vec![1.0; 7];
+        let t = nested_test(&y, &[ones], &indicators(&group));
+        let mean = |g: usize| {
+            let v: Vec<f64> = (0..7).filter(|&i| group[i] == g).map(|i| y[i]).collect();
+            v.iter().sum::<f64>() / v.len() as f64
+        };
+        let ssw: f64 = (0..7).map(|i| (y[i] - mean(group[i])).powi(2)).sum();
+        let lam = noncentrality_for_power(1, 5, STRESS_TREND_ALPHA, DETECT_POWER);
+        let want = (ssw / 5.0 * lam * (1.0 / 4.0 + 1.0 / 3.0)).sqrt();
+        assert_eq!((t.d1, t.d2), (1, 5));
+        assert!(
+            (t.detectable / want - 1.0).abs() < 1e-9,
+            "{} {want}",
+            t.detectable
+        );
+        // More than two groups: no single difference.
+        let three = nested_test(&y, &[vec![1.0; 7]], &indicators(&[0, 0, 1, 1, 2, 2, 2]));
+        assert!(three.detectable.is_nan() && three.f.is_finite());
+
+        let x: Vec<f64> = [60.0f64, 60.0, 70.0, 80.0, 90.0, 100.0]
+            .iter()
+            .map(|s| s.ln())
+            .collect();
+        let camp: Vec<usize> = (0..6).map(|k| k % 2).collect();
+        let base = vec![vec![1.0; 6], x.clone()];
+        let extra = indicators(&camp);
+        // With σ = 1 the detectable shift is √(λ*/‖M k_B‖²); ‖M k_B‖² from any noise-free y.
+        let beyond = {
+            let kb: Vec<f64> = camp.iter().map(|c| *c as f64).collect();
+            // The residual sum of squares of k_B on a level and the slope.
+            let n = 6.0;
+            let (sx, sk) = (x.iter().sum::<f64>() / n, kb.iter().sum::<f64>() / n);
+            let sxx: f64 = x.iter().map(|v| (v - sx).powi(2)).sum();
+            let sxk: f64 = x.iter().zip(&kb).map(|(a, b)| (a - sx) * (b - sk)).sum();
+            let skk: f64 = kb.iter().map(|b| (b - sk).powi(2)).sum();
+            skk - sxk * sxk / sxx
+        };
+        let d2 = 6 - 3;
+        let shift =
+            (noncentrality_for_power(1, d2, STRESS_TREND_ALPHA, DETECT_POWER) / beyond).sqrt();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(69);
+        let (sets, mut called) = (4000, 0);
+        for _ in 0..sets {
+            let yy: Vec<f64> = (0..6)
+                .map(|i| {
+                    let e: f64 = StandardNormal.sample(&mut rng);
+                    0.3 - 2.0 * x[i] + shift * camp[i] as f64 + e
+                })
+                .collect();
+            let (f, d1, d2) = nested_f(&yy, &base, &extra);
+            called += usize::from(f_upper(f, d1, d2) < STRESS_TREND_ALPHA);
+        }
+        // Binomial 99.9 % limits about 0.8 of 4,000: 3,200 ± 41.
+        assert!((3159..=3241).contains(&called), "{called}");
     }
 
     /// The campaign test on the Alloy 617 layout (INL2 pairs at 750, 850 and 950 °C, KAERI2

@@ -762,6 +762,19 @@ pub fn p_text(p: f64) -> String {
     }
 }
 
+/// The clause on the difference of two groups' levels a test calls with 80 % probability
+/// ([`crate::likelihood::GroupLevels::detectable_ln`]); empty where there is none.
+fn detectable_text(d: f64) -> String {
+    if !d.is_finite() {
+        return String::new();
+    }
+    format!(
+        "; it calls a difference of {d:.2} between the two levels (a factor {:.2}) with {:.0} % probability",
+        d.exp(),
+        100.0 * crate::likelihood::DETECT_POWER
+    )
+}
+
 /// One line on how a kind's ln factors differ between temperatures
 /// ([`crate::likelihood::TemperatureLevels`]), without a leading dash: the means per
 /// temperature, the F-test and, where it is called, what that means.
@@ -778,7 +791,7 @@ pub fn temperature_levels_text(t: &crate::likelihood::TemperatureLevels) -> Stri
             t.df.0,
             t.df.1,
             crate::likelihood::STRESS_TREND_ALPHA
-        )
+        ) + &detectable_text(t.detectable_ln)
     } else if t.df.1 == 0 {
         "no test: too few specimens beside the levels and the slope".to_string()
     } else {
@@ -813,7 +826,7 @@ pub fn campaign_levels_text(c: &crate::likelihood::CampaignLevels) -> String {
             c.df.0,
             c.df.1,
             crate::likelihood::STRESS_TREND_ALPHA
-        )
+        ) + &detectable_text(c.detectable_ln)
     } else if c.df.0 == 0 {
         "no test: the campaigns share no temperature, so their levels are the temperatures'"
             .to_string()
@@ -928,6 +941,7 @@ fn group_levels_json<G: serde::Serialize>(
                     "f": jnum(t.f),
                     "df": [t.df.0, t.df.1],
                     "p_value": jnum(t.p_value),
+                    "detectable_difference_ln": jnum(t.detectable_ln),
                     called: t.differ(),
                 }),
             )
@@ -1094,17 +1108,21 @@ mod tests {
     use super::*;
 
     /// The campaign line's words for each case of the test, as a table: called, not called,
-    /// campaigns confounded with temperatures, too few specimens, the scatter at its floor.
+    /// campaigns confounded with temperatures, too few specimens, the scatter at its floor;
+    /// the difference the test can detect wherever there is a test.
     #[test]
     fn campaign_levels_text_says_why_there_is_no_test() {
         use crate::likelihood::{CampaignLevels, EffectKind};
         let line = |f: f64, df: (usize, usize), p: f64| {
+            // The difference the test can detect exists only where there is a test.
+            let detectable_ln = if f.is_finite() { 0.5 } else { f64::NAN };
             campaign_levels_text(&CampaignLevels {
                 kind: EffectKind::Rate,
                 mean_ln: vec![("INL2".into(), 0.21), ("KAERI2".into(), -0.25)],
                 f,
                 df,
                 p_value: p,
+                detectable_ln,
             })
         };
         // F, its degrees of freedom, p, words the line holds, whether it is called.
@@ -1145,6 +1163,11 @@ mod tests {
             assert!(s.starts_with("The ln rate factors between campaigns: mean +0.21 for INL2, -0.25 for KAERI2 ("), "{s}");
             assert!(s.contains(words), "{s}");
             assert_eq!(s.contains("**the campaigns differ**"), called, "{s}");
+            assert_eq!(
+                s.contains("it calls a difference of 0.50 between the two levels (a factor 1.65) with 80 % probability"),
+                f.is_finite(),
+                "{s}"
+            );
         }
     }
 
