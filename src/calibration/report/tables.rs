@@ -836,7 +836,7 @@ pub fn campaign_levels_text(c: &crate::likelihood::CampaignLevels) -> String {
         "no test: the scatter is at its floor, the factors are zero".to_string()
     };
     let flag = if c.differ() {
-        ": **the campaigns differ**, a heat or laboratory effect that the scatter between specimens mixes in; a prediction for a new campaign carries it on top of the scatter"
+        ": **the campaigns differ**, a heat or laboratory effect that the scatter between specimens mixes in; `predict` draws a new specimen from one population of specimens, so for a specimen of a new campaign its interval leaves this difference out"
     } else {
         ""
     };
