@@ -951,3 +951,70 @@ fn fit_with_specimen_effects_ends_at_an_optimum_of_its_likelihood() {
     eprintln!("fit −2 ln L {objective:.2}, effects and scatter fitted again {again:.2}");
     assert!(again >= objective - 1.0, "{again} vs {objective}");
 }
+
+/// `synth --world campaigns` through the binary: two campaigns alternating in stress order,
+/// named on load, and `fit`'s campaign test with the difference it can detect (generated
+/// set 213001 of docs/SPECIMENS.md's 400: 5 specimens, (1, 2) degrees of freedom).
+#[test]
+fn a_generated_set_with_campaigns_gets_the_campaign_test() {
+    let dir = TempDir::new().unwrap();
+    let sets = dir.path().join("sets");
+    let o = bin()
+        .args([
+            "synth",
+            sets.to_str().unwrap(),
+            "--sets",
+            "1",
+            "--seed",
+            "213001",
+        ])
+        .args(["--world", "campaigns", "--scenario", "none"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let set = sets.join("set-213001");
+    let truth: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(set.join("truth.json")).unwrap()).unwrap();
+    let sp = &truth["specimens"];
+    let labels: Vec<&str> = sp["labels"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|l| l.as_str().unwrap())
+        .collect();
+    assert_eq!(labels, ["A-1", "B-1", "A-2", "B-2", "A-3"]);
+    let camp = sp["campaign_effects"].as_array().unwrap();
+    assert_eq!(camp[0], camp[2]);
+    assert_ne!(camp[0], camp[1]);
+    let cfg = set.join("config.toml");
+    let mut text = std::fs::read_to_string(&cfg).unwrap();
+    text += "\n[objective]\nkind = \"likelihood\"\n";
+    std::fs::write(&cfg, text).unwrap();
+    let out = dir.path().join("fit");
+    let o = bin()
+        .args(["fit", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        stdout.contains("The ln rate factors between campaigns: mean"),
+        "{stdout}"
+    );
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let lv = &s["specimens"]["campaign_levels"]["rate"];
+    let names: Vec<&str> = lv["mean_ln_by_campaign"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|g| g["campaign"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["A", "B"], "{lv}");
+    assert_eq!(lv["df"], serde_json::json!([1, 2]), "{lv}");
+    let d = lv["detectable_difference_ln"].as_f64().unwrap();
+    assert!(d.is_finite() && d > 0.0, "{lv}");
+    assert!(stdout.contains(&format!(
+        "it calls a difference of {d:.2} between the two levels"
+    )));
+}
