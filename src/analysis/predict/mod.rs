@@ -416,6 +416,7 @@ pub fn table(run: &PredictRun, names: &[&str]) -> String {
                 kinds.join(" and ")
             ));
         }
+        s.push_str(&campaign_notes(&r.campaign_levels));
         for (n, (g, v)) in names.iter().zip(r.given.iter().zip(&r.params)) {
             s.push_str(&format!(
                 "  {n:>8}: given {g:.6e}, refit {v:.6e} ({:+.2} %)\n",
@@ -695,6 +696,7 @@ pub fn summary_json(cfg: &RunConfig, data: &Dataset, model: &dyn Model, run: &Pr
             "delta_neg2ll": jnum(r.delta_neg2ll()),
             "specimen_effects": r.specimen_effects,
             "without_specimen_factors": r.without_specimen_factors,
+            "campaign_levels": r.campaign_levels,
             "constants": all_names.iter().zip(r.given.iter().zip(&r.params)).map(|(n, (g, v))| json!({
                 "name": n,
                 "given": g,
@@ -1051,8 +1053,51 @@ pub fn curve_plots(
         .collect()
 }
 
+/// The printout's notes on the test campaigns of a refit with specimen effects: one line per
+/// kind on how its factors differ between campaigns, then what a new test's interval leaves
+/// out; empty without campaigns.
+fn campaign_notes(levels: &[crate::likelihood::CampaignLevels]) -> String {
+    if levels.is_empty() {
+        return String::new();
+    }
+    let mut s: String = levels
+        .iter()
+        .map(|c| {
+            format!(
+                "  note: {}\n",
+                crate::report::tables::campaign_levels_text(c)
+            )
+        })
+        .collect();
+    s.push_str("  note: a new test's interval draws its specimen from one population of specimens, whichever campaign it comes from: for a specimen of a campaign not in the data it leaves the difference between campaigns out\n");
+    s
+}
+
 #[cfg(test)]
 mod tests {
+    /// The campaign notes: none without campaigns; with them a line per kind (the report's
+    /// campaign line) and the sentence on what a new test's interval leaves out.
+    #[test]
+    fn campaign_notes_say_what_a_new_tests_interval_leaves_out() {
+        use crate::likelihood::{CampaignLevels, EffectKind};
+        assert_eq!(campaign_notes(&[]), "");
+        let level = |kind| CampaignLevels {
+            kind,
+            mean_ln: vec![("INL2".into(), 0.21), ("KAERI2".into(), -0.25)],
+            f: 7.35,
+            df: (1, 28),
+            p_value: 0.011,
+            detectable_ln: 0.82,
+        };
+        let s = campaign_notes(&[level(EffectKind::Rate), level(EffectKind::Ductility)]);
+        let lines: Vec<&str> = s.lines().collect();
+        assert_eq!(lines.len(), 3, "{s}");
+        assert!(lines[0]
+            .starts_with("  note: The ln rate factors between campaigns: mean +0.21 for INL2"));
+        assert!(lines[1].starts_with("  note: The ln ductility factors between campaigns"));
+        assert!(lines[2].contains("leaves the difference between campaigns out"));
+    }
+
     use super::*;
     use crate::uncertainty::predict::BandPoint;
 

@@ -499,6 +499,11 @@ pub struct Refit {
     /// Whether the refit left out the specimen factors `auto` chose, their scatter beyond
     /// the stress trend zero ([`super::Context::settles_without_specimens`]).
     pub without_specimen_factors: bool,
+    /// Per kind of specimen effect, how the refit's factors differ between the test campaigns
+    /// the labels name (empty without effects or campaigns): a new test's interval draws the
+    /// specimen from one population, so for a campaign not in the data it leaves that
+    /// difference out.
+    pub campaign_levels: Vec<crate::likelihood::CampaignLevels>,
 }
 
 impl Refit {
@@ -586,6 +591,11 @@ pub fn intervals_at_observed(
             .map(|s| s.kinds.clone())
             .unwrap_or_default(),
         without_specimen_factors,
+        campaign_levels: reference
+            .specimen
+            .as_ref()
+            .map(|s| s.campaign_levels(ctx.curves))
+            .unwrap_or_default(),
     };
     let pc = &setup.profile;
     let (th, calibration) = if pc.calibrate > 0 {
