@@ -861,12 +861,7 @@ fn specimen_factors_by_temperature_and_campaign() {
             (d / want_d - 1.0).abs() < 1e-6,
             "{kind}: {d} against {want_d}"
         );
-        let names: Vec<&str> = lv["mean_ln_by_campaign"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|g| g["campaign"].as_str().unwrap())
-            .collect();
+        let names = campaign_names(lv);
         assert_eq!(names, ["INL2", "KAERI2"], "{lv}");
     }
 }
@@ -952,6 +947,16 @@ fn fit_with_specimen_effects_ends_at_an_optimum_of_its_likelihood() {
     assert!(again >= objective - 1.0, "{again} vs {objective}");
 }
 
+/// The campaigns of a `campaign_levels` entry of summary.json, in its order.
+fn campaign_names(lv: &serde_json::Value) -> Vec<&str> {
+    lv["mean_ln_by_campaign"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|g| g["campaign"].as_str().unwrap())
+        .collect()
+}
+
 /// `synth --world campaigns` through the binary: two campaigns alternating in stress order,
 /// named on load, and `fit`'s campaign test with the difference it can detect (generated
 /// set 213001 of docs/SPECIMENS.md's 400: 5 specimens, (1, 2) degrees of freedom).
@@ -1004,12 +1009,7 @@ fn a_generated_set_with_campaigns_gets_the_campaign_test() {
     let s: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     let lv = &s["specimens"]["campaign_levels"]["rate"];
-    let names: Vec<&str> = lv["mean_ln_by_campaign"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|g| g["campaign"].as_str().unwrap())
-        .collect();
+    let names = campaign_names(lv);
     assert_eq!(names, ["A", "B"], "{lv}");
     assert_eq!(lv["df"], serde_json::json!([1, 2]), "{lv}");
     let d = lv["detectable_difference_ln"].as_f64().unwrap();

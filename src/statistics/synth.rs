@@ -468,7 +468,7 @@ fn draw_specimens(stresses: &[f64], seed: u64, world: World) -> (Vec<f64>, Speci
             labels.push(format!("S{}-b", k + 1));
         }
     }
-    let rate_effects = tests.iter().map(|_| rate_sd * normal(&mut rng)).collect();
+    let mut rate_effects: Vec<f64> = tests.iter().map(|_| rate_sd * normal(&mut rng)).collect();
     let ductility_effects = tests
         .iter()
         .map(|_| ductility_sd * normal(&mut rng))
@@ -480,7 +480,6 @@ fn draw_specimens(stresses: &[f64], seed: u64, world: World) -> (Vec<f64>, Speci
     } else {
         (0.0, vec![])
     };
-    let mut rate_effects: Vec<f64> = rate_effects;
     let (campaign_sd, campaign_effects) = if world == World::Campaigns {
         let sd = 0.1 + 0.3 * rng.gen::<f64>();
         let levels = [sd * normal(&mut rng), sd * normal(&mut rng)];
