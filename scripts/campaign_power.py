@@ -6,13 +6,14 @@ and `B` alternating in stress order, each campaign with its own log-normal creep
 sd 10–40 %). Each set is fitted by `creepfit fit` with the likelihood objective (`auto`
 specimen effects, the configuration's own scatter estimate). Appends one line per set to
 OUT/results.jsonl: the truth (specimen and campaign sd, the campaigns' true ln-rate
-contrast), the rate test's F, df and p, and the rate scatter's estimate and 95 % interval.
+contrast), the rate test's F, df and p, the rate scatter's estimate and 95 % interval, and
+the sd of a new specimen from a new campaign with its interval (`new_campaign_sd_ln`).
 Read with `--summary OUT`: the test's rejection rate at 1 % by the true contrast in units of
-the specimen sd, and how often the scatter's interval covers the within-campaign sd and the
-sd of a new specimen from a new campaign.
+the specimen sd, and how often each interval covers the within-campaign sd and the sd of a
+new specimen from a new campaign.
 
     scripts/campaign_power.py CREEPFIT_BINARY OUT FIRST_SEED SETS
-    scripts/campaign_power.py --summary OUT
+    scripts/campaign_power.py --summary OUT   (or a results file, e.g. docs/measurements/campaign-power-213001.jsonl)
 """
 import json
 import os
@@ -21,7 +22,8 @@ import sys
 
 
 def summary(out):
-    rows = [json.loads(l) for l in open(os.path.join(out, "results.jsonl"))]
+    path = out if os.path.isfile(out) else os.path.join(out, "results.jsonl")
+    rows = [json.loads(l) for l in open(path)]
     ok = [r for r in rows if r.get("error") is None]
     print(f"sets {len(rows)}, fitted {len(ok)}")
     tested = [r for r in ok if r["p"] is not None]
@@ -52,6 +54,22 @@ def summary(out):
     marginal = sum(r["sd_lo"] <= r["marginal_sd"] <= r["sd_hi"] for r in sc)
     print(f"rate scatter's 95 % interval covers the within-campaign sd in {within} of {len(sc)}, "
           f"the sd of a new specimen from a new campaign in {marginal} of {len(sc)}")
+    nc = [r for r in ok if r.get("new_lo") is not None]
+    if nc:
+        cov = sum(r["new_lo"] <= r["marginal_sd"] <= r["new_hi"] for r in nc)
+        low = sum(r["new_hi"] < r["marginal_sd"] for r in nc)
+        both = [r for r in nc if r in sc]
+        old_cov = sum(r["sd_lo"] <= r["marginal_sd"] <= r["sd_hi"] for r in both)
+        big = [r for r in nc if r["campaign_sd"] >= r["rate_sd"]]
+        print(f"new-campaign sd's 95 % interval (campaign_levels.rate.new_campaign_sd_ln) covers "
+              f"the sd of a new specimen from a new campaign in {cov} of {len(nc)} (too low in "
+              f"{low}); the rate scatter's interval on the same sets {old_cov} of {len(both)}; "
+              f"where the campaign sd is at least the specimen sd: "
+              f"{sum(r['new_lo'] <= r['marginal_sd'] <= r['new_hi'] for r in big)} against "
+              f"{sum(r['sd_lo'] <= r['marginal_sd'] <= r['sd_hi'] for r in big if r in sc)} of {len(big)}")
+        w = sorted(r["new_hi"] / r["new_lo"] for r in nc if r["new_lo"] > 0)
+        if w:
+            print(f"its upper/lower end ratio: median {w[len(w)//2]:.1f}")
 
 
 def main():
@@ -95,6 +113,9 @@ def main():
                 "detectable": lv.get("detectable_difference_ln") if lv else None,
                 "sd": sc.get("sd_ln"), "sd_lo": sc.get("sd_ln_lo95"), "sd_hi": sc.get("sd_ln_hi95"),
             })
+            nc = lv.get("new_campaign_sd_ln") if lv else None
+            if nc is not None:
+                row.update({"new_sd": nc["estimate"], "new_lo": nc["lo95"], "new_hi": nc["hi95"]})
         results.write(json.dumps(row) + "\n")
         results.flush()
 

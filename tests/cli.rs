@@ -863,6 +863,35 @@ fn specimen_factors_by_temperature_and_campaign() {
         );
         let names = campaign_names(lv);
         assert_eq!(names, ["INL2", "KAERI2"], "{lv}");
+        // The sd of a new specimen from a new campaign, Graybill and Wang's interval from the
+        // two mean squares (Burdick & Graybill 1992, §3.2): γ = MS₁/q + (1 − 1/q) MS₂ with q =
+        // ‖M z_INL2‖² + ‖M z_KAERI2‖² = 2‖M k‖² (the two indicators sum to the temperatures').
+        // χ²₁'s 2.5 % and 97.5 % points from the tables (statrs' inverse is NaN at the first).
+        let q = 2.0 * rss(&design(false), &k);
+        let (m1, m2) = (rss_t - rss_tc, rss_tc / df2 as f64);
+        let (c1, c2) = (1.0 / q, 1.0 - 1.0 / q);
+        use statrs::distribution::{ChiSquared, ContinuousCDF};
+        let chi2 = ChiSquared::new(df2 as f64).unwrap();
+        let (g1, h1) = (1.0 - 1.0 / 5.023886, 1.0 / 0.000982069 - 1.0);
+        let (g2, h2) = (
+            1.0 - df2 as f64 / chi2.inverse_cdf(0.975),
+            df2 as f64 / chi2.inverse_cdf(0.025) - 1.0,
+        );
+        let gamma = c1 * m1 + c2 * m2;
+        let want_lo = (gamma - ((g1 * c1 * m1).powi(2) + (g2 * c2 * m2).powi(2)).sqrt())
+            .max(0.0)
+            .sqrt();
+        let want_hi = (gamma + ((h1 * c1 * m1).powi(2) + (h2 * c2 * m2).powi(2)).sqrt()).sqrt();
+        let want_est = (m2 + ((m1 - m2) / q).max(0.0)).sqrt();
+        let nc = &lv["new_campaign_sd_ln"];
+        for (key, want) in [("estimate", want_est), ("lo95", want_lo), ("hi95", want_hi)] {
+            let got = nc[key].as_f64().unwrap_or_else(|| panic!("{kind}: {nc}"));
+            assert!(
+                (got / want - 1.0).abs() < 1e-5,
+                "{kind} {key}: {got} against {want}"
+            );
+        }
+        eprintln!("{kind}: new campaign's specimen sd {want_est:.3} ({want_lo:.3}–{want_hi:.3})");
     }
 }
 
@@ -1017,4 +1046,18 @@ fn a_generated_set_with_campaigns_gets_the_campaign_test() {
     assert!(stdout.contains(&format!(
         "it calls a difference of {d:.2} between the two levels"
     )));
+    // The sd of a new specimen from a new campaign, in the file and on the line.
+    let nc = &lv["new_campaign_sd_ln"];
+    let (est, lo, hi) = (
+        nc["estimate"].as_f64().unwrap(),
+        nc["lo95"].as_f64().unwrap(),
+        nc["hi95"].as_f64().unwrap(),
+    );
+    assert!(lo <= est && est <= hi, "{nc}");
+    assert!(
+        stdout.contains(&format!(
+            "a new specimen from a new campaign: sd {est:.2} in the ln factor (95 % {lo:.2}–{hi:.2}"
+        )),
+        "{stdout}"
+    );
 }

@@ -1055,7 +1055,8 @@ pub fn curve_plots(
 
 /// The printout's notes on the test campaigns of a refit with specimen effects: one line per
 /// kind on how its factors differ between campaigns, then what a new test's interval leaves
-/// out; empty without campaigns.
+/// out, unless a kind's line has said it already (its campaigns differ); empty without
+/// campaigns.
 fn campaign_notes(levels: &[crate::likelihood::CampaignLevels]) -> String {
     if levels.is_empty() {
         return String::new();
@@ -1069,6 +1070,9 @@ fn campaign_notes(levels: &[crate::likelihood::CampaignLevels]) -> String {
             )
         })
         .collect();
+    if levels.iter().any(|c| c.differ()) {
+        return s;
+    }
     s.push_str("  note: a new test's interval draws its specimen from one population of specimens, whichever campaign it comes from: for a specimen of a campaign not in the data it leaves the difference between campaigns out\n");
     s
 }
@@ -1088,6 +1092,7 @@ mod tests {
             df: (1, 28),
             p_value: 0.011,
             detectable_ln: 0.82,
+            new_group_sd: None,
         };
         let s = campaign_notes(&[level(EffectKind::Rate), level(EffectKind::Ductility)]);
         let lines: Vec<&str> = s.lines().collect();
@@ -1096,6 +1101,20 @@ mod tests {
             .starts_with("  note: The ln rate factors between campaigns: mean +0.21 for INL2"));
         assert!(lines[1].starts_with("  note: The ln ductility factors between campaigns"));
         assert!(lines[2].contains("leaves the difference between campaigns out"));
+        // Where a kind's campaigns differ, its own line says what the interval leaves out
+        // and the closing sentence would repeat it.
+        let called = CampaignLevels {
+            p_value: 0.009,
+            ..level(EffectKind::Rate)
+        };
+        let s = campaign_notes(&[called, level(EffectKind::Ductility)]);
+        let lines: Vec<&str> = s.lines().collect();
+        assert_eq!(lines.len(), 2, "{s}");
+        assert!(
+            lines[0].contains("its interval leaves this difference out"),
+            "{s}"
+        );
+        assert_eq!(s.matches("leaves").count(), 1, "{s}");
     }
 
     use super::*;

@@ -841,10 +841,21 @@ pub fn campaign_levels_text(c: &crate::likelihood::CampaignLevels) -> String {
         ""
     };
     format!(
-        "The ln {} factors between campaigns: mean {} ({test}){flag}",
+        "The ln {} factors between campaigns: mean {} ({test}){flag}{}",
         c.kind.name(),
-        means.join(", ")
+        means.join(", "),
+        new_campaign_text(c.new_group_sd)
     )
+}
+
+/// The campaign line's clause on a new specimen from a new campaign
+/// ([`crate::likelihood::GroupLevels::new_group_sd`]); empty without the estimate.
+fn new_campaign_text(sd: Option<(f64, f64, f64)>) -> String {
+    sd.map_or_else(String::new, |(est, lo, hi)| {
+        format!(
+            "; a new specimen from a new campaign: sd {est:.2} in the ln factor (95 % {lo:.2}–{hi:.2}, the campaigns' degrees of freedom included)"
+        )
+    })
 }
 
 /// The kinds of specimen effect, in the order of `specimens.csv` and `summary.json`.
@@ -942,6 +953,9 @@ fn group_levels_json<G: serde::Serialize>(
                     "df": [t.df.0, t.df.1],
                     "p_value": jnum(t.p_value),
                     "detectable_difference_ln": jnum(t.detectable_ln),
+                    "new_campaign_sd_ln": t.new_group_sd.map(|(e, lo, hi)| {
+                        json!({"estimate": jnum(e), "lo95": jnum(lo), "hi95": jnum(hi)})
+                    }),
                     called: t.differ(),
                 }),
             )
@@ -1123,6 +1137,7 @@ mod tests {
                 df,
                 p_value: p,
                 detectable_ln,
+                new_group_sd: None,
             })
         };
         // F, its degrees of freedom, p, words the line holds, whether it is called.
@@ -1169,6 +1184,12 @@ mod tests {
                 "{s}"
             );
         }
+        // The sd of a new campaign's specimen closes the line where there is one.
+        assert_eq!(new_campaign_text(None), "");
+        assert_eq!(
+            new_campaign_text(Some((0.655, 0.505, 13.794))),
+            "; a new specimen from a new campaign: sd 0.66 in the ln factor (95 % 0.51–13.79, the campaigns' degrees of freedom included)"
+        );
     }
 
     #[test]
