@@ -96,6 +96,11 @@ pub struct SetResult {
     pub scatter_lo95: Vec<f64>,
     #[serde(default, deserialize_with = "de_vec_f64")]
     pub scatter_hi95: Vec<f64>,
+    /// Where the specimens name campaigns: the base fit's sd of the ln rate factor of a new
+    /// specimen from a new campaign, and its 95 % interval
+    /// ([`crate::likelihood::GroupLevels::new_group_sd`]); empty where there is none.
+    #[serde(default, deserialize_with = "de_vec_f64")]
+    pub new_campaign_rate: Vec<f64>,
     /// Why the set could not be generated or diagnosed, if so.
     pub error: Option<String>,
 }
@@ -415,6 +420,7 @@ pub fn run_one_diagnosed_with(
         scatter_est: vec![],
         scatter_lo95: vec![],
         scatter_hi95: vec![],
+        new_campaign_rate: vec![],
         error: None,
     };
     let folder = dir.join("sets").join(&name);
@@ -463,6 +469,13 @@ pub fn run_one_diagnosed_with(
         })?;
         diagnosis = Some(d.clone());
         (r.scatter_est, r.scatter_lo95, r.scatter_hi95) = scatter_by_kind(d.base.specimen.as_ref());
+        r.new_campaign_rate = d
+            .base
+            .specimen_campaign_levels
+            .iter()
+            .find(|c| c.kind == EffectKind::Rate)
+            .and_then(|c| c.new_group_sd)
+            .map_or_else(Vec::new, |(e, lo, hi)| vec![e, lo, hi]);
         if let Some(sp) = &t.specimens {
             r.scatter_true = true_by_kind(sp, r.scatter_est.len());
         }
@@ -610,6 +623,10 @@ pub struct Rates {
     /// Specimens-world sets, per kind of specimen scatter (`rate`, `ductility`): see
     /// [`ScatterCoverage`].
     pub scatter: Vec<ScatterCoverage>,
+    /// Sets whose specimens name campaigns: how the interval of a new campaign's specimen's
+    /// rate sd ([`SetResult::new_campaign_rate`]) did against the true rate scatter (of a
+    /// new specimen from a new campaign); kind `rate_new_campaign`, no sets where none had it.
+    pub new_campaign: ScatterCoverage,
 }
 
 /// How the base fit's 95 % interval of one kind of specimen scatter did against the truth
@@ -883,7 +900,24 @@ pub fn rates(results: &[SetResult]) -> Rates {
             .count(),
         errors: results.len() - ok.len(),
         scatter: scatter_coverage(&ok),
+        new_campaign: new_campaign_coverage(&ok),
     }
+}
+
+/// [`Rates::new_campaign`]: the sets with a new campaign's rate sd, against the true rate
+/// scatter (world `campaigns`: √(specimen sd² + campaign sd²)).
+fn new_campaign_coverage(ok: &[&SetResult]) -> ScatterCoverage {
+    let with: Vec<(Vec<f64>, Vec<f64>, Vec<f64>)> = ok
+        .iter()
+        .filter(|r| r.new_campaign_rate.len() == 3 && !r.scatter_true.is_empty())
+        .map(|r| {
+            let n = &r.new_campaign_rate;
+            (vec![r.scatter_true[0]], vec![n[1]], vec![n[2]])
+        })
+        .collect();
+    let mut c = coverage_of(with.iter().map(|(t, lo, hi)| (&t[..], &lo[..], &hi[..]))).remove(0);
+    c.kind = "rate_new_campaign".into();
+    c
 }
 
 /// The outcome labels of the confusion matrix, in column order.
@@ -1141,6 +1175,18 @@ pub fn write_reports(dir: &Path, results: &[SetResult], first_seed: u64) -> Resu
             c.absent_sets
         );
     }
+    let c = &r.new_campaign;
+    if c.true_sets > 0 {
+        let (lo, hi) = wilson(c.covered, c.true_sets);
+        md += &format!(
+            "- A new specimen from a new campaign (sets whose specimens name campaigns): the 95 % interval of its rate sd covers the true sd in {} of {} sets = {:.1} % (Wilson 95 % {:.1}–{:.1} %)\n",
+            c.covered,
+            c.true_sets,
+            100.0 * c.covered as f64 / c.true_sets as f64,
+            100.0 * lo,
+            100.0 * hi
+        );
+    }
     for (title, det) in [
         ("all sets", false),
         ("detectable effect sets (and all no-effect sets)", true),
@@ -1376,6 +1422,22 @@ mod tests {
         assert_eq!((d.true_sets, d.covered), (3, 1));
         assert_eq!((d.absent_sets, d.spurious), (3, 1));
         assert_eq!(r.errors, 1);
+        // No set names campaigns: no sets in the new campaign's row.
+        assert_eq!(r.new_campaign.true_sets, 0);
+        assert_eq!(r.new_campaign.kind, "rate_new_campaign");
+        // Sets with a new campaign's sd: scored against the true rate scatter (ends included).
+        let campaign = |t: f64, lo: f64, hi: f64| {
+            let mut r = set([t, 0.08], [0.1, 0.05], [0.3, 0.2]);
+            r.new_campaign_rate = vec![0.5 * (lo + hi), lo, hi];
+            r
+        };
+        let r = rates(&[
+            campaign(0.3, 0.2, 0.9),
+            campaign(0.3, 0.3, 0.9),
+            campaign(0.3, 0.31, 0.9),
+            set([0.2, 0.08], [0.1, 0.05], [0.3, 0.2]),
+        ]);
+        assert_eq!((r.new_campaign.true_sets, r.new_campaign.covered), (3, 2));
     }
 
     /// Which λ places a set in the power table, as a table: the oracle with the specimens'
@@ -1466,6 +1528,7 @@ mod tests {
             scatter_est: vec![],
             scatter_lo95: vec![],
             scatter_hi95: vec![],
+            new_campaign_rate: vec![],
             error: Some("not generated".into()),
         }
     }
