@@ -465,23 +465,8 @@ impl Cutoffs {
     /// too low above the estimate (docs/SPECIMENS.md, "The scatter's interval with few
     /// specimens").
     pub fn small_sample(dof: f64, level: f64) -> Cutoffs {
-        use statrs::distribution::{ChiSquared, ContinuousCDF};
         let d = if dof >= 1.0 { dof } else { 1.0 };
-        let chi = ChiSquared::new(d).expect("d ≥ 1");
-        // The quantile by bisection in ln x on the CDF (statrs' own inverse is NaN at the
-        // 2.5 % point of one degree of freedom).
-        let quantile = |q: f64| {
-            let (mut lo, mut hi) = ((1e-12f64).ln(), (10.0 * d + 100.0).ln());
-            for _ in 0..200 {
-                let mid = 0.5 * (lo + hi);
-                if chi.cdf(mid.exp()) < q {
-                    lo = mid;
-                } else {
-                    hi = mid;
-                }
-            }
-            (0.5 * (lo + hi)).exp()
-        };
+        let quantile = |q: f64| chi2_quantile(d, q);
         let rise = |q: f64| {
             let u = quantile(q) / d;
             d * (u - 1.0 - u.ln())
@@ -491,6 +476,23 @@ impl Cutoffs {
             upper: rise(0.5 * (1.0 - level)),
         }
     }
+}
+
+/// The `q` quantile of the χ² distribution with `d` ≥ 1 degrees of freedom, by bisection in
+/// ln x on the CDF: statrs' own inverse is NaN at the 2.5 % point of one degree of freedom.
+pub fn chi2_quantile(d: f64, q: f64) -> f64 {
+    use statrs::distribution::{ChiSquared, ContinuousCDF};
+    let chi = ChiSquared::new(d).expect("d ≥ 1");
+    let (mut lo, mut hi) = ((1e-12f64).ln(), (10.0 * d + 100.0).ln());
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if chi.cdf(mid.exp()) < q {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    (0.5 * (lo + hi)).exp()
 }
 
 /// The profile interval of τ_kind at cutoffs `cut` under the criterion `f` (−2 ln L in the

@@ -1389,28 +1389,14 @@ fn nested(y: &[f64], base: &[Vec<f64>], extra: &[Vec<f64>], detect: bool) -> Nes
 /// test was not made or q ≤ 1 (the groups nearly confounded with the base columns: the
 /// coefficient of θ₂ would be negative).
 pub fn new_group_sd(t: &NestedTest, level: f64) -> Option<(f64, f64, f64)> {
-    use statrs::distribution::{ChiSquared, ContinuousCDF};
     if !(t.f.is_finite() && t.q.is_finite() && t.q > 1.0 && t.ms.1 > 0.0) {
         return None;
     }
     let (c1, c2) = (1.0 / t.q, 1.0 - 1.0 / t.q);
     let (m1, m2) = t.ms;
     let a = 0.5 * (1.0 - level);
-    // n/χ²_n at the upper and lower a points; statrs' inverse CDF by bisection on ln x, as
-    // its own is NaN at the 2.5 % point of one degree of freedom.
-    let ratio = |n: usize, p: f64| {
-        let chi = ChiSquared::new(n as f64).expect("n ≥ 1");
-        let (mut lo, mut hi) = ((1e-12f64).ln(), (10.0 * n as f64 + 100.0).ln());
-        for _ in 0..64 {
-            let mid = 0.5 * (lo + hi);
-            if chi.cdf(mid.exp()) < p {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        n as f64 / (0.5 * (lo + hi)).exp()
-    };
+    // n/χ²_n at the upper and lower a points.
+    let ratio = |n: usize, p: f64| n as f64 / crate::specimen::chi2_quantile(n as f64, p);
     let g = |n| 1.0 - ratio(n, 1.0 - a);
     let h = |n| ratio(n, a) - 1.0;
     let gamma = c1 * m1 + c2 * m2;
