@@ -141,6 +141,27 @@ fn data_ratio(dir: &std::path::Path, scenario: &str, seed: u64) -> (f64, f64) {
         strain: idx.iter().map(|&i| truth_noise.strain[i]).collect(),
         lifetime_sd: truth_noise.lifetime_sd,
     };
+    // The reading error's growth of each loaded curve: the truth's factor per reading where
+    // the curve holds every generated reading, else from its measured strains.
+    let truth_scale = creepfit::battery::true_reading_scale(t);
+    let scale: Option<Vec<Vec<f64>>> = truth_scale.as_ref().map(|w| {
+        data.curves
+            .iter()
+            .zip(&idx)
+            .map(|(c, &i)| {
+                if w[i].len() == c.strains.len() {
+                    w[i].clone()
+                } else {
+                    let top = t.true_strain[i].iter().copied().fold(0.0_f64, f64::max);
+                    let eps_f = sp.growth_strain(i, top);
+                    c.strains
+                        .iter()
+                        .map(|e| 1.0 + sp.error_growth * e.max(0.0) / eps_f)
+                        .collect()
+                }
+            })
+            .collect()
+    });
     let mut kinds = vec![(creepfit::likelihood::EffectKind::Rate, sp.rate_sd)];
     let mut eta: Vec<f64> = idx.iter().map(|&i| sp.rate_effects[i]).collect();
     if sp.ductility_sd > 0.0 {
@@ -166,6 +187,7 @@ fn data_ratio(dir: &std::path::Path, scenario: &str, seed: u64) -> (f64, f64) {
             &starts,
             &setup.settings,
             &noise,
+            scale.as_deref(),
             &kinds,
             &eta,
             profile,

@@ -5,7 +5,8 @@
 //!
 //! **Detectable** is defined by an oracle that knows the truth: the base model is fitted to the
 //! noise-free true observations (strain at the sampled times, the true rupture times) under
-//! the TRUE error model; the smallest sum of squared whitened residuals, λ, is the
+//! the TRUE error model (in the specimen worlds with the reading error's growth with strain,
+//! [`true_reading_scale`]); the smallest sum of squared whitened residuals, λ, is the
 //! noncentrality of a likelihood-ratio test that knows the error model. A set is detectable
 //! when λ ≥ [`DETECTABLE_LAMBDA`] = 25: the base model misses the truth by five standard errors.
 //! In the specimen world that oracle knows each specimen's factor, which no test does: there a
@@ -181,7 +182,7 @@ pub fn true_curves(truth: &Truth) -> Vec<Curve> {
 }
 
 /// The set's true error model (AR(1) per curve and the rupture-time scatter; the growth of
-/// the specimen world's reading error with strain is not part of it).
+/// the specimen world's reading error with strain is [`true_reading_scale`]).
 pub fn true_noise(truth: &Truth) -> ErrorModel {
     ErrorModel {
         strain: truth
@@ -191,6 +192,32 @@ pub fn true_noise(truth: &Truth) -> ErrorModel {
             .collect(),
         lifetime_sd: truth.lifetime_sd,
     }
+}
+
+/// The factor on each true reading's error where the set's reading error grows with strain
+/// (the specimen worlds: 1 + g ε/ε_f, as `synth` drew it, ε the true strain of the reading):
+/// per curve, one per reading of [`true_curves`]; `None` where it does not grow. An oracle
+/// without it takes every reading to be as precise as the first, and overstates what the
+/// late readings — a tertiary stage, where most catalogued effects act — tell.
+pub fn true_reading_scale(truth: &Truth) -> Option<Vec<Vec<f64>>> {
+    let sp = truth
+        .specimens
+        .as_ref()
+        .filter(|sp| sp.error_growth > 0.0)?;
+    Some(
+        truth
+            .true_strain
+            .iter()
+            .enumerate()
+            .map(|(i, e)| {
+                let top = e.iter().copied().fold(0.0_f64, f64::max);
+                let eps_f = sp.growth_strain(i, top);
+                e.iter()
+                    .map(|e| 1.0 + sp.error_growth * e / eps_f)
+                    .collect()
+            })
+            .collect(),
+    )
 }
 
 /// The oracle's starts in `space`: `truth_start`, the initial guess on `curves`, and 8
@@ -224,6 +251,7 @@ pub fn oracle_lambda(cfg: &RunConfig, truth: &Truth) -> f64 {
     };
     let curves = true_curves(truth);
     let noise = true_noise(truth);
+    let scale = true_reading_scale(truth);
     let space = cfg.space();
     let starts = oracle_starts(
         model.as_ref(),
@@ -269,6 +297,7 @@ pub fn oracle_lambda(cfg: &RunConfig, truth: &Truth) -> f64 {
         &starts,
         &settings,
         &noise,
+        scale.as_deref(),
         factors.as_ref(),
     )
     .map_or(f64::NAN, |b| b.0)
@@ -277,7 +306,7 @@ pub fn oracle_lambda(cfg: &RunConfig, truth: &Truth) -> f64 {
 /// Oracle λ of a set from the specimen world with the specimens' factors **unknown**, as they
 /// are to `diagnose` and in every laboratory: the "expected data" noncentrality of the
 /// likelihood-ratio test between the hierarchical base model and the hierarchical true model,
-/// both at the true error model and the true scatter —
+/// both at the true error model (its growth with strain included) and the true scatter —
 ///
 ///   λ_s = min over (θ, η) of the base's [Σ r²/σ² + Σ η²/τ²] − the same minimum of the
 ///   catalogued extension that generated the set (its own constants free),
@@ -304,6 +333,7 @@ pub fn oracle_lambda_scatter(cfg: &RunConfig, truth: &Truth) -> Option<f64> {
     let settings = &setup.settings;
     let curves = true_curves(truth);
     let noise = true_noise(truth);
+    let scale = true_reading_scale(truth);
     // The kinds the truth carries (a scatter of zero is no kind: every factor is 1).
     let mut kinds = vec![];
     let mut eta0 = vec![];
@@ -343,6 +373,7 @@ pub fn oracle_lambda_scatter(cfg: &RunConfig, truth: &Truth) -> Option<f64> {
             &starts,
             settings,
             &noise,
+            scale.as_deref(),
             &kinds,
             &eta0,
         )

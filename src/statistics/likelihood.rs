@@ -646,6 +646,10 @@ pub struct LikelihoodProblem<'a> {
     scatter: Mutex<Vec<f64>>,
     /// Keep the scatter where it is (the effects are then penalised least squares at it).
     hold_scatter: bool,
+    /// Per curve and reading, a known factor w ≥ 1 on the reading error (a reading error
+    /// that grows with strain, [`crate::errmodel::GrowingError`]): the AR(1) is that of the
+    /// residual over w. `None`: w = 1.
+    reading_scale: Option<Vec<Vec<f64>>>,
 }
 
 impl<'a> LikelihoodProblem<'a> {
@@ -660,6 +664,7 @@ impl<'a> LikelihoodProblem<'a> {
             effects: None,
             scatter: Mutex::new(vec![]),
             hold_scatter: false,
+            reading_scale: None,
         }
     }
 
@@ -678,6 +683,22 @@ impl<'a> LikelihoodProblem<'a> {
             fixed: true,
             ..LikelihoodProblem::new(inner, noise, 0.0)
         }
+    }
+
+    /// The same problem with each reading's error multiplied by a known factor (`scale`: per
+    /// curve, one w > 0 per reading): residuals and Jacobian rows are divided by w before the
+    /// AR(1) whitens them. −2 ln L then leaves out 2 Σ ln w, a constant of the data set,
+    /// so differences between models on the same data are exact. `None`: w = 1.
+    pub fn with_reading_scale(mut self, scale: Option<Vec<Vec<f64>>>) -> Self {
+        if let Some(w) = &scale {
+            let curves = self.curves();
+            assert_eq!(w.len(), curves.len(), "one scale per curve");
+            for (w, c) in w.iter().zip(curves) {
+                assert_eq!(w.len(), c.times_h.len(), "one scale per reading");
+            }
+        }
+        self.reading_scale = scale;
+        self
     }
 
     /// The same problem with specimen effects laid out as `layout`, their scatter starting at
@@ -731,17 +752,24 @@ impl<'a> LikelihoodProblem<'a> {
             let n = c.times_h.len();
             let ef = c.rupture_strain;
             let p = &noise.strain[i];
-            for v in &mut r[off..off + n] {
-                *v *= ef;
-            }
+            let w = self.reading_scale.as_ref().map(|w| &w[i]);
+            let scale = |v: &mut [f64]| {
+                for v in v.iter_mut() {
+                    *v *= ef;
+                }
+                if let Some(w) = w {
+                    for (v, w) in v.iter_mut().zip(w) {
+                        *v /= w;
+                    }
+                }
+            };
+            scale(&mut r[off..off + n]);
             p.whiten(&mut r[off..off + n]);
             if let Some(j) = jac.as_deref_mut() {
                 let nrows = j.nrows();
                 for k in 0..j.ncols() {
                     let col = &mut j.as_mut_slice()[k * nrows + off..k * nrows + off + n];
-                    for v in col.iter_mut() {
-                        *v *= ef;
-                    }
+                    scale(col);
                     p.whiten(col);
                 }
             }
@@ -3293,10 +3321,12 @@ fn whitened_at(
 }
 
 /// The smallest sum of squared whitened residuals of `model` on `curves` under the known error
-/// model `noise` (no profiling; each curve's constants multiplied by its `factors`, if
-/// given: known specimen effects), over fits from `starts`: the noncentrality of a
-/// likelihood-ratio test that knows the error model. Returns (minimum, its constants);
+/// model `noise` (no profiling; each reading's error multiplied by `scale`, if given,
+/// [`LikelihoodProblem::with_reading_scale`]; each curve's constants multiplied by its
+/// `factors`, if given: known specimen effects), over fits from `starts`: the noncentrality
+/// of a likelihood-ratio test that knows the error model. Returns (minimum, its constants);
 /// `None` if every start failed.
+#[allow(clippy::too_many_arguments)]
 pub fn min_whitened_ss(
     model: &dyn Model,
     curves: &[Curve],
@@ -3304,6 +3334,7 @@ pub fn min_whitened_ss(
     starts: &[Vec<f64>],
     settings: &FitSettings,
     noise: &ErrorModel,
+    scale: Option<&[Vec<f64>]>,
     factors: Option<&CurveFactors>,
 ) -> Option<(f64, Vec<f64>)> {
     let mut best: Option<(f64, Vec<f64>)> = None;
@@ -3315,7 +3346,8 @@ pub fn min_whitened_ss(
                 jacobian: settings.jacobian,
             },
             noise.clone(),
-        );
+        )
+        .with_reading_scale(scale.map(<[Vec<f64>]>::to_vec));
         let u0 = space.to_unit(s);
         let k = u0.len();
         let lm = minimize(&problem, &u0, &vec![0.0; k], &vec![1.0; k], &settings.lm);
@@ -3332,7 +3364,8 @@ pub fn min_whitened_ss(
 }
 
 /// The smallest penalised sum of squares Σ r²/σ² + Σ η²/τ² of `model` on `curves` at the
-/// known error model `noise` and the known scatter τ > 0 of each kind in `kinds` (the effects
+/// known error model `noise` (each reading's error multiplied by `scale`, if given) and the
+/// known scatter τ > 0 of each kind in `kinds` (the effects
 /// free, kind-major, started at `eta0`), over fits from `starts`: on noise-free
 /// data, the "expected data" noncentrality of a likelihood-ratio test between two
 /// hierarchical models is the difference of two such minima (the specimens' factors unknown,
@@ -3348,18 +3381,20 @@ pub fn min_penalised_ss(
     starts: &[Vec<f64>],
     settings: &FitSettings,
     noise: &ErrorModel,
+    scale: Option<&[Vec<f64>]>,
     kinds: &[(EffectKind, f64)],
     eta0: &[f64],
 ) -> Option<(f64, Vec<f64>, Vec<f64>)> {
     min_penalised(
-        model, curves, space, starts, settings, noise, kinds, eta0, None,
+        model, curves, space, starts, settings, noise, scale, kinds, eta0, None,
     )
 }
 
 /// [`min_penalised_ss`], or with `profile = Some(floor)` the error model re-estimated with
 /// the constants (AR(1) per curve and the rupture-time scatter above `floor`, started at
 /// `noise`, as every likelihood fit profiles it; the scatter still held): then the minimum
-/// is the penalised −2 ln L, Σ r²/σ² + Σ η²/τ² plus the error model's normalising term.
+/// is the penalised −2 ln L, Σ r²/σ² + Σ η²/τ² plus the error model's normalising term
+/// (with `scale`, the AR(1) is that of the residual over w and 2 Σ ln w is left out).
 #[allow(clippy::too_many_arguments)]
 pub fn min_penalised(
     model: &dyn Model,
@@ -3368,6 +3403,7 @@ pub fn min_penalised(
     starts: &[Vec<f64>],
     settings: &FitSettings,
     noise: &ErrorModel,
+    scale: Option<&[Vec<f64>]>,
     kinds: &[(EffectKind, f64)],
     eta0: &[f64],
     profile: Option<f64>,
@@ -3401,7 +3437,8 @@ pub fn min_penalised(
         let problem = match profile {
             Some(floor) => LikelihoodProblem::new(inner, noise.clone(), floor),
             None => LikelihoodProblem::fixed(inner, noise.clone()),
-        };
+        }
+        .with_reading_scale(scale.map(<[Vec<f64>]>::to_vec));
         let problem = match &layout {
             Some(l) => problem.with_effects(l.clone(), tau.clone(), true),
             None => problem,

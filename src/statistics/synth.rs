@@ -244,9 +244,20 @@ pub struct SpecimenTruth {
     pub campaign_effects: Vec<f64>,
     /// Growth of the reading error with strain: sd × (1 + g ε/ε_f).
     pub error_growth: f64,
+    /// Per curve: the ε_f of that growth, the true strain at which the curve's reading error
+    /// is (1 + g) times its start (fraction). Empty in sets written before 2026-12-05: then
+    /// each curve's largest true strain stands for it ([`SpecimenTruth::growth_strain`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub error_growth_strain: Vec<f64>,
 }
 
 impl SpecimenTruth {
+    /// The ε_f of curve `i`'s reading-error growth ([`SpecimenTruth::error_growth_strain`]),
+    /// or `largest` (the curve's largest true strain) where the set did not record it.
+    pub fn growth_strain(&self, i: usize, largest: f64) -> f64 {
+        self.error_growth_strain.get(i).copied().unwrap_or(largest)
+    }
+
     /// The true scatter per kind: rate, ductility, and coarsening in world `shapes`. In world
     /// `campaigns` the rate's is that of a new specimen from a new campaign,
     /// √(specimen sd² + campaign sd²): what iid specimen factors stand for.
@@ -509,6 +520,7 @@ fn draw_specimens(stresses: &[f64], seed: u64, world: World) -> (Vec<f64>, Speci
             campaign_sd,
             campaign_effects,
             error_growth,
+            error_growth_strain: vec![],
         },
     )
 }
@@ -679,6 +691,9 @@ fn generate_inner(
             for (v, e) in err.iter_mut().zip(&strain) {
                 *v *= 1.0 + sp.error_growth * e / eps_f;
             }
+        }
+        if let Some(sp) = truth.specimens.as_mut() {
+            sp.error_growth_strain.push(eps_f);
         }
         for k in 0..times.len() {
             rows.push((times[k], strain[k] + err[k]));
