@@ -202,6 +202,11 @@ pub enum Command {
         /// replicates (639 at the default bootstrap).
         #[arg(long)]
         bootstrap_extended: Option<usize>,
+        /// `[diagnose] max_points` of every set's configuration (default 100): the battery
+        /// measures the calibration of `diagnose` on curves reduced to at most so many points
+        /// (600: the generated logged curves whole).
+        #[arg(long)]
+        diagnose_max_points: Option<usize>,
         /// No progress bar and no line per set.
         #[arg(long, short)]
         quiet: bool,
@@ -474,6 +479,7 @@ pub fn run(cli: Cli) -> Result<()> {
             specimen_effects,
             specimen_scatter,
             bootstrap_extended,
+            diagnose_max_points,
             quiet,
         } => commands::with_threads(threads, || {
             commands::battery(
@@ -486,6 +492,7 @@ pub fn run(cli: Cli) -> Result<()> {
                     effects: specimen_effects,
                     scatter: specimen_scatter,
                     bootstrap_extended,
+                    max_points: diagnose_max_points,
                 },
                 quiet,
             )

@@ -348,6 +348,9 @@ pub fn battery(
     if let Some(most) = overrides.bootstrap_extended {
         id["bootstrap_extended"] = most.into();
     }
+    if let Some(n) = overrides.max_points {
+        id["diagnose_max_points"] = n.into();
+    }
     crate::identity::bind_folder(out, BATTERY_IDENTITY, "results.jsonl", &id)?;
     let folder = RunFolder::take_over(lock, "battery", &|f| {
         f == BATTERY_IDENTITY || f == "results.jsonl" || f.starts_with("sets/")

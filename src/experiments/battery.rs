@@ -415,6 +415,8 @@ pub struct SetOverrides {
     pub scatter: crate::likelihood::SpecimenScatter,
     /// `[diagnose] bootstrap_extended` (written only when given).
     pub bootstrap_extended: Option<usize>,
+    /// `[diagnose] max_points` (written only when given).
+    pub max_points: Option<usize>,
 }
 
 /// [`run_one_diagnosed`] with the set's configuration overridden as `overrides` says.
@@ -464,6 +466,9 @@ pub fn run_one_diagnosed_with(
         set.config_toml = crate::synth::with_specimen_scatter(&set.config_toml, overrides.scatter);
         if let Some(most) = overrides.bootstrap_extended {
             set.config_toml = crate::synth::with_bootstrap_extended(&set.config_toml, most);
+        }
+        if let Some(n) = overrides.max_points {
+            set.config_toml = crate::synth::with_diagnose_max_points(&set.config_toml, n);
         }
         write_set(&set, &folder)?;
         let t = &set.truth;

@@ -829,6 +829,12 @@ pub fn with_bootstrap_extended(config: &str, most: usize) -> String {
     with_line_in(config, "diagnose", &format!("bootstrap_extended = {most}"))
 }
 
+/// `config` (a generated set's configuration, which has no such line) with `[diagnose]
+/// max_points = n`: the most points per curve `diagnose` works on.
+pub fn with_diagnose_max_points(config: &str, n: usize) -> String {
+    with_line_in(config, "diagnose", &format!("max_points = {n}"))
+}
+
 /// Shortest round-trip text of a number.
 fn fmt(v: f64) -> String {
     format!("{v}")
@@ -1177,6 +1183,17 @@ mod tests {
                 .unwrap();
                 assert_eq!(cfg.diagnose.most_replicates(), 639, "{t}");
                 assert_eq!(cfg.diagnose.bootstrap_extended, Some(639));
+                // `--diagnose-max-points` beside it (the same table), and alone.
+                for t in [t.clone(), set.config_toml.clone()] {
+                    let t = with_diagnose_max_points(&t, 600);
+                    let cfg = crate::config::RunConfig::from_str_with(
+                        &t,
+                        std::path::Path::new("t.toml"),
+                        &Default::default(),
+                    )
+                    .unwrap();
+                    assert_eq!(cfg.diagnose.max_points, 600, "{t}");
+                }
             }
         }
         let cfg = crate::config::RunConfig::from_str_with(
@@ -1186,6 +1203,7 @@ mod tests {
         )
         .unwrap();
         assert_eq!(cfg.diagnose.most_replicates(), cfg.diagnose.bootstrap);
+        assert_eq!(cfg.diagnose.max_points, 100);
     }
 
     /// The coarsening factors are drawn N(0, sd²): over many sets, the mean of (κ/sd)² is 1
