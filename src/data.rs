@@ -1601,6 +1601,43 @@ pub fn note_data(folder: &mut crate::output::RunFolder, data: &Dataset) {
 mod tests {
     use super::*;
 
+    /// What the reduction keeps of the reading error's averaging: on pure white noise of sd σ
+    /// in groups of 4 equally spaced readings, a reduced point's variance is the least-squares
+    /// quadratic's intercept variance e₀ᵀ(XᵀX)⁻¹e₀ σ² = 41/64 σ² (x = ±1/3, ±1), where the
+    /// group's mean would have σ²/4: the reduced curve holds 0.25/0.64 = 39 % of the readings'
+    /// information about a smooth model (docs/SPECIMENS.md, "Session 71").
+    #[test]
+    fn a_reduced_point_has_the_local_quadratics_variance() {
+        use rand::SeedableRng;
+        use rand_distr::{Distribution, StandardNormal};
+        let groups = 99;
+        let n = 1 + 4 * groups;
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(216_101);
+        let (mut sum2, mut count) = (0.0, 0usize);
+        for _ in 0..200 {
+            let c = Curve {
+                temperature_c: 600.0,
+                stress_mpa: 100.0,
+                specimen: None,
+                times_h: (0..n).map(|k| k as f64).collect(),
+                strains: (0..n).map(|_| StandardNormal.sample(&mut rng)).collect(),
+                rupture_time_h: None,
+                rupture_strain: 1.0,
+                min_rate_measured: None,
+                min_rate_estimated: 1e-3,
+            };
+            let b = binned(&c, groups + 1);
+            assert_eq!(b.strains.len(), groups + 1);
+            for v in &b.strains[1..] {
+                sum2 += v * v;
+                count += 1;
+            }
+        }
+        let var = sum2 / count as f64;
+        // 19,800 values: the estimate's relative sd is √(2/19,800) = 1 %.
+        assert!((var / (41.0 / 64.0) - 1.0).abs() < 0.04, "{var}");
+    }
+
     /// Which labels name campaigns, as a table: Alloy 617's, `synth`'s replicate pairs,
     /// specimens each alone, one curve unlabelled, one-condition campaigns, a small campaign.
     #[test]
