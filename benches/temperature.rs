@@ -69,6 +69,7 @@ fn synthetic(model: &dyn Model, truth: &[f64]) -> Vec<Curve> {
             temperature_c: t,
             stress_mpa: s,
             specimen: None,
+            groups: None,
             min_rate_estimated: estimate_min_rate(&times, &e, r.t_end),
             times_h: times,
             strains: e,

@@ -95,6 +95,7 @@ fn main() {
                 temperature_c: t,
                 stress_mpa: s,
                 specimen: None,
+                groups: None,
                 min_rate_estimated: estimate_min_rate(&times, &e, r.t_end),
                 times_h: times,
                 strains: e,

@@ -207,6 +207,35 @@ pub struct Curve {
     /// Minimum creep rate (1/h) estimated from the curve by [`estimate_min_rate`], with the
     /// rupture time (or, for an interrupted test, the last measured time) as the life.
     pub min_rate_estimated: f64,
+    /// Where each point is the mean of a group of readings ([`reduced_to_means`]): the
+    /// readings' times, so that the model is averaged over the same times. `None`: every
+    /// point is a reading.
+    pub groups: Option<std::sync::Arc<ReadingGroups>>,
+}
+
+/// The readings behind a curve of group means: their times (h, ascending) and, per point of
+/// the curve, the end of its group in them (group k is `times_h[ends[k-1]..ends[k]]`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReadingGroups {
+    /// The readings' times, h.
+    pub times_h: Vec<f64>,
+    /// Per point, one past its group's last reading.
+    pub ends: Vec<usize>,
+}
+
+impl ReadingGroups {
+    /// The mean over each group of `raw` (one value per reading) into `out` (one per group).
+    pub fn average<S: crate::dual::Scalar>(&self, raw: &[S], out: &mut [S]) {
+        let mut lo = 0;
+        for (o, &hi) in out.iter_mut().zip(&self.ends) {
+            let mut acc = S::cst(0.0);
+            for v in &raw[lo..hi] {
+                acc = acc + *v;
+            }
+            *o = acc / (hi - lo) as f64;
+            lo = hi;
+        }
+    }
 }
 
 /// The campaign (laboratory, heat or batch of specimens) a specimen label names: the text
@@ -251,6 +280,7 @@ impl Curve {
             rupture_time_h: Some(1.0),
             rupture_strain: 0.01,
             min_rate_measured: None,
+            groups: None,
             min_rate_estimated: 0.01,
         }
     }
@@ -938,6 +968,7 @@ fn finish_curve(
         rupture_time_h,
         rupture_strain,
         min_rate_measured: rec.and_then(|r| r.min_rate),
+        groups: None,
         min_rate_estimated,
     })
 }
@@ -1519,6 +1550,84 @@ pub fn binned(c: &Curve, max_points: usize) -> Curve {
     Curve {
         times_h: times,
         strains,
+        groups: None,
+        ..c.clone()
+    }
+}
+
+/// How a curve longer than `max_points` is reduced ([`reduce`]).
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    clap::ValueEnum,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum Reduction {
+    /// Each group's local least-squares quadratic at its mean time (`binned`).
+    #[default]
+    LocalQuadratic,
+    /// Each group's mean, the model averaged over the same readings (`reduced_to_means`).
+    Means,
+}
+
+impl Reduction {
+    /// Whether this is the default (left out of written configurations).
+    pub fn is_default(&self) -> bool {
+        *self == Reduction::default()
+    }
+
+    /// The configuration's name of it.
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            Reduction::LocalQuadratic => "local_quadratic",
+            Reduction::Means => "means",
+        }
+    }
+}
+
+/// `c` with at most `max_points` points, reduced as `how` says.
+pub fn reduce(c: &Curve, max_points: usize, how: Reduction) -> Curve {
+    match how {
+        Reduction::LocalQuadratic => binned(c, max_points),
+        Reduction::Means => reduced_to_means(c, max_points),
+    }
+}
+
+/// `c` with at most `max_points` points as [`binned`] groups them, each point the plain mean
+/// of its group's readings at the group's mean time, the readings' times kept
+/// ([`Curve::groups`]): the model is then compared through its own mean over the same
+/// times, so the point has a mean's reading error (1/m of a reading's variance, where the
+/// local quadratic's value has about 2.25/m) and no bias where the curve bends.
+pub fn reduced_to_means(c: &Curve, max_points: usize) -> Curve {
+    let n = c.times_h.len();
+    if n <= max_points || max_points < 2 || c.groups.is_some() {
+        return c.clone();
+    }
+    let groups = (max_points - 1).min((n - 1) / 4).max(1);
+    let mut times = vec![c.times_h[0]];
+    let mut strains = vec![c.strains[0]];
+    let mut ends = vec![1];
+    for g in 0..groups {
+        let lo = 1 + g * (n - 1) / groups;
+        let hi = 1 + (g + 1) * (n - 1) / groups;
+        let m = (hi - lo) as f64;
+        times.push(c.times_h[lo..hi].iter().sum::<f64>() / m);
+        strains.push(c.strains[lo..hi].iter().sum::<f64>() / m);
+        ends.push(hi);
+    }
+    Curve {
+        times_h: times,
+        strains,
+        groups: Some(std::sync::Arc::new(ReadingGroups {
+            times_h: c.times_h.clone(),
+            ends,
+        })),
         ..c.clone()
     }
 }
@@ -1624,6 +1733,7 @@ mod tests {
                 rupture_time_h: None,
                 rupture_strain: 1.0,
                 min_rate_measured: None,
+                groups: None,
                 min_rate_estimated: 1e-3,
             };
             let b = binned(&c, groups + 1);
@@ -1636,6 +1746,30 @@ mod tests {
         let var = sum2 / count as f64;
         // 19,800 values: the estimate's relative sd is √(2/19,800) = 1 %.
         assert!((var / (41.0 / 64.0) - 1.0).abs() < 0.04, "{var}");
+        // The same groups as means: 1/4 of a reading's variance.
+        let (mut sum2, mut count) = (0.0, 0usize);
+        for _ in 0..200 {
+            let c = Curve {
+                temperature_c: 600.0,
+                stress_mpa: 100.0,
+                specimen: None,
+                times_h: (0..n).map(|k| k as f64).collect(),
+                strains: (0..n).map(|_| StandardNormal.sample(&mut rng)).collect(),
+                rupture_time_h: None,
+                rupture_strain: 1.0,
+                min_rate_measured: None,
+                groups: None,
+                min_rate_estimated: 1e-3,
+            };
+            let b = reduced_to_means(&c, groups + 1);
+            assert_eq!(b.groups.as_ref().unwrap().ends.len(), groups + 1);
+            for v in &b.strains[1..] {
+                sum2 += v * v;
+                count += 1;
+            }
+        }
+        let var = sum2 / count as f64;
+        assert!((var / 0.25 - 1.0).abs() < 0.04, "{var}");
     }
 
     /// Which labels name campaigns, as a table: Alloy 617's, `synth`'s replicate pairs,

@@ -413,6 +413,7 @@ fn curves_of(model: &dyn Model, x: &[f64], stresses: &[f64]) -> Vec<creepfit::da
                 temperature_c: 560.0,
                 stress_mpa: s,
                 specimen: None,
+                groups: None,
                 min_rate_estimated: creepfit::data::estimate_min_rate(&ts, &strain, t_r),
                 times_h: ts,
                 strains: strain,

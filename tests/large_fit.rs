@@ -55,6 +55,7 @@ fn logged_curves(n: usize) -> Vec<Curve> {
                 temperature_c: 560.0,
                 stress_mpa: stress,
                 specimen: None,
+                groups: None,
                 min_rate_estimated: estimate_min_rate(&times, &strains, life),
                 rupture_strain: *strains.last().unwrap(),
                 times_h: times,

@@ -73,6 +73,7 @@ fn synth(
                 temperature_c: 560.0,
                 stress_mpa: s,
                 specimen: None,
+                groups: None,
                 min_rate_estimated: estimate_min_rate(&times, &strain, r.t_end),
                 times_h: times,
                 strains: strain,

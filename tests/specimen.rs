@@ -107,6 +107,7 @@ fn specimen3(
         temperature_c: 560.0,
         stress_mpa: stress,
         specimen: None,
+        groups: None,
         min_rate_estimated: estimate_min_rate(&times, &e, tf),
         rupture_strain: *e.last().unwrap(),
         times_h: times,

@@ -775,6 +775,7 @@ mod tests {
             times_h: times,
             rupture_time_h: Some(r.t_end),
             min_rate_measured: None,
+            groups: None,
             min_rate_estimated: r.min_rate,
         };
         let settings = ObjectiveSettings {

@@ -207,6 +207,11 @@ pub enum Command {
         /// (600: the generated logged curves whole).
         #[arg(long)]
         diagnose_max_points: Option<usize>,
+        /// `[diagnose] reduction` of every set's configuration (default `local-quadratic`):
+        /// the battery measures the calibration of `diagnose` on curves reduced to group means
+        /// compared with the model's means (`means`).
+        #[arg(long, value_enum)]
+        diagnose_reduction: Option<crate::data::Reduction>,
         /// No progress bar and no line per set.
         #[arg(long, short)]
         quiet: bool,
@@ -480,6 +485,7 @@ pub fn run(cli: Cli) -> Result<()> {
             specimen_scatter,
             bootstrap_extended,
             diagnose_max_points,
+            diagnose_reduction,
             quiet,
         } => commands::with_threads(threads, || {
             commands::battery(
@@ -493,6 +499,7 @@ pub fn run(cli: Cli) -> Result<()> {
                     scatter: specimen_scatter,
                     bootstrap_extended,
                     max_points: diagnose_max_points,
+                    reduction: diagnose_reduction,
                 },
                 quiet,
             )

@@ -172,6 +172,7 @@ pub fn true_curves(truth: &Truth) -> Vec<Curve> {
             rupture_time_h: Some(truth.true_rupture_h[i]),
             rupture_strain: *truth.true_strain[i].last().unwrap_or(&1.0),
             min_rate_measured: None,
+            groups: None,
             min_rate_estimated: crate::data::estimate_min_rate(
                 &truth.times_h[i],
                 &truth.true_strain[i],
@@ -417,6 +418,8 @@ pub struct SetOverrides {
     pub bootstrap_extended: Option<usize>,
     /// `[diagnose] max_points` (written only when given).
     pub max_points: Option<usize>,
+    /// `[diagnose] reduction` (written only when given).
+    pub reduction: Option<crate::data::Reduction>,
 }
 
 /// [`run_one_diagnosed`] with the set's configuration overridden as `overrides` says.
@@ -469,6 +472,9 @@ pub fn run_one_diagnosed_with(
         }
         if let Some(n) = overrides.max_points {
             set.config_toml = crate::synth::with_diagnose_max_points(&set.config_toml, n);
+        }
+        if let Some(how) = overrides.reduction {
+            set.config_toml = crate::synth::with_diagnose_reduction(&set.config_toml, how);
         }
         write_set(&set, &folder)?;
         let t = &set.truth;
@@ -818,7 +824,7 @@ pub fn scatter_fit(
     let curves: Vec<Curve> = data
         .curves
         .iter()
-        .map(|c| crate::data::binned(c, cfg.diagnose.max_points))
+        .map(|c| crate::data::reduce(c, cfg.diagnose.max_points, cfg.diagnose.reduction))
         .collect();
     let model = cfg.build_model()?;
     let space = cfg.space();

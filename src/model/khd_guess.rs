@@ -197,6 +197,8 @@ pub fn initial_guess(
                 times_h: c.times_h[..keep].to_vec(),
                 strains: c.strains[..keep].to_vec(),
                 rupture_time_h: None,
+                // The guess's primary stage is read at the points themselves.
+                groups: None,
                 ..c.clone()
             }
         })

@@ -344,6 +344,7 @@ mod tests {
                     rupture_time_h: Some(t_r),
                     rupture_strain: eps_r,
                     min_rate_measured: Some(TRUTH[0] * (s / SIGMA0).powf(TRUTH[1])),
+                    groups: None,
                     min_rate_estimated: f64::NAN,
                 }
             })

@@ -369,6 +369,7 @@ pub fn bin_curves(curves: &[Curve], max_points: usize) -> Binned {
                 rupture_time_h: c.rupture_time_h,
                 rupture_strain: c.rupture_strain,
                 min_rate_measured: c.min_rate_measured,
+                groups: None,
                 min_rate_estimated: c.min_rate_estimated,
             };
             (binned, weights)
@@ -512,6 +513,21 @@ impl<'a> Objective<'a> {
         let c = &self.curves[i];
         let mut buf = [S::cst(0.0); MAX_PARAMS];
         let n = self.curve_params(i, params, &mut buf);
+        if let Some(g) = &c.groups {
+            // A curve of group means: the model at every reading, averaged as the readings were.
+            let mut raw = vec![S::cst(0.0); g.times_h.len()];
+            let res = S::simulate(
+                self.model,
+                &buf[..n],
+                &self.load(c),
+                &g.times_h,
+                &mut raw,
+                &self.ode_for(c),
+            );
+            let out = self.conclude(i, &res, &g.times_h, |k, s| raw[k] = s);
+            g.average(&raw, strain);
+            return out;
+        }
         let res = S::simulate(
             self.model,
             &buf[..n],
@@ -520,27 +536,26 @@ impl<'a> Objective<'a> {
             strain,
             &self.ode_for(c),
         );
-        self.conclude(i, &res, |k, s| strain[k] = s)
+        self.conclude(i, &res, &c.times_h, |k, s| strain[k] = s)
     }
 
-    /// How simulation `res` of curve `i` ends for eq. 8: the post-rupture continuation
-    /// handed to `cont(k, strain)` for every measured time after the rupture, and (outcome,
-    /// rupture time, rupture strain, min rate), or the failure.
+    /// How simulation `res` of curve `i` at `times` (its points', or its readings' where the
+    /// points are group means) ends for eq. 8: the post-rupture continuation handed to
+    /// `cont(k, strain)` for every time after the rupture, and (outcome, rupture time,
+    /// rupture strain, min rate), or the failure.
     fn conclude<S: Scalar>(
         &self,
         i: usize,
         res: &SimResult<S>,
+        times: &[f64],
         mut cont: impl FnMut(usize, S),
     ) -> Result<(Outcome, S, S, f64), EvalFailure> {
         let c = &self.curves[i];
-        let n = c.times_h.len();
+        let n = times.len();
         match res.outcome {
             Outcome::Ruptured => {
-                for k in res.n_out..n {
-                    cont(
-                        k,
-                        res.strain_end + res.rate_end * (-res.t_end + c.times_h[k]),
-                    );
+                for (k, &t) in times.iter().enumerate().skip(res.n_out) {
+                    cont(k, res.strain_end + res.rate_end * (-res.t_end + t));
                 }
                 Ok((res.outcome, res.t_end, res.strain_end, res.min_rate))
             }
@@ -632,14 +647,32 @@ impl<'a> Objective<'a> {
             };
             let mut pbuf = [Dual::<SENS>::cst(0.0); MAX_PARAMS];
             let np = self.curve_params(i, params, &mut pbuf);
-            let res = self.model.simulate_sens_each(
-                &pbuf[..np],
-                &self.load(c),
-                &c.times_h,
-                &mut points,
-                &self.ode_for(c),
-            );
-            let (_, t_r, _, _) = self.conclude(i, &res, |k, s| points(k, &[s]))?;
+            let t_r = if let Some(g) = &c.groups {
+                // Group means: the model at every reading, averaged, then as any point.
+                let mut raw = vec![Dual::<SENS>::cst(0.0); g.times_h.len()];
+                let res = self.model.simulate_sens(
+                    &pbuf[..np],
+                    &self.load(c),
+                    &g.times_h,
+                    &mut raw,
+                    &self.ode_for(c),
+                );
+                let (_, t_r, _, _) = self.conclude(i, &res, &g.times_h, |k, s| raw[k] = s)?;
+                let mut mean = vec![Dual::<SENS>::cst(0.0); n];
+                g.average(&raw, &mut mean);
+                points(0, &mean);
+                t_r
+            } else {
+                let res = self.model.simulate_sens_each(
+                    &pbuf[..np],
+                    &self.load(c),
+                    &c.times_h,
+                    &mut points,
+                    &self.ode_for(c),
+                );
+                self.conclude(i, &res, &c.times_h, |k, s| points(k, &[s]))?
+                    .1
+            };
             let life = match c.rupture_time_h {
                 Some(t_exp) => self.lifetime_error(t_r, t_exp) * self.w[i].sqrt(),
                 None => Dual::cst(0.0),
@@ -1063,6 +1096,7 @@ mod tests {
             rupture_time_h: Some(10.0),
             rupture_strain: 0.5,
             min_rate_measured: None,
+            groups: None,
             min_rate_estimated: 0.01,
         }
     }

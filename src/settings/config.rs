@@ -430,6 +430,11 @@ pub struct DiagnoseConfig {
     /// densely a curve was logged. Default 100: digitised curves (the seed's have 36–70
     /// points) are used as they are, logged ones (hundreds to thousands) are reduced.
     pub max_points: usize,
+    /// How a longer curve is reduced: `local_quadratic` (default: each group's local
+    /// quadratic at its mean time) or `means` (each group's mean, compared with the model's
+    /// mean over the same readings: a mean's reading error and no curvature bias).
+    #[serde(skip_serializing_if = "crate::data::Reduction::is_default")]
+    pub reduction: crate::data::Reduction,
 }
 
 /// Default most bootstrap replicates of `diagnose`: 20 m − 1 for m = the catalogued
@@ -450,6 +455,7 @@ impl Default for DiagnoseConfig {
             lifetime_sd_floor: crate::errmodel::DEFAULT_LIFETIME_SD_FLOOR,
             extensions: Vec::new(),
             max_points: 100,
+            reduction: crate::data::Reduction::LocalQuadratic,
         }
     }
 }

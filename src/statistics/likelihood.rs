@@ -4242,6 +4242,7 @@ mod tests {
             rupture_time_h: Some(10.0),
             rupture_strain: 0.05,
             min_rate_measured: None,
+            groups: None,
             min_rate_estimated: 1e-3,
         };
         let r = [0.1, -0.2, 0.5];

@@ -835,6 +835,16 @@ pub fn with_diagnose_max_points(config: &str, n: usize) -> String {
     with_line_in(config, "diagnose", &format!("max_points = {n}"))
 }
 
+/// `config` (a generated set's configuration, which has no such line) with `[diagnose]
+/// reduction = how`: how `diagnose` reduces a curve longer than `max_points`.
+pub fn with_diagnose_reduction(config: &str, how: crate::data::Reduction) -> String {
+    with_line_in(
+        config,
+        "diagnose",
+        &format!("reduction = \"{}\"", how.as_str()),
+    )
+}
+
 /// Shortest round-trip text of a number.
 fn fmt(v: f64) -> String {
     format!("{v}")
@@ -1000,6 +1010,7 @@ pub fn two_temperature_set(
             temperature_c: t,
             stress_mpa: s,
             specimen: None,
+            groups: None,
             min_rate_estimated: crate::data::estimate_min_rate(&times, &e, t_r),
             rupture_strain: e[m - 1],
             times_h: times,
@@ -1192,6 +1203,15 @@ mod tests {
                         &Default::default(),
                     )
                     .unwrap();
+                    assert_eq!(cfg.diagnose.max_points, 600, "{t}");
+                    let t = with_diagnose_reduction(&t, crate::data::Reduction::Means);
+                    let cfg = crate::config::RunConfig::from_str_with(
+                        &t,
+                        std::path::Path::new("t.toml"),
+                        &Default::default(),
+                    )
+                    .unwrap();
+                    assert_eq!(cfg.diagnose.reduction, crate::data::Reduction::Means, "{t}");
                     assert_eq!(cfg.diagnose.max_points, 600, "{t}");
                 }
             }

@@ -287,6 +287,12 @@ pub fn replicate_hier_drawn<R: Rng>(
             Curve {
                 times_h: c.times_h.iter().map(|t| t * ratio).collect(),
                 rupture_time_h: c.rupture_time_h.map(|t| t * ratio),
+                groups: c.groups.as_ref().map(|g| {
+                    std::sync::Arc::new(crate::data::ReadingGroups {
+                        times_h: g.times_h.iter().map(|t| t * ratio).collect(),
+                        ends: g.ends.clone(),
+                    })
+                }),
                 ..c.clone()
             }
         })
@@ -652,6 +658,7 @@ mod tests {
             rupture_time_h: Some(80.0),
             rupture_strain: 0.05,
             min_rate_measured: None,
+            groups: None,
             min_rate_estimated: 1e-4,
         }
     }

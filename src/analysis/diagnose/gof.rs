@@ -727,6 +727,7 @@ mod tests {
             rupture_time_h: Some(100.0),
             rupture_strain: 0.05,
             min_rate_measured: None,
+            groups: None,
             min_rate_estimated: 1e-4,
         }
     }

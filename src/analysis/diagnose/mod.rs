@@ -36,7 +36,6 @@ use rayon::prelude::*;
 
 pub use crate::config::DiagnoseConfig;
 use crate::config::DiagnoseSetup;
-use crate::data::binned;
 use crate::data::{Curve, Dataset};
 use crate::errmodel::GrowingError;
 use crate::error::{Error, Result};
@@ -1381,7 +1380,7 @@ pub fn diagnose_observed(
     let binned_curves: Vec<Curve> = data
         .curves
         .iter()
-        .map(|c| binned(c, dc.max_points))
+        .map(|c| crate::data::reduce(c, dc.max_points, dc.reduction))
         .collect();
     let curves = &binned_curves;
     let settings = setup.settings;
@@ -2135,6 +2134,7 @@ fn decision_words(
 mod tests {
     use super::*;
     use crate::config::RunConfig;
+    use crate::data::binned;
     use std::path::Path;
 
     fn seed_config(extra: &str) -> RunConfig {

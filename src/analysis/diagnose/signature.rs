@@ -216,6 +216,7 @@ mod tests {
             rupture_time_h: Some(100.0),
             rupture_strain: 0.06,
             min_rate_measured: None,
+            groups: None,
             min_rate_estimated: 3e-4,
         };
         let e = [0.0; 5];
