@@ -207,7 +207,7 @@ pub enum Command {
         /// (600: the generated logged curves whole).
         #[arg(long)]
         diagnose_max_points: Option<usize>,
-        /// `[diagnose] reduction` of every set's configuration (default `local-quadratic`):
+        /// `[diagnose] reduction` of every set's configuration (default `local_quadratic`):
         /// the battery measures the calibration of `diagnose` on curves reduced to group means
         /// compared with the model's means (`means`).
         #[arg(long, value_enum)]
