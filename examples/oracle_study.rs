@@ -156,7 +156,7 @@ fn data_ratio(dir: &std::path::Path, scenario: &str, seed: u64) -> (f64, f64) {
                     let eps_f = sp.growth_strain(i, top);
                     c.strains
                         .iter()
-                        .map(|e| 1.0 + sp.error_growth * e.max(0.0) / eps_f)
+                        .map(|e| sp.reading_factor(e.max(0.0), eps_f))
                         .collect()
                 }
             })

@@ -1533,15 +1533,9 @@ pub fn binned(c: &Curve, max_points: usize) -> Curve {
     if n <= max_points || max_points < 2 {
         return c.clone();
     }
-    // At least 4 points a group: the local quadratic needs them, and the plain mean a
-    // smaller group falls back to is biased where the curve bends (a 3-point mean in the
-    // first hours of a logged primary stage is off by more than its reading error).
-    let groups = (max_points - 1).min((n - 1) / 4).max(1);
     let mut times = vec![c.times_h[0]];
     let mut strains = vec![c.strains[0]];
-    for g in 0..groups {
-        let lo = 1 + g * (n - 1) / groups;
-        let hi = 1 + (g + 1) * (n - 1) / groups;
+    for (lo, hi) in group_bounds(n, max_points) {
         let (t, e) = (&c.times_h[lo..hi], &c.strains[lo..hi]);
         let tm = t.iter().sum::<f64>() / t.len() as f64;
         times.push(tm);
@@ -1553,6 +1547,17 @@ pub fn binned(c: &Curve, max_points: usize) -> Curve {
         groups: None,
         ..c.clone()
     }
+}
+
+/// The groups a curve of `n` readings longer than `max_points` is reduced to: the first
+/// reading alone (not listed), the others in `max_points − 1` runs of consecutive readings
+/// (fewer where that would leave a run under 4) whose sizes differ by at most one, as
+/// (first, one past the last). At least 4 a group: the local quadratic needs them, and the
+/// plain mean a smaller group falls back to is biased where the curve bends (a 3-point mean
+/// in the first hours of a logged primary stage is off by more than its reading error).
+fn group_bounds(n: usize, max_points: usize) -> impl Iterator<Item = (usize, usize)> {
+    let groups = (max_points - 1).min((n - 1) / 4).max(1);
+    (0..groups).map(move |g| (1 + g * (n - 1) / groups, 1 + (g + 1) * (n - 1) / groups))
 }
 
 /// How a curve longer than `max_points` is reduced ([`reduce`]).
@@ -1610,13 +1615,10 @@ pub fn reduced_to_means(c: &Curve, max_points: usize) -> Curve {
     if n <= max_points || max_points < 2 || c.groups.is_some() {
         return c.clone();
     }
-    let groups = (max_points - 1).min((n - 1) / 4).max(1);
     let mut times = vec![c.times_h[0]];
     let mut strains = vec![c.strains[0]];
     let mut ends = vec![1];
-    for g in 0..groups {
-        let lo = 1 + g * (n - 1) / groups;
-        let hi = 1 + (g + 1) * (n - 1) / groups;
+    for (lo, hi) in group_bounds(n, max_points) {
         let m = (hi - lo) as f64;
         times.push(c.times_h[lo..hi].iter().sum::<f64>() / m);
         strains.push(c.strains[lo..hi].iter().sum::<f64>() / m);

@@ -2,9 +2,6 @@
 //! differences, column by column, on the bundled data; and the one-state fast path against
 //! the four-state model.
 
-use std::path::Path;
-
-use creepfit::config::RunConfig;
 use creepfit::fit::FitSettings;
 use creepfit::lsq::LeastSquaresProblem;
 use creepfit::model::objective::{CreepProblem, JacobianMethod, Objective, ObjectiveSettings};
@@ -12,14 +9,8 @@ use creepfit::model::registry;
 use creepfit::ode::OdeOptions;
 use nalgebra::DMatrix;
 
-fn config(name: &str) -> RunConfig {
-    RunConfig::load(
-        &Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("configs")
-            .join(name),
-    )
-    .unwrap()
-}
+mod common;
+use common::config;
 
 /// Largest relative column error of the sensitivity Jacobian against central differences,
 /// at unit-box point `u`.

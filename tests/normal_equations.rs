@@ -3,9 +3,6 @@
 //! Jacobian, and the geodesic correction's Jᵀ·r_vv streamed from the Jacobian produced anew
 //! equals the stored path's.
 
-use std::path::Path;
-
-use creepfit::config::RunConfig;
 use creepfit::fit::FitSettings;
 use creepfit::lsq::{LeastSquaresProblem, NormalEquations};
 use creepfit::model::objective::{CreepProblem, JacobianMethod, Objective};
@@ -13,14 +10,8 @@ use nalgebra::{DMatrix, DVector};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-fn config(name: &str) -> RunConfig {
-    RunConfig::load(
-        &Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("configs")
-            .join(name),
-    )
-    .unwrap()
-}
+mod common;
+use common::config;
 
 /// Largest entry of |a − b| relative to the largest entry of |b|.
 fn rel_diff(a: &[f64], b: &[f64]) -> f64 {

@@ -14,14 +14,8 @@ use creepfit::model::registry;
 use creepfit::ode::OdeOptions;
 use nalgebra::DMatrix;
 
-fn config(name: &str) -> RunConfig {
-    RunConfig::load(
-        &Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("configs")
-            .join(name),
-    )
-    .unwrap()
-}
+mod common;
+use common::config;
 
 /// The seed's 590 °C curves (36–70 readings) and the same reduced to 12 points.
 fn curves() -> (RunConfig, Vec<Curve>, Vec<Curve>) {

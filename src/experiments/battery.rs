@@ -213,9 +213,7 @@ pub fn true_reading_scale(truth: &Truth) -> Option<Vec<Vec<f64>>> {
             .map(|(i, e)| {
                 let top = e.iter().copied().fold(0.0_f64, f64::max);
                 let eps_f = sp.growth_strain(i, top);
-                e.iter()
-                    .map(|e| 1.0 + sp.error_growth * e / eps_f)
-                    .collect()
+                e.iter().map(|&e| sp.reading_factor(e, eps_f)).collect()
             })
             .collect(),
     )

@@ -724,13 +724,29 @@ impl<'a> Objective<'a> {
                 Err(_) => {
                     let mut buf = [0.0; MAX_PARAMS];
                     let np = self.curve_params(i, params, &mut buf);
-                    let res = self.model.simulate(
-                        &buf[..np],
-                        &self.load(c),
-                        &c.times_h,
-                        &mut strain,
-                        &self.ode_for(c),
-                    );
+                    // What the simulation reached, at the points as they are compared (a group
+                    // mean of the readings it did not all reach is NaN).
+                    let res = match &c.groups {
+                        Some(g) => {
+                            let mut raw = vec![f64::NAN; g.times_h.len()];
+                            let res = self.model.simulate(
+                                &buf[..np],
+                                &self.load(c),
+                                &g.times_h,
+                                &mut raw,
+                                &self.ode_for(c),
+                            );
+                            g.average(&raw, &mut strain);
+                            res
+                        }
+                        None => self.model.simulate(
+                            &buf[..np],
+                            &self.load(c),
+                            &c.times_h,
+                            &mut strain,
+                            &self.ode_for(c),
+                        ),
+                    };
                     objective = f64::NAN;
                     norm = f64::NAN;
                     curves.push(CurvePrediction {

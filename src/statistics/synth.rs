@@ -252,6 +252,12 @@ pub struct SpecimenTruth {
 }
 
 impl SpecimenTruth {
+    /// The factor on the reading error at strain `e` of a curve whose growth ends at `eps_f`
+    /// (both fractions): 1 + g e/ε_f, as the data were drawn.
+    pub fn reading_factor(&self, e: f64, eps_f: f64) -> f64 {
+        1.0 + self.error_growth * e / eps_f
+    }
+
     /// The ε_f of curve `i`'s reading-error growth ([`SpecimenTruth::error_growth_strain`]),
     /// or `largest` (the curve's largest true strain) where the set did not record it.
     pub fn growth_strain(&self, i: usize, largest: f64) -> f64 {
@@ -689,7 +695,7 @@ fn generate_inner(
         let mut err = ar.simulate(times.len(), &mut rng);
         if let Some(sp) = &specimens {
             for (v, e) in err.iter_mut().zip(&strain) {
-                *v *= 1.0 + sp.error_growth * e / eps_f;
+                *v *= sp.reading_factor(*e, eps_f);
             }
         }
         if let Some(sp) = truth.specimens.as_mut() {

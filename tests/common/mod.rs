@@ -9,6 +9,11 @@ pub fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
+/// A bundled configuration (`configs/<name>`), loaded.
+pub fn config(name: &str) -> creepfit::config::RunConfig {
+    creepfit::config::RunConfig::load(&root().join("configs").join(name)).unwrap()
+}
+
 /// Run the `creepfit` binary with `args` from the repository root.
 pub fn creepfit(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_creepfit"))
