@@ -1,7 +1,9 @@
 //! `[diagnose] reduction = "means"`: a curve reduced to group means carries its readings'
 //! times, and the objective compares each mean with the model's own mean over the same
 //! readings — the same numbers as the model at every reading averaged by hand, and a
-//! sensitivity Jacobian that matches central differences through the averaging.
+//! sensitivity Jacobian that matches central differences through the averaging; with
+//! `reduction = "strain_means"` the groups differ in size and every mean's residual is in a
+//! reading's units.
 
 use std::path::Path;
 
@@ -137,8 +139,117 @@ fn the_reduction_is_read_from_the_diagnose_table() {
             .reduction,
         creepfit::data::Reduction::Means
     );
+    assert_eq!(
+        read("[diagnose]\nreduction = \"strain_means\"\n")
+            .unwrap()
+            .diagnose
+            .reduction,
+        creepfit::data::Reduction::StrainMeans
+    );
     let err = read("[diagnose]\nreduction = \"median\"\n")
         .unwrap_err()
         .to_string();
     assert!(err.contains("reduction") && err.contains("means"), "{err}");
+}
+
+/// `reduction = "strain_means"`: groups of different sizes (one reading where the strain
+/// moves fast, many along the secondary stage), each mean's residual in a reading's units, so
+/// that one error model fits them all. On 1,000 noisy copies of the seed's 590 °C curves
+/// (white reading error of sd 1e-4 at every reading, the model's own curves beneath), reduced
+/// to 12 points: the residuals at the true constants have a reading's variance, and the
+/// likelihood's whitened residuals at that known error model unit variance (each within 3 %,
+/// four sd of the estimate from 33,000 values). Without the weighting the pooled variance of
+/// the means is a fraction of a reading's; with groups drawn on the raw readings instead of
+/// their smoothed rise it was 1.40 times a reading's.
+#[test]
+fn strain_means_residuals_are_in_a_readings_units() {
+    use creepfit::data::{reduce, Reduction};
+    use creepfit::errmodel::{Ar1, ErrorModel};
+    use creepfit::likelihood::{residuals_at, LikelihoodProblem};
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, StandardNormal};
+    let (cfg, raw, _) = curves();
+    let model = registry("khd").unwrap();
+    let fit = FitSettings::from_config(&cfg);
+    let space = cfg.space();
+    let u = [0.5, 0.3, 0.4, 0.6, 0.5, 0.2];
+    let mut params = space.fixed.clone();
+    space.from_unit(&u, &mut params);
+    let truth = Objective::new(model.as_ref(), &raw, vec![1.0; raw.len()], fit.objective())
+        .evaluate(&params);
+    let sd = 1e-4;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(216_103);
+    let (mut sum2, mut plain2, mut white2, mut count) = (0.0, 0.0, 0.0, 0usize);
+    let (mut smallest, mut largest) = (usize::MAX, 0);
+    for _ in 0..1000 {
+        let reduced: Vec<Curve> = raw
+            .iter()
+            .zip(&truth.curves)
+            .map(|(c, t)| {
+                let noisy = Curve {
+                    strains: t
+                        .strain
+                        .iter()
+                        .map(|v| v + sd * Distribution::<f64>::sample(&StandardNormal, &mut rng))
+                        .collect(),
+                    ..c.clone()
+                };
+                reduce(&noisy, 12, Reduction::StrainMeans)
+            })
+            .collect();
+        for c in &reduced {
+            let g = c.groups.as_ref().expect("reduced");
+            let mut lo = 0;
+            for &hi in &g.ends[1..] {
+                smallest = smallest.min(hi - lo);
+                largest = largest.max(hi - lo);
+                lo = hi;
+            }
+        }
+        let res = residuals_at(model.as_ref(), &reduced, &params, &fit).unwrap();
+        for (c, e) in reduced.iter().zip(&res.strain) {
+            for (k, v) in e.iter().enumerate().skip(1) {
+                sum2 += v * v;
+                let m = (c.groups.as_ref().unwrap().ends[k]
+                    - c.groups.as_ref().unwrap().ends[k - 1]) as f64;
+                plain2 += v * v / m;
+                count += 1;
+            }
+        }
+        let noise = ErrorModel {
+            strain: vec![Ar1::white(sd); reduced.len()],
+            lifetime_sd: 1.0,
+        };
+        let problem = LikelihoodProblem::fixed(
+            CreepProblem {
+                objective: Objective::new(
+                    model.as_ref(),
+                    &reduced,
+                    vec![1.0; reduced.len()],
+                    fit.objective(),
+                ),
+                space: space.clone(),
+                jacobian: JacobianMethod::Sensitivity,
+            },
+            noise,
+        );
+        let mut r = vec![0.0; problem.n_residuals()];
+        problem.residuals(&u, &mut r).unwrap();
+        let mut off = 0;
+        for c in &reduced {
+            let n = c.times_h.len();
+            white2 += r[off + 1..off + n].iter().map(|v| v * v).sum::<f64>();
+            off += n + 1;
+        }
+    }
+    let (var, plain, white) = (
+        sum2 / count as f64 / (sd * sd),
+        plain2 / count as f64 / (sd * sd),
+        white2 / count as f64,
+    );
+    eprintln!("sizes {smallest}..{largest}: variance {var}, whitened {white}, unweighted {plain}");
+    assert!(largest >= 3 * smallest, "sizes {smallest}..{largest}");
+    assert!((var - 1.0).abs() < 0.03, "{var}");
+    assert!((white - 1.0).abs() < 0.03, "{white}");
+    assert!(plain < 0.6, "{plain}");
 }

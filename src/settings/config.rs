@@ -431,8 +431,11 @@ pub struct DiagnoseConfig {
     /// points) are used as they are, logged ones (hundreds to thousands) are reduced.
     pub max_points: usize,
     /// How a longer curve is reduced: `local_quadratic` (default: each group's local
-    /// quadratic at its mean time) or `means` (each group's mean, compared with the model's
-    /// mean over the same readings: a mean's reading error and no curvature bias).
+    /// quadratic at its mean time), `means` (each group's mean, compared with the model's
+    /// mean over the same readings: a mean's reading error and no curvature bias) or
+    /// `strain_means` (the same over groups spanning equal strain ranges, so that the
+    /// primary and tertiary stages keep their readings; each point weighed by its group's
+    /// size).
     #[serde(skip_serializing_if = "crate::data::Reduction::is_default")]
     pub reduction: crate::data::Reduction,
 }

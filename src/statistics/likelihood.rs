@@ -593,19 +593,20 @@ pub fn raw_objective<'a>(
 }
 
 /// Raw residuals from an eq. 8 residual vector of [`raw_objective`] (layout: per curve its
-/// strain residuals, then its lifetime residual).
+/// strain residuals, then its lifetime residual): strain as a fraction, a group mean's in a
+/// reading's units ([`Curve::to_reading_units`]), and ln of the life ratio.
 pub fn split_residuals(curves: &[Curve], r: &[f64]) -> Residuals {
     let mut off = 0;
     let mut strain = Vec::with_capacity(curves.len());
     let mut lifetime = Vec::with_capacity(curves.len());
     for c in curves {
         let n = c.times_h.len();
-        strain.push(
-            r[off..off + n]
-                .iter()
-                .map(|v| v * c.rupture_strain)
-                .collect(),
-        );
+        let mut e: Vec<f64> = r[off..off + n]
+            .iter()
+            .map(|v| v * c.rupture_strain)
+            .collect();
+        c.to_reading_units(&mut e);
+        strain.push(e);
         lifetime.push(c.rupture_time_h.map(|_| r[off + n].ln_1p()));
         off += n + 1;
     }
@@ -757,6 +758,7 @@ impl<'a> LikelihoodProblem<'a> {
                 for v in v.iter_mut() {
                     *v *= ef;
                 }
+                c.to_reading_units(v);
                 if let Some(w) = w {
                     for (v, w) in v.iter_mut().zip(w) {
                         *v /= w;

@@ -109,7 +109,8 @@ pub fn replicate_data<R: Rng>(
         .zip(&eval.curves)
         .enumerate()
         .map(|(i, (c, p))| {
-            let e = reading.simulate(i, &fractions_of(c, reading), rng);
+            let mut e = reading.simulate(i, &fractions_of(c, reading), rng);
+            c.from_reading_units(&mut e);
             let strains: Vec<f64> = p.strain.iter().zip(&e).map(|(s, d)| s + d).collect();
             let z: f64 = rng.sample(StandardNormal);
             let rupture_time_h = c.rupture_time_h.map(|t| {
@@ -307,7 +308,9 @@ pub fn replicate_hier_drawn<R: Rng>(
         .map(|(i, (c, p))| {
             // The real curve's strain fractions: the replicate's times are the real ones
             // scaled by the new specimen's life, so its readings fall at the same fractions.
-            let e = reading.simulate(i, &fractions_of(&curves[i], reading), rng);
+            let mut e = reading.simulate(i, &fractions_of(&curves[i], reading), rng);
+            // A group mean's error from a reading's (the reading error model's units).
+            curves[i].from_reading_units(&mut e);
             let mut strains: Vec<f64> = p.strain.iter().zip(&e).map(|(s, d)| s + d).collect();
             let z: f64 = rng.sample(StandardNormal);
             let rupture_time_h = c.rupture_time_h.map(|t| {

@@ -210,8 +210,11 @@ fn design(curves: &[Curve], res: &Residuals, shape: Shape) -> (DMatrix<f64>, Vec
             };
             match k {
                 Some(k) if w != 0.0 => {
-                    for (j, v) in knot_column(c, k).enumerate() {
-                        x[(off + j, p)] = w * v;
+                    let mut col: Vec<f64> = knot_column(c, k).map(|v| w * v).collect();
+                    // In the residuals' units (a group mean's in a reading's).
+                    c.to_reading_units(&mut col);
+                    for (j, v) in col.into_iter().enumerate() {
+                        x[(off + j, p)] = v;
                     }
                 }
                 None if res.lifetime[i].is_some() => x[(off + n, p)] = w,
@@ -421,6 +424,7 @@ fn curve_stats(c: &Curve, e: &[f64], p: &crate::errmodel::Ar1) -> CurveStats {
         for (v, h) in col.iter_mut().zip(knot_column(c, k)) {
             *v = h;
         }
+        c.to_reading_units(col);
         p.whiten(col);
     }
     let mut r = e.to_vec();
