@@ -1640,7 +1640,7 @@ impl Reduction {
 /// s that gives at most `max_points − 1` runs (greedy runs, s by bisection), as (first, one
 /// past the last). Where the strain moves fast for its reading error (the primary stage's
 /// first hours, the tertiary stage) a run is one reading or a few; along a slow secondary
-/// stage it is long. Equal-count runs ([`group_bounds`]) average the tertiary stage's few
+/// stage it is long. Equal-count runs (`reduction = "means"`) average the tertiary stage's few
 /// readings into a handful of points and lose the shape between them: on a generated set
 /// with a hidden constant load (182012), the ratio that names it falls from 68 on every
 /// reading to 31 on equal-count means of 4–5 readings.
@@ -1743,8 +1743,8 @@ fn smoothed_rise(strains: &[f64], k: usize) -> Vec<f64> {
             } else {
                 (i - k, i + k + 1)
             };
-            let d: Vec<f64> = (0..5).map(|c| p[hi][c] - p[lo][c]).collect();
-            let (s0, s1, s2, sv, sxv) = (d[0], d[1], d[2], d[3], d[4]);
+            let d: [f64; 5] = std::array::from_fn(|c| p[hi][c] - p[lo][c]);
+            let [s0, s1, s2, sv, sxv] = d;
             let det = s0 * s2 - s1 * s1;
             let value = if det > 0.0 {
                 let b = (s0 * sxv - s1 * sv) / det;
@@ -1783,7 +1783,7 @@ pub fn reduced_to_means(c: &Curve, max_points: usize) -> Curve {
 
 /// `c` with at most `max_points` points as [`strain_group_bounds`] groups them, each point
 /// the plain mean of its group's readings, as [`reduced_to_means`]; the groups differ in size,
-/// and every fit weighs a point by its size ([`Curve::reading_units`]).
+/// and every fit weighs a point by its size ([`Curve::to_reading_units`]).
 pub fn reduced_to_strain_means(c: &Curve, max_points: usize) -> Curve {
     let n = c.times_h.len();
     if n <= max_points || max_points < 2 || c.groups.is_some() {

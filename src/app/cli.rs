@@ -209,7 +209,8 @@ pub enum Command {
         diagnose_max_points: Option<usize>,
         /// `[diagnose] reduction` of every set's configuration (default `local_quadratic`):
         /// the battery measures the calibration of `diagnose` on curves reduced to group means
-        /// compared with the model's means (`means`).
+        /// compared with the model's means (`means`; `strain_means`: groups spanning equal
+        /// strain ranges, each weighed by its size).
         #[arg(long, value_enum)]
         diagnose_reduction: Option<crate::data::Reduction>,
         /// No progress bar and no line per set.
