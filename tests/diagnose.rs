@@ -270,6 +270,10 @@ fn diagnosis_json_keeps_its_contract() {
     assert!(d["caution"].is_null() || d["caution"].is_string());
     // No specimen factors asked for (no replicates, the default scatter), so none left out.
     assert_eq!(d["specimen_scatter_zero"], false);
+    // The default reduction weighs no group means by an estimated misfit share: the key is
+    // there, null.
+    assert!(d.as_object().unwrap().contains_key("misfit_share"));
+    assert!(d["misfit_share"].is_null(), "{}", d["misfit_share"]);
     let cands = d["candidates"].as_array().unwrap();
     assert_eq!(cands.len(), creepfit::model::ext::CATALOGUE.len());
     for c in cands.iter().chain(std::iter::once(&d["base"])) {

@@ -292,6 +292,7 @@ pub fn replicate_hier_drawn<R: Rng>(
                     std::sync::Arc::new(crate::data::ReadingGroups {
                         times_h: g.times_h.iter().map(|t| t * ratio).collect(),
                         ends: g.ends.clone(),
+                        misfit_share: g.misfit_share,
                     })
                 }),
                 ..c.clone()

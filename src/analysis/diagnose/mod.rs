@@ -822,6 +822,12 @@ pub struct Diagnosis {
     /// trend at zero ([`decide::without_specimen_factors`]): every model was then fitted
     /// without factors and the bootstrap drew identical specimens.
     pub specimen_scatter_zero: bool,
+    /// With `reduction = "strain_means"` on grouped curves: the share ρ of a reading's error
+    /// variance that the group means do not shrink, estimated from the base fit and held for
+    /// the diagnosis (a mean of m readings has (1 − ρ)/m + ρ of a reading's variance);
+    /// `null` otherwise (white reading error, ρ = 0, for `means`).
+    #[serde(default)]
+    pub misfit_share: Option<f64>,
     /// The settings used.
     pub settings: DiagnoseConfig,
     /// Wall time, s (not in `diagnosis.json`, whose content does not depend on how the run
@@ -1359,6 +1365,36 @@ fn gof_bootstrap(
         .collect())
 }
 
+/// The share ρ of the reading error that the means of `curves`' groups do not shrink
+/// ([`crate::data::ReadingGroups::misfit_share`], [`crate::errmodel::estimate_misfit_share`]),
+/// from the residuals of the base model's best fit (`spec`, at ρ = 0) from `start` (the
+/// initial guess) and the data fits' Latin-hypercube starts; `None` where no start could be
+/// fitted. The fit is the data fits' without their polish: ρ is a nuisance of the error
+/// model, and a local optimum's larger misfit would only show as a larger ρ.
+fn group_misfit_share(
+    spec: &Spec,
+    curves: &[Curve],
+    start: Vec<f64>,
+    dc: &DiagnoseConfig,
+    settings: &FitSettings,
+    ml: &MlOptions,
+) -> Option<f64> {
+    let mut starts = vec![start];
+    let mut rng = ChaCha8Rng::seed_from_u64(dc.seed);
+    for u in latin_hypercube(dc.starts, spec.space.n_free(), &mut rng) {
+        let mut x = vec![0.0; spec.space.len()];
+        spec.space.from_unit(&u, &mut x);
+        starts.push(x);
+    }
+    let best = fit_all(spec, curves, &starts, 0, None, settings, ml)
+        .into_iter()
+        .map(|(_, f)| f)
+        .filter(|f| f.ok())
+        .min_by(|a, b| a.neg2ll.total_cmp(&b.neg2ll))?;
+    let res = best.residuals.as_ref()?;
+    Some(crate::errmodel::misfit_share_of(curves, res))
+}
+
 /// Diagnose `data` with the models of `setup` ([`crate::config::RunConfig::diagnose_setup`]) and the
 /// `[diagnose]` settings `dc` (the configuration's, with the command line's overrides).
 pub fn diagnose(setup: &DiagnoseSetup, data: &Dataset, dc: &DiagnoseConfig) -> Result<Diagnosis> {
@@ -1377,19 +1413,18 @@ pub fn diagnose_observed(
         .map_err(|m| Error::Diagnose(format!("{}: {}", m.field, m.what)))?;
     let t0 = Instant::now();
     let lm0 = LmCounts::now();
-    let binned_curves: Vec<Curve> = data
+    let reduced: Vec<Curve> = data
         .curves
         .iter()
         .map(|c| crate::data::reduce(c, dc.max_points, dc.reduction))
         .collect();
-    let curves = &binned_curves;
     let settings = setup.settings;
     let ml = MlOptions {
         lifetime_sd_floor: dc.lifetime_sd_floor,
         white_first: true,
         specimen: setup
             .specimen_effects
-            .resolve(curves, setup.specimen_scatter)
+            .resolve(&reduced, setup.specimen_scatter)
             .0
             .with_scatter(setup.specimen_scatter),
         hold_scatter: None,
@@ -1406,11 +1441,27 @@ pub fn diagnose_observed(
     let khd_space = &setup.bare.space;
     let guess = initial_guess(
         khd.as_ref(),
-        curves,
+        &reduced,
         khd_space,
         settings.omega_f,
         &settings.ode,
     );
+    // Groups of different sizes (`strain_means`): the share of the reading error their means
+    // do not shrink, estimated once from the base model's fit at white reading error and
+    // held for the whole diagnosis (data fits, replicates' draws and refits).
+    let misfit_share = (dc.reduction == crate::data::Reduction::StrainMeans
+        && reduced.iter().any(|c| c.groups.is_some()))
+    .then(|| {
+        hooks.phase("the group means' error", 1);
+        let start = specs[0].start_from_base(&khd_names, &guess.params);
+        group_misfit_share(&specs[0], &reduced, start, dc, &settings, &ml)
+    })
+    .flatten();
+    let binned_curves: Vec<Curve> = match misfit_share {
+        Some(rho) if rho > 0.0 => reduced.iter().map(|c| c.with_misfit_share(rho)).collect(),
+        _ => reduced,
+    };
+    let curves = &binned_curves;
 
     // 1. Fits on the data.
     let mut fits: Vec<Option<MlFit>> = Vec::with_capacity(specs.len());
@@ -1992,6 +2043,7 @@ pub fn diagnose_observed(
         decision,
         caution,
         specimen_scatter_zero: singular,
+        misfit_share,
         settings: dc.clone(),
         wall_s: t0.elapsed().as_secs_f64(),
         phase_s: phase,

@@ -83,6 +83,17 @@ pub fn report_md(name: &str, setup: &DiagnoseSetup, d: &Diagnosis) -> String {
             .join(", ");
         s += ".\n\n";
     }
+    if let Some(rho) = d.misfit_share {
+        s += &format!(
+            "Group means (`reduction = \"strain_means\"`): {:.0} % of a reading's error variance does not shrink with averaging (ρ = {rho:.3}, from the base fit; a mean of m readings is taken to have (1 − ρ)/m + ρ of a reading's variance{}).\n\n",
+            100.0 * rho,
+            if rho == 0.0 {
+                ": white reading error, the √m weights"
+            } else {
+                ""
+            }
+        );
+    }
     s += "## Decision\n\n";
     for w in &d.decision {
         s += &format!("- {w}\n");
