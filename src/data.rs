@@ -254,7 +254,7 @@ impl ReadingGroups {
     /// Per point, the factor that puts its residual in a reading's units
     /// ([`reading_units_factor`] of its group's size at [`ReadingGroups::misfit_share`]): √m
     /// for white reading error, where a mean of m readings has 1/m of a reading's variance.
-    pub fn root_sizes(&self) -> impl Iterator<Item = f64> + '_ {
+    pub fn reading_unit_factors(&self) -> impl Iterator<Item = f64> + '_ {
         let rho = self.misfit_share;
         self.sizes().map(move |m| reading_units_factor(m, rho))
     }
@@ -303,12 +303,12 @@ pub fn campaigns(curves: &[Curve]) -> Option<Vec<&str>> {
 
 impl Curve {
     /// Multiply each point's value in `v` (one per point, e.g. residuals or a design column)
-    /// by √m, m the readings its group averages ([`ReadingGroups::root_sizes`]), so that a
-    /// mean's residual is in a reading's units and the points of different sizes share one
-    /// error model. A no-op where every point is a reading (`groups` is `None`).
+    /// by its group's factor ([`ReadingGroups::reading_unit_factors`]: √m for white reading
+    /// error, m the readings its group averages), so that a mean's residual is in a reading's
+    /// units and the points of different sizes share one error model. A no-op where every point is a reading (`groups` is `None`).
     pub fn to_reading_units(&self, v: &mut [f64]) {
         if let Some(g) = &self.groups {
-            for (v, r) in v.iter_mut().zip(g.root_sizes()) {
+            for (v, r) in v.iter_mut().zip(g.reading_unit_factors()) {
                 *v *= r;
             }
         }
@@ -332,7 +332,7 @@ impl Curve {
     /// its group mean's.
     pub fn from_reading_units(&self, v: &mut [f64]) {
         if let Some(g) = &self.groups {
-            for (v, r) in v.iter_mut().zip(g.root_sizes()) {
+            for (v, r) in v.iter_mut().zip(g.reading_unit_factors()) {
                 *v /= r;
             }
         }

@@ -1365,6 +1365,20 @@ fn gof_bootstrap(
         .collect())
 }
 
+/// The data fits' `dc.starts` fresh starts of `spec`: a Latin hypercube of its free
+/// constants' unit box seeded by `dc.seed`, in physical units.
+fn fresh_starts(spec: &Spec, dc: &DiagnoseConfig) -> Vec<Vec<f64>> {
+    let mut rng = ChaCha8Rng::seed_from_u64(dc.seed);
+    latin_hypercube(dc.starts, spec.space.n_free(), &mut rng)
+        .into_iter()
+        .map(|u| {
+            let mut x = vec![0.0; spec.space.len()];
+            spec.space.from_unit(&u, &mut x);
+            x
+        })
+        .collect()
+}
+
 /// The share ρ of the reading error that the means of `curves`' groups do not shrink
 /// ([`crate::data::ReadingGroups::misfit_share`], [`crate::errmodel::estimate_misfit_share`]),
 /// from the residuals of the base model's best fit (`spec`, at ρ = 0) from `start` (the
@@ -1380,12 +1394,7 @@ fn group_misfit_share(
     ml: &MlOptions,
 ) -> Option<f64> {
     let mut starts = vec![start];
-    let mut rng = ChaCha8Rng::seed_from_u64(dc.seed);
-    for u in latin_hypercube(dc.starts, spec.space.n_free(), &mut rng) {
-        let mut x = vec![0.0; spec.space.len()];
-        spec.space.from_unit(&u, &mut x);
-        starts.push(x);
-    }
+    starts.extend(fresh_starts(spec, dc));
     let best = fit_all(spec, curves, &starts, 0, None, settings, ml)
         .into_iter()
         .map(|(_, f)| f)
@@ -1485,12 +1494,7 @@ pub fn diagnose_observed(
                 starts.splice(0..0, std::iter::once(from_base).chain(probes));
             }
         }
-        let mut rng = ChaCha8Rng::seed_from_u64(dc.seed);
-        for u in latin_hypercube(dc.starts, spec.space.n_free(), &mut rng) {
-            let mut x = vec![0.0; spec.space.len()];
-            spec.space.from_unit(&u, &mut x);
-            starts.push(x);
-        }
+        starts.extend(fresh_starts(spec, dc));
         // Journaled per model: the fits take about half of a diagnosis (measured on Alloy
         // 617: 110 s of 235 s), too long to redo after an interruption.
         // A base refitted without the specimen factors the configuration asks for (their
