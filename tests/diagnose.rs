@@ -3,16 +3,19 @@
 //! - A reduced battery of generated data sets (`creepfit::synth`: three material families,
 //!   3–5 stresses, digitised or logged sampling ending at 95–100 % of life, some curves cut at
 //!   a strain limit, white or AR(1) reading error, 1 % scatter of rupture times, shuffled rows;
-//!   every catalogued effect over a range of sizes, and no effect): false alarms on the
-//!   no-effect sets and the share of detectable catalogued effects named correctly. Fixed
-//!   seeds 1001–1006 (development seeds). The sets cycle through the battery's eight
-//!   scenarios (`synth::scenario_of`), so 6 sets hold its 2 no-effect sets and its 4
-//!   catalogued effects; the last two of the cycle, effects outside the catalogue (seeds 1007
-//!   and 1008), were left out on 2026-11-27 to keep CI under 30 minutes: nothing here asserted
-//!   their outcome, and 1008 alone took 136 s of the battery's 375 s (`creepfit battery DIR
-//!   --seed 1001 --sets 8 --threads 2`, Intel Xeon, 2 cores). The calibration itself —
-//!   false-alarm rate and power over many sets, on seeds not used while developing — is
-//!   `creepfit battery`, run by `scripts/bench_battery.sh`.
+//!   every catalogued effect over a range of sizes, and no effect): the battery's machinery
+//!   (confusion matrix, power table, summary, resume) and its two rates on the first two sets
+//!   of the cycle (`synth::scenario_of`): set 1001 without an effect is not a false alarm,
+//!   set 1002's constant load is named. Fixed development seeds. Until 2026-12-05 it was six
+//!   sets (1001–1006: also loading_strain, dislocation_damage, a second no-effect set and
+//!   stress_ductility, all as expected) and the suite's longest test (617 s of a 36.7 min
+//!   CI); `creepfit battery DIR --seed 1001 --sets 6 --threads 2` on 2026-12-05 (AMD EPYC,
+//!   2 cores, a test build beside it for the first sets): 43 + 222 s for the two kept, 448 s
+//!   for the four left out. Loading strain is named in tests/temperature.rs' joint diagnosis
+//!   and under specimen scatter in tests/specimen.rs, both against one other extension; the
+//!   whole catalogue's naming of the other effects is left to the batteries.
+//!   The calibration itself — false-alarm rate and power over many sets, on seeds not used
+//!   while developing — is `creepfit battery`, run by `scripts/bench_battery.sh`.
 //! - Real laboratory curves (Alloy 617, `data/alloy617/`): the verdict and the cause are the
 //!   same on all points and on every 10th point, at every temperature, and a conclusion is
 //!   reached at three of the four (`-- --ignored`: eight diagnoses of Alloy 617; with the
@@ -33,19 +36,19 @@ mod common;
 use common::*;
 
 #[test]
-fn battery_of_6_generated_sets() {
+fn battery_of_2_generated_sets() {
     let dir = TempDir::new().unwrap();
     let results = run_battery_observed(
         dir.path(),
         1001,
-        6,
+        2,
         creepfit::synth::World::Identical,
         None,
         &creepfit::battery::SetOverrides::default(),
-        &TestProgress::new("battery_of_6_generated_sets"),
+        &TestProgress::new("battery_of_2_generated_sets"),
     )
     .unwrap();
-    assert_eq!(results.len(), 6);
+    assert_eq!(results.len(), 2);
     let r = write_reports(dir.path(), &results, 1001).unwrap();
     for (i, res) in results.iter().enumerate() {
         eprintln!(
@@ -59,19 +62,14 @@ fn battery_of_6_generated_sets() {
         );
     }
     assert_eq!(r.errors, 0, "every set generated and diagnosed");
-    assert_eq!(r.null_sets, 2);
-    // None of two (at the 5 % level 0.1 expected; the 40-set bound was two of ten).
-    assert_eq!(
-        r.false_alarms, 0,
-        "false alarms on no-effect data: {} of 2",
-        r.false_alarms
-    );
+    assert_eq!(r.null_sets, 1);
+    assert_eq!(r.false_alarms, 0, "a false alarm on set 1001");
     let (det, named): (usize, usize) = r.named.iter().fold((0, 0), |(d, k), e| (d + e.2, k + e.3));
-    assert!(det >= 2, "too few detectable catalogued sets: {det}"); // the 40-set bound, scaled
-    assert!(
-        named as f64 >= 0.8 * det as f64,
-        "detectable catalogued effects named correctly: {named} of {det}"
-    );
+    // Set 1002's constant load is detectable (oracle λ 693) and named.
+    assert_eq!(det, 1, "detectable catalogued sets");
+    assert_eq!(named, 1, "set 1002's constant load named");
+    let set_1002 = results.iter().find(|r| r.seed == 1002).unwrap();
+    assert_eq!(set_1002.outcome(), "extension:constant_load");
     // The reports add up: the confusion matrix counts every set once.
     let conf = std::fs::read_to_string(dir.path().join("confusion.csv")).unwrap();
     let total: usize = conf
@@ -79,11 +77,11 @@ fn battery_of_6_generated_sets() {
         .skip(1)
         .flat_map(|l| l.split(',').skip(1).map(|v| v.parse::<usize>().unwrap()))
         .sum();
-    assert_eq!(total, 6);
+    assert_eq!(total, 2);
     assert!(dir.path().join("power.png").exists());
     // summary.json holds the same rates; identical specimens carry no scatter to cover.
     let sj = json(&dir.path().join("summary.json"));
-    assert_eq!(sj["null_sets"], 2);
+    assert_eq!(sj["null_sets"], 1);
     assert_eq!(
         sj["false_alarms"].as_u64().unwrap() as usize,
         r.false_alarms
@@ -97,7 +95,7 @@ fn battery_of_6_generated_sets() {
     let again = run_battery(
         dir.path(),
         1001,
-        6,
+        2,
         creepfit::synth::World::Identical,
         None,
         false,
@@ -252,10 +250,15 @@ fn diagnosis_json_keeps_its_contract() {
         // 134 s of CI before (2026-11-29).
         "--bootstrap",
         "39",
-        // A test close to significance (p ≤ α/2 after 39) goes on to 159: the rule's
-        // replicate counts are checked below.
+        // Four Latin-hypercube starts per model instead of 16: the contract, not the
+        // multistart's reach.
+        "--starts",
+        "4",
+        // A test close to significance (p ≤ α/2 after 39) goes on to 79: the rule's
+        // replicate counts are checked below (159 until 2026-12-05: the run then took 94 s
+        // on 2 threads, 52 s of it bootstrapping the rejecting tests again).
         "--bootstrap-extended",
-        "159",
+        "79",
         "--alpha",
         "0.4",
     ]);
@@ -335,11 +338,11 @@ fn diagnosis_json_keeps_its_contract() {
     assert!(cands.iter().any(|c| c["lr_critical"].is_f64()));
     // A test decided not significant early is dropped from the later replicates (no specimen
     // effects here): it had at least 10 null ratios at or above its own. One close to
-    // significance after the 39 (p ≤ α/2) went on towards 159 (4 · 40 − 1); the others
+    // significance after the 39 (p ≤ α/2) went on towards 79 (2 · 40 − 1); the others
     // ended at 39. So every test's count of replicates is the rule's.
     let reps = d["bootstrap"]["replicates"].as_u64().unwrap();
     let (first, most) = (39, d["bootstrap"]["most"].as_u64().unwrap());
-    assert_eq!(most, 159);
+    assert_eq!(most, 79);
     assert!(d["base"]["null_replicates"].is_null());
     let nulls = d["bootstrap"]["null_statistics"].as_array().unwrap();
     for c in cands {

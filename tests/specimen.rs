@@ -1594,11 +1594,15 @@ fn a_zero_scatter_beyond_the_trend_gives_the_diagnosis_without_factors() {
         let cfg = dir.join(format!("{name}.toml"));
         std::fs::write(&cfg, cfg_text).unwrap();
         let out = tmp.path().join(name);
+        // Four starts per model instead of 16: the equality of two diagnoses, not the
+        // multistart's reach (69 s of CI with 16 on 2026-12-05, the data fits most of it).
         let o = creepfit(&[
             "diagnose",
             cfg.to_str().unwrap(),
             "--out",
             out.to_str().unwrap(),
+            "--starts",
+            "4",
             "--threads",
             "2",
             "-q",
@@ -1652,7 +1656,11 @@ fn a_zero_scatter_beyond_the_trend_gives_the_intervals_without_factors() {
         let cfg = dir.join(format!("{how}.toml"));
         std::fs::write(
             &cfg,
-            format!("{text}\n[objective]\nspecimen_scatter = \"{how}\"\n"),
+            // Ten calibration replicates, the fewest allowed (the default 20 is a threshold's
+            // accuracy, not what is compared here).
+            format!(
+                "{text}\n[objective]\nspecimen_scatter = \"{how}\"\n[profile]\ncalibrate = 10\n"
+            ),
         )
         .unwrap();
         let prof = tmp.path().join(format!("profile-{how}"));
@@ -1736,7 +1744,7 @@ fn a_hierarchical_profile_at_zero_scatter_is_the_profile_without_effects() {
         std::fs::write(
             &cfg,
             format!(
-                "{text}\n[objective]\nspecimen_effects = {effects}\nspecimen_scatter = \"likelihood\"\n"
+                "{text}\n[objective]\nspecimen_effects = {effects}\nspecimen_scatter = \"likelihood\"\n[profile]\ncalibrate = 10\n"
             ),
         )
         .unwrap();
