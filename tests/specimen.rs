@@ -1595,7 +1595,8 @@ fn a_zero_scatter_beyond_the_trend_gives_the_diagnosis_without_factors() {
         std::fs::write(&cfg, cfg_text).unwrap();
         let out = tmp.path().join(name);
         // Four starts per model instead of 16: the equality of two diagnoses, not the
-        // multistart's reach (69 s of CI with 16 on 2026-12-05, the data fits most of it).
+        // multistart's reach (with 16: 83 s in 94ea3cc's CI, 69 s under nextest on 2026-12-05; the
+        // data fits most of it).
         let o = creepfit(&[
             "diagnose",
             cfg.to_str().unwrap(),
