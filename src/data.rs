@@ -1672,6 +1672,54 @@ impl Reduction {
     }
 }
 
+/// How `diagnose` weighs the group means of [`Reduction::StrainMeans`]
+/// ([`ReadingGroups::misfit_share`]).
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    clap::ValueEnum,
+)]
+#[serde(rename_all = "snake_case")]
+#[value(rename_all = "snake_case")]
+pub enum MisfitShare {
+    /// ρ = 0: a mean of m readings has 1/m of a reading's error variance (weight √m), exact
+    /// for white reading error. The default: its null battery is calibrated (the must-show's
+    /// 200 sets, 5 false alarms).
+    #[default]
+    White,
+    /// ρ estimated from the base model's fit and held for the whole diagnosis (weights
+    /// 1/√((1 − ρ)/m + ρ)). Experimental: 6 false alarms on 33 null sets (session 75).
+    Estimate,
+}
+
+impl MisfitShare {
+    /// Whether this is the default (left out of written configurations).
+    pub fn is_default(&self) -> bool {
+        *self == MisfitShare::default()
+    }
+
+    /// The configuration's name of it.
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            MisfitShare::White => "white",
+            MisfitShare::Estimate => "estimate",
+        }
+    }
+
+    /// Whether `diagnose` estimates ρ for curves reduced by `reduction`: only with
+    /// `estimate`, only for `strain_means` (equal-count groups are all of one size, so ρ
+    /// only scales the reading error), and only where some curve was grouped.
+    pub fn estimated(self, reduction: Reduction, any_grouped: bool) -> bool {
+        self == MisfitShare::Estimate && reduction == Reduction::StrainMeans && any_grouped
+    }
+}
+
 /// The groups a curve of readings `strains` (in time order) longer than `max_points` is
 /// reduced to by [`Reduction::StrainMeans`]: the first reading alone (not listed), the others
 /// in runs of consecutive readings whose strains span at most a common range s, the smallest
@@ -1937,6 +1985,32 @@ mod tests {
     /// quadratic's intercept variance e₀ᵀ(XᵀX)⁻¹e₀ σ² = 41/64 σ² (x = ±1/3, ±1), where the
     /// group's mean would have σ²/4: the reduced curve holds 0.25/0.64 = 39 % of the readings'
     /// information about a smooth model (docs/SPECIMENS.md, "Session 71").
+    /// `diagnose` estimates the misfit share only when asked, only for `strain_means` and only
+    /// where a curve was grouped; every other case keeps √m (ρ = 0).
+    #[test]
+    fn the_misfit_share_is_estimated_only_when_asked_for_strain_means() {
+        use MisfitShare::{Estimate, White};
+        use Reduction::{LocalQuadratic, Means, StrainMeans};
+        let table = [
+            (White, StrainMeans, true, false),
+            (White, StrainMeans, false, false),
+            (White, Means, true, false),
+            (Estimate, StrainMeans, true, true),
+            (Estimate, StrainMeans, false, false),
+            (Estimate, Means, true, false),
+            (Estimate, LocalQuadratic, true, false),
+        ];
+        for (how, reduction, grouped, want) in table {
+            assert_eq!(
+                how.estimated(reduction, grouped),
+                want,
+                "{how:?} {reduction:?} grouped {grouped}"
+            );
+        }
+        assert!(White.is_default() && !Estimate.is_default());
+        assert_eq!((White.as_str(), Estimate.as_str()), ("white", "estimate"));
+    }
+
     #[test]
     fn a_reduced_point_has_the_local_quadratics_variance() {
         use rand::SeedableRng;

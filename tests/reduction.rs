@@ -149,7 +149,23 @@ fn the_reduction_is_read_from_the_diagnose_table() {
     let err = read("[diagnose]\nreduction = \"median\"\n")
         .unwrap_err()
         .to_string();
-    assert!(err.contains("reduction") && err.contains("means"), "{err}");
+    assert!(err.contains("reduction") && err.contains("means"), "{err}"); // How `strain_means`' means are weighed: white (√m) unless asked.
+    use creepfit::data::MisfitShare;
+    assert_eq!(read("").unwrap().diagnose.misfit_share, MisfitShare::White);
+    assert_eq!(
+        read("[diagnose]\nreduction = \"strain_means\"\nmisfit_share = \"estimate\"\n")
+            .unwrap()
+            .diagnose
+            .misfit_share,
+        MisfitShare::Estimate
+    );
+    let err = read("[diagnose]\nmisfit_share = \"guess\"\n")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("misfit_share") && err.contains("estimate"),
+        "{err}"
+    );
 }
 
 /// The seed's 590 °C curves as read (`raw`) and the model's own curves beneath them

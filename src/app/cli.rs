@@ -213,6 +213,11 @@ pub enum Command {
         /// strain ranges, each weighed by its size).
         #[arg(long, value_enum)]
         diagnose_reduction: Option<crate::data::Reduction>,
+        /// `[diagnose] misfit_share` of every set's configuration (default `white`): how
+        /// `strain_means`' group means are weighed (`estimate`: the share of the reading
+        /// error that averaging does not shrink, from the base fit; experimental).
+        #[arg(long, value_enum)]
+        diagnose_misfit_share: Option<crate::data::MisfitShare>,
         /// No progress bar and no line per set.
         #[arg(long, short)]
         quiet: bool,
@@ -487,6 +492,7 @@ pub fn run(cli: Cli) -> Result<()> {
             bootstrap_extended,
             diagnose_max_points,
             diagnose_reduction,
+            diagnose_misfit_share,
             quiet,
         } => commands::with_threads(threads, || {
             commands::battery(
@@ -501,6 +507,7 @@ pub fn run(cli: Cli) -> Result<()> {
                     bootstrap_extended,
                     max_points: diagnose_max_points,
                     reduction: diagnose_reduction,
+                    misfit_share: diagnose_misfit_share,
                 },
                 quiet,
             )

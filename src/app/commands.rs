@@ -354,6 +354,9 @@ pub fn battery(
     if let Some(how) = overrides.reduction {
         id["diagnose_reduction"] = how.as_str().into();
     }
+    if let Some(how) = overrides.misfit_share {
+        id["diagnose_misfit_share"] = how.as_str().into();
+    }
     crate::identity::bind_folder(out, BATTERY_IDENTITY, "results.jsonl", &id)?;
     let folder = RunFolder::take_over(lock, "battery", &|f| {
         f == BATTERY_IDENTITY || f == "results.jsonl" || f.starts_with("sets/")

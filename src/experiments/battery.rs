@@ -418,6 +418,8 @@ pub struct SetOverrides {
     pub max_points: Option<usize>,
     /// `[diagnose] reduction` (written only when given).
     pub reduction: Option<crate::data::Reduction>,
+    /// `[diagnose] misfit_share` (written only when given).
+    pub misfit_share: Option<crate::data::MisfitShare>,
 }
 
 /// [`run_one_diagnosed`] with the set's configuration overridden as `overrides` says.
@@ -473,6 +475,9 @@ pub fn run_one_diagnosed_with(
         }
         if let Some(how) = overrides.reduction {
             set.config_toml = crate::synth::with_diagnose_reduction(&set.config_toml, how);
+        }
+        if let Some(how) = overrides.misfit_share {
+            set.config_toml = crate::synth::with_diagnose_misfit_share(&set.config_toml, how);
         }
         write_set(&set, &folder)?;
         let t = &set.truth;

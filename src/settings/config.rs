@@ -438,6 +438,12 @@ pub struct DiagnoseConfig {
     /// size).
     #[serde(skip_serializing_if = "crate::data::Reduction::is_default")]
     pub reduction: crate::data::Reduction,
+    /// How `strain_means`' group means are weighed: `white` (default: √m, a mean of m
+    /// readings with 1/m of a reading's error variance; its null battery is calibrated) or
+    /// `estimate` (the share ρ that averaging does not shrink, estimated from the base fit;
+    /// experimental, its false alarms are not calibrated: docs/SPECIMENS.md, "Session 75").
+    #[serde(skip_serializing_if = "crate::data::MisfitShare::is_default")]
+    pub misfit_share: crate::data::MisfitShare,
 }
 
 /// Default most bootstrap replicates of `diagnose`: 20 m − 1 for m = the catalogued
@@ -459,6 +465,7 @@ impl Default for DiagnoseConfig {
             extensions: Vec::new(),
             max_points: 100,
             reduction: crate::data::Reduction::LocalQuadratic,
+            misfit_share: crate::data::MisfitShare::White,
         }
     }
 }

@@ -851,6 +851,16 @@ pub fn with_diagnose_reduction(config: &str, how: crate::data::Reduction) -> Str
     )
 }
 
+/// `config` (a generated set's configuration, which has no such line) with `[diagnose]
+/// misfit_share = how`: how `diagnose` weighs `strain_means`' group means.
+pub fn with_diagnose_misfit_share(config: &str, how: crate::data::MisfitShare) -> String {
+    with_line_in(
+        config,
+        "diagnose",
+        &format!("misfit_share = \"{}\"", how.as_str()),
+    )
+}
+
 /// Shortest round-trip text of a number.
 fn fmt(v: f64) -> String {
     format!("{v}")

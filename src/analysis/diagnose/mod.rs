@@ -822,10 +822,10 @@ pub struct Diagnosis {
     /// trend at zero ([`decide::without_specimen_factors`]): every model was then fitted
     /// without factors and the bootstrap drew identical specimens.
     pub specimen_scatter_zero: bool,
-    /// With `reduction = "strain_means"` on grouped curves: the share ρ of a reading's error
-    /// variance that the group means do not shrink, estimated from the base fit and held for
-    /// the diagnosis (a mean of m readings has (1 − ρ)/m + ρ of a reading's variance);
-    /// `null` otherwise (white reading error, ρ = 0, for `means`).
+    /// With `reduction = "strain_means"` and `misfit_share = "estimate"` on grouped curves:
+    /// the share ρ of a reading's error variance that the group means do not shrink,
+    /// estimated from the base fit and held for the diagnosis (a mean of m readings has
+    /// (1 − ρ)/m + ρ of a reading's variance); `null` otherwise (white reading error, ρ = 0).
     #[serde(default)]
     pub misfit_share: Option<f64>,
     /// The settings used.
@@ -1455,17 +1455,19 @@ pub fn diagnose_observed(
         settings.omega_f,
         &settings.ode,
     );
-    // Groups of different sizes (`strain_means`): the share of the reading error their means
-    // do not shrink, estimated once from the base model's fit at white reading error and
-    // held for the whole diagnosis (data fits, replicates' draws and refits).
-    let misfit_share = (dc.reduction == crate::data::Reduction::StrainMeans
-        && reduced.iter().any(|c| c.groups.is_some()))
-    .then(|| {
-        hooks.phase("the group means' error", 1);
-        let start = specs[0].start_from_base(&khd_names, &guess.params);
-        group_misfit_share(&specs[0], &reduced, start, dc, &settings, &ml)
-    })
-    .flatten();
+    // Groups of different sizes (`strain_means`, `misfit_share = "estimate"`): the share of
+    // the reading error their means do not shrink, estimated once from the base model's fit
+    // at white reading error and held for the whole diagnosis (data fits, replicates' draws
+    // and refits).
+    let misfit_share = dc
+        .misfit_share
+        .estimated(dc.reduction, reduced.iter().any(|c| c.groups.is_some()))
+        .then(|| {
+            hooks.phase("the group means' error", 1);
+            let start = specs[0].start_from_base(&khd_names, &guess.params);
+            group_misfit_share(&specs[0], &reduced, start, dc, &settings, &ml)
+        })
+        .flatten();
     let binned_curves: Vec<Curve> = match misfit_share {
         Some(rho) if rho > 0.0 => reduced.iter().map(|c| c.with_misfit_share(rho)).collect(),
         _ => reduced,
