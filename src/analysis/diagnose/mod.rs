@@ -1385,8 +1385,9 @@ fn fresh_starts(spec: &Spec, dc: &DiagnoseConfig) -> Vec<Vec<f64>> {
 /// initial guess) and the data fits' Latin-hypercube starts, its best polished with the
 /// specimen factors `ml` asks for; `None` where no start could be fitted. Without the
 /// polish (sessions 74–75) each curve's own creep rate was left in its residuals, a misfit
-/// shared by every reading of a group that averaging does not shrink: on generated null sets
-/// with white reading error ρ̂ was 0.75–0.99 where the truth's residuals give 0.
+/// shared by every reading of a group that averaging does not shrink: on session 75's 16
+/// logged null sets with white reading error ρ̂ was 0.70–0.99 where the truth's residuals
+/// give 0.
 fn group_misfit_share(
     spec: &Spec,
     curves: &[Curve],
