@@ -1409,6 +1409,33 @@ pub fn diagnose(setup: &DiagnoseSetup, data: &Dataset, dc: &DiagnoseConfig) -> R
     diagnose_observed(setup, data, dc, &Hooks::default())
 }
 
+/// The likelihood options of the data fits on curves `reduced`: the configured specimen
+/// effects (those the curves can carry) at the configured scatter criterion, the scatter free.
+fn data_options(setup: &DiagnoseSetup, reduced: &[Curve], dc: &DiagnoseConfig) -> MlOptions {
+    MlOptions {
+        lifetime_sd_floor: dc.lifetime_sd_floor,
+        white_first: true,
+        specimen: setup
+            .specimen_effects
+            .resolve(reduced, setup.specimen_scatter)
+            .0
+            .with_scatter(setup.specimen_scatter),
+        hold_scatter: None,
+    }
+}
+
+/// The initial guess on curves `reduced`: the family's procedure on its bare model (per
+/// temperature with the laws), in the bare model's constants.
+fn bare_guess(setup: &DiagnoseSetup, reduced: &[Curve]) -> crate::model::guess::Guess {
+    initial_guess(
+        setup.bare.model.as_ref(),
+        reduced,
+        &setup.bare.space,
+        setup.settings.omega_f,
+        &setup.settings.ode,
+    )
+}
+
 /// [`diagnose`] reporting its phases to `hooks.observer` (and stopping when it asks to), its
 /// bootstrap replicates journaled in (and resumed from) `hooks.journal`.
 pub fn diagnose_observed(
@@ -1427,16 +1454,7 @@ pub fn diagnose_observed(
         .map(|c| crate::data::reduce(c, dc.max_points, dc.reduction))
         .collect();
     let settings = setup.settings;
-    let ml = MlOptions {
-        lifetime_sd_floor: dc.lifetime_sd_floor,
-        white_first: true,
-        specimen: setup
-            .specimen_effects
-            .resolve(&reduced, setup.specimen_scatter)
-            .0
-            .with_scatter(setup.specimen_scatter),
-        hold_scatter: None,
-    };
+    let ml = data_options(setup, &reduced, dc);
     // Whether the configuration fits specimen factors (a base refitted without them,
     // [`singular_scatter`], is journaled under a key of its own).
     let setup_effects = ml.specimen.any();
@@ -1444,16 +1462,14 @@ pub fn diagnose_observed(
 
     // The initial guess (the family's procedure on its bare model, per temperature with the
     // laws), extended by name.
-    let khd = &setup.bare.model;
-    let khd_names: Vec<&str> = khd.constants().iter().map(|c| c.name).collect();
-    let khd_space = &setup.bare.space;
-    let guess = initial_guess(
-        khd.as_ref(),
-        &reduced,
-        khd_space,
-        settings.omega_f,
-        &settings.ode,
-    );
+    let khd_names: Vec<&str> = setup
+        .bare
+        .model
+        .constants()
+        .iter()
+        .map(|c| c.name)
+        .collect();
+    let guess = bare_guess(setup, &reduced);
     // Groups of different sizes (`strain_means`, `misfit_share = "estimate"`): the share of
     // the reading error their means do not shrink, estimated once from the base model's fit
     // at white reading error and held for the whole diagnosis (data fits, replicates' draws
@@ -2233,16 +2249,7 @@ mod tests {
             .collect();
         assert!(reduced.iter().any(|c| c.groups.is_some()));
         let setup = cfg.diagnose_setup().unwrap();
-        let ml = MlOptions {
-            lifetime_sd_floor: dc.lifetime_sd_floor,
-            white_first: true,
-            specimen: setup
-                .specimen_effects
-                .resolve(&reduced, setup.specimen_scatter)
-                .0
-                .with_scatter(setup.specimen_scatter),
-            hold_scatter: None,
-        };
+        let ml = data_options(&setup, &reduced, &dc);
         assert!(ml.specimen.any());
         let spec = &setup.variants[0];
         // diagnose's start: the bare model's initial guess.
@@ -2253,14 +2260,7 @@ mod tests {
             .iter()
             .map(|c| c.name)
             .collect();
-        let guess = initial_guess(
-            setup.bare.model.as_ref(),
-            &reduced,
-            &setup.bare.space,
-            setup.settings.omega_f,
-            &setup.settings.ode,
-        );
-        let start = spec.start_from_base(&names, &guess.params);
+        let start = spec.start_from_base(&names, &bare_guess(&setup, &reduced).params);
         let rho = group_misfit_share(spec, &reduced, start, &dc, &setup.settings, &ml).unwrap();
         assert_eq!(rho, 0.0);
     }
