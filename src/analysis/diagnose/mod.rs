@@ -1839,7 +1839,7 @@ pub fn diagnose_observed(
         .zip(&failed_starts)
         .map(|((s, f), &n)| candidate(s, curves, f.as_ref(), n, &warm))
         .collect();
-    let sel = decide::select(&SelectInput {
+    let select_input = SelectInput {
         alpha: dc.alpha,
         extensions: (0..n_ext)
             .map(|k| ExtensionEvidence {
@@ -1851,7 +1851,8 @@ pub fn diagnose_observed(
         base_gof_p: p_gof.clone(),
         base_gof_decides: in_family[n_ext..].to_vec(),
         spread,
-    });
+    };
+    let sel = decide::select(&select_input);
     // Stage 2: the best extension's own goodness of fit.
     let cause_gof: Vec<GofTest> = match sel.best {
         Some(b) => gof_bootstrap(
@@ -2001,6 +2002,14 @@ pub fn diagnose_observed(
             crate::fit::written_off_caution(&labels, &n.strain_sd_pct, &largest)
         }),
         decide::failed_refits_caution(&failed_per_test, dc.alpha),
+        decide::one_draw_caution(
+            &select_input,
+            &sel,
+            &lr_obs,
+            &sampled.computed[..n_ext],
+            dc.bootstrap,
+            dc.bootstrap_extended.is_some(),
+        ),
         decide::unconverged_fits_caution(
             &std::iter::once(&base)
                 .chain(&cands)
