@@ -366,8 +366,9 @@ pub fn specimen_factors_caution(
 }
 
 /// The caution a diagnosis carries where a single null replicate decided an extension's test:
-/// the test is not rejected, exactly one of its `replicates[k]` null replicates reached its
-/// ratio (or failed, which counts the same), and with none the test (its p-value then
+/// the test is not rejected, its p-value is at most α on its own, exactly one of its
+/// `replicates[k]` null replicates reached its ratio (or failed, which counts the same), and
+/// with none the test (its p-value then
 /// 1/(n + 1), n its replicates or `first` if it stopped before: the depth it would have run
 /// to) would be rejected by the same family's Holm procedure. Monte Carlo p-values are exact,
 /// so the decision is valid, but at 159 replicates and Holm's 0.05/8 = 1/160 one draw above
@@ -395,7 +396,9 @@ pub fn one_draw_caution(
             let p = inp.extensions[k].p_value;
             // p = (1 + against)/(n + 1): the replicates at or above the ratio (or failed).
             let against = (p * (n + 1) as f64).round() as i64 - 1;
-            if n == 0 || against != 1 {
+            // Significant on its own at α: where it is not, the one replicate came early
+            // (a family stopped after 10–20 replicates) and says little about the test.
+            if n == 0 || against != 1 || p > inp.alpha {
                 return None;
             }
             let mut without = inp.clone();
@@ -418,8 +421,9 @@ pub fn one_draw_caution(
          639 replicates"
     };
     Some(format!(
-        "a single null replicate decided {} test(s) ({}): without it each would be significant \
-         at Holm's level, so another seed may decide otherwise; {more}",
+        "a single null replicate decided {} test(s) ({}): each is significant at α on its \
+         own but not at Holm's level, and without that replicate it would be, so another seed \
+         may decide otherwise; {more}",
         hit.len(),
         hit.join("; ")
     ))
@@ -598,7 +602,7 @@ mod tests {
         let a = [0.0; 6];
         // (p-values, replicates per test, alpha, first, caution expected, name it must hold)
         type Row = ([f64; 6], [usize; 6], f64, usize, bool, &'static str);
-        let table: [Row; 8] = [
+        let table: [Row; 10] = [
             // 182002: stress_ductility 2/71 (one of 70 above), the family stopped at 70.
             (
                 [1.0, 0.27, 0.37, 2.0 / 71.0, 0.55, 0.17],
@@ -662,6 +666,24 @@ mod tests {
                 40,
                 false,
                 "",
+            ),
+            // One above among the first 20 (a family stopped early): p 2/21 is above α.
+            (
+                [1.0, 0.27, 0.37, 2.0 / 21.0, 0.55, 0.17],
+                [10, 50, 40, 20, 30, 70],
+                0.05,
+                159,
+                false,
+                "",
+            ),
+            // One above among 40: p 2/41 is at most α.
+            (
+                [1.0, 0.27, 0.37, 2.0 / 41.0, 0.55, 0.17],
+                [10, 50, 40, 40, 30, 70],
+                0.05,
+                159,
+                true,
+                "e3",
             ),
             // Two tests at one above each: both would be significant alone (Holm's first two
             // steps are 0.05/8 and 0.05/7).
