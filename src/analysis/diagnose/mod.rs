@@ -1462,13 +1462,7 @@ pub fn diagnose_observed(
 
     // The initial guess (the family's procedure on its bare model, per temperature with the
     // laws), extended by name.
-    let khd_names: Vec<&str> = setup
-        .bare
-        .model
-        .constants()
-        .iter()
-        .map(|c| c.name)
-        .collect();
+    let khd_names = setup.bare.names();
     let guess = bare_guess(setup, &reduced);
     // Groups of different sizes (`strain_means`, `misfit_share = "estimate"`): the share of
     // the reading error their means do not shrink, estimated once from the base model's fit
@@ -2262,14 +2256,7 @@ mod tests {
         assert!(ml.specimen.any());
         let spec = &setup.variants[0];
         // diagnose's start: the bare model's initial guess.
-        let names: Vec<&str> = setup
-            .bare
-            .model
-            .constants()
-            .iter()
-            .map(|c| c.name)
-            .collect();
-        let start = spec.start_from_base(&names, &bare_guess(&setup, &reduced).params);
+        let start = spec.start_from_base(&setup.bare.names(), &bare_guess(&setup, &reduced).params);
         let rho = group_misfit_share(spec, &reduced, start, &dc, &setup.settings, &ml).unwrap();
         assert_eq!(rho, 0.0);
     }
