@@ -2002,8 +2002,26 @@ pub fn diagnose_observed(
             &lr_obs,
             &sampled.computed[..n_ext],
             dc.bootstrap,
-            dc.bootstrap_extended.is_some(),
+            dc.most_replicates() > dc.bootstrap,
         ),
+        sel.best.and_then(|b| {
+            let tests: Vec<decide::CauseTest> = cause_gof
+                .iter()
+                .filter(|g| g.decides)
+                .map(|g| decide::CauseTest {
+                    name: shape_name(g.gof.shape).to_string(),
+                    p_value: g.p_value,
+                    replicates: g.replicates,
+                })
+                .collect();
+            decide::one_draw_cause_caution(
+                &specs[b + 1].name,
+                &tests,
+                dc.alpha,
+                dc.bootstrap,
+                dc.most_replicates() > dc.bootstrap,
+            )
+        }),
         decide::unconverged_fits_caution(
             &std::iter::once(&base)
                 .chain(&cands)
