@@ -632,6 +632,37 @@ pub fn merged(first: Sampled, second: &Sampled, redo: &[bool]) -> Sampled {
     out
 }
 
+/// What a test's second null run changed ([`merged`]'s `second` against `first`, over the
+/// replicates both runs computed): how many replicates' ratios it raised (or filled in
+/// where the first refit failed), and the replicates at or above the observed `obs` as
+/// [`p_value`] counts them (a failed refit counts) in the first run and in the second.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct AgainEffect {
+    /// Replicates whose ratio the second run raised, or computed where the first failed.
+    pub raised: usize,
+    /// Replicates at or above the observed ratio: first run, second run.
+    pub at_or_above: [usize; 2],
+}
+
+/// [`AgainEffect`] of `second` (the second run's column) against `first` over the second
+/// run's replicates; `obs` the data's ratio.
+pub fn again_effect(first: &[f64], second: &[f64], obs: f64) -> AgainEffect {
+    let above = |s: f64| !(s < obs - TIE);
+    let mut e = AgainEffect {
+        raised: 0,
+        at_or_above: [0, 0],
+    };
+    for (b, &a) in second.iter().enumerate() {
+        let f = first.get(b).copied().unwrap_or(f64::NAN);
+        if a.is_finite() && !(f >= a) {
+            e.raised += 1;
+        }
+        e.at_or_above[0] += usize::from(above(f));
+        e.at_or_above[1] += usize::from(above(a));
+    }
+    e
+}
+
 /// The 95 % quantile of |a_b − c_b| over replicates where both are finite (NaN if none).
 pub fn spread95(a: &[f64], c: &[f64]) -> f64 {
     let mut d: Vec<f64> = a
@@ -650,6 +681,37 @@ pub fn spread95(a: &[f64], c: &[f64]) -> f64 {
 
 #[cfg(test)]
 mod tests {
+    /// The second run's effect, counted by hand: raised where the second ratio is larger or
+    /// the first failed; at or above the data's ratio as `p_value` counts (NaN counts).
+    #[test]
+    fn the_second_null_runs_effect_is_counted_as_p_value_counts() {
+        let nan = f64::NAN;
+        // (first, second, obs, raised, at or above first, second)
+        type Row = (Vec<f64>, Vec<f64>, f64, usize, [usize; 2]);
+        let table: Vec<Row> = vec![
+            (vec![1.0, 2.0, 3.0], vec![1.0, 2.0, 3.0], 10.0, 0, [0, 0]),
+            (vec![1.0, 2.0, 3.0], vec![1.0, 12.0, 3.0], 10.0, 1, [0, 1]),
+            (vec![0.0, 9.0], vec![71.0, 9.5], 10.0, 2, [0, 1]),
+            // A failed first refit counts as at or above; filled in below the ratio, no more.
+            (vec![nan, 2.0], vec![4.0, 2.0], 10.0, 1, [1, 0]),
+            // Failed in both: counts in both, raised in neither.
+            (vec![nan], vec![nan], 10.0, 0, [1, 1]),
+            // Within TIE of the ratio counts as at or above.
+            (vec![9.995], vec![9.995], 10.0, 0, [1, 1]),
+            // The second run computed fewer replicates than the first.
+            (vec![1.0, 2.0, 30.0], vec![11.0], 10.0, 1, [0, 1]),
+        ];
+        for (first, second, obs, raised, at) in table {
+            let e = super::again_effect(&first, &second, obs);
+            assert_eq!(e.raised, raised, "{first:?} {second:?}");
+            assert_eq!(e.at_or_above, at, "{first:?} {second:?}");
+            // Whatever the second run changed, p_value over its replicates is its count.
+            let n = second.len();
+            let p = super::p_value(obs, &second);
+            assert!((p - (1 + at[1]) as f64 / (n + 1) as f64).abs() < 1e-12);
+        }
+    }
+
     use super::*;
 
     fn curve(n: usize, stress_mpa: f64) -> Curve {

@@ -672,6 +672,9 @@ pub struct Candidate {
     /// found the data's best fit added to every replicate's refits (a test that rejected with
     /// the replicates' own starts; `p_value` and `lr_critical` are then the second run's).
     pub null_again: bool,
+    /// What that second run changed (`None` where it was not run): replicates whose ratio
+    /// it raised, and the replicates at or above the data's ratio before and after.
+    pub null_again_effect: Option<bootstrap::AgainEffect>,
     /// Rejected the base model at level α (Holm).
     pub significant: bool,
     /// BIC − BIC(base) with the effective number of observations of the base's error model
@@ -941,6 +944,7 @@ fn candidate(
         lr_critical: None,
         null_replicates: None,
         null_again: false,
+        null_again_effect: None,
         significant: false,
         delta_bic: f64::NAN,
         loo_rmse: f64::NAN,
@@ -1762,6 +1766,7 @@ pub fn diagnose_observed(
                 && matches!(recipes[k + 1], Some(Recipe::Grid(_) | Recipe::Fixed(_)))
         })
         .collect();
+    let mut again_effect: Vec<Option<bootstrap::AgainEffect>> = vec![None; n_ext];
     let t_again = std::time::Instant::now();
     let lm_again = LmCounts::now();
     let sampled = if again.iter().any(|a| *a) {
@@ -1798,6 +1803,21 @@ pub fn diagnose_observed(
                 )
             },
         )?;
+        for k in (0..n_ext).filter(|&k| again[k]) {
+            // Over the replicates both runs computed (the second's, as a test that rejected
+            // was never dropped from the first).
+            let n = second.computed[k].min(sampled.computed[k]);
+            let column = |s: &bootstrap::Sampled| -> Vec<f64> {
+                (0..n)
+                    .map(|b| s.reps.get(b).map_or(f64::NAN, |r| r[k]))
+                    .collect()
+            };
+            again_effect[k] = Some(bootstrap::again_effect(
+                &column(&sampled),
+                &column(&second),
+                observed[k],
+            ));
+        }
         bootstrap::merged(sampled, &second, &again)
     } else {
         sampled
@@ -1909,6 +1929,7 @@ pub fn diagnose_observed(
             c.lr_critical = bootstrap::critical_value(&col(k), dc.alpha);
             c.null_replicates = Some(sampled.computed[k]);
             c.null_again = again[k];
+            c.null_again_effect = again_effect[k];
             c.significant = sel.rejected[k];
             c.delta_bic = -lr_obs[k] + (c.k as f64 - cands_k0(specs)) * n_eff.ln();
         } else {

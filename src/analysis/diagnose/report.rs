@@ -397,11 +397,17 @@ fn g_parts_md(g: &super::gof::Gof, d: &Diagnosis) -> String {
 /// The Method paragraph's clause on the tests bootstrapped again with the start that found the
 /// data's best fit (empty when none was).
 fn again_md(d: &Diagnosis) -> String {
-    let again: Vec<&str> = d
+    let again: Vec<String> = d
         .candidates
         .iter()
         .filter(|c| c.null_again)
-        .map(|c| c.name.as_str())
+        .map(|c| match (c.null_again_effect, c.null_replicates) {
+            (Some(e), Some(n)) => format!(
+                "{}: {} of {n} replicates' ratios raised, {} → {} at or above the data's",
+                c.name, e.raised, e.at_or_above[0], e.at_or_above[1]
+            ),
+            _ => c.name.clone(),
+        })
         .collect();
     if again.is_empty() {
         return String::new();
@@ -410,7 +416,7 @@ fn again_md(d: &Diagnosis) -> String {
         "; the tests that rejected were bootstrapped again on the same replicates with the fresh \
          start that found the extension's best fit on the data added to every refit, and their \
          p-values are the second run's ({})",
-        again.join(", ")
+        again.join("; ")
     )
 }
 
