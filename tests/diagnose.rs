@@ -432,10 +432,27 @@ fn diagnosis_json_keeps_its_contract() {
         md.contains("stopped early: no test could become significant"),
         stopped
     );
+    // The Method names each test run again with what its second run changed.
+    let clauses: Vec<String> = cands
+        .iter()
+        .filter(|c| c["null_again"].as_bool().unwrap())
+        .map(|c| {
+            let e = &c["null_again_effect"];
+            format!(
+                "{}: {} of {} replicates' ratios raised, {} → {} at or above the data's",
+                c["name"].as_str().unwrap(),
+                e["raised"],
+                c["null_replicates"],
+                e["at_or_above"][0],
+                e["at_or_above"][1]
+            )
+        })
+        .collect();
+    assert_eq!(clauses.len(), again.len());
     assert!(
         md.contains(&format!(
             "p-values are the second run's ({})",
-            again.join(", ")
+            clauses.join("; ")
         )),
         "{md}"
     );
