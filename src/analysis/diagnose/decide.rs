@@ -173,13 +173,25 @@ pub fn select(inp: &SelectInput) -> Selection {
     }
 }
 
+/// Whether Holm at `alpha` rejects the best extension on its own goodness-of-fit p-values
+/// (stage 2 of [`verdict`]; [`one_draw_cause_caution`] re-decides it so).
+fn cause_rejected(cause_gof_p: &[f64], alpha: f64) -> bool {
+    holm(cause_gof_p, alpha).0.iter().any(|r| *r)
+}
+
+/// The replicates at or above the statistic (or failed) behind a bootstrap p-value of
+/// `n` replicates: `bootstrap::p_value` is (1 + that)/(n + 1).
+fn at_or_above(p: f64, n: usize) -> i64 {
+    (p * (n + 1) as f64).round() as i64 - 1
+}
+
 /// Stage 2: the verdict and the cause, given the bootstrap p-values of the best extension's
 /// own goodness-of-fit tests that decide (Holm at `alpha` over them; empty when there is no
 /// best extension).
 pub fn verdict(sel: &Selection, cause_gof_p: &[f64], alpha: f64) -> (Verdict, Option<usize>) {
     match sel.best {
         Some(b) => {
-            if holm(cause_gof_p, alpha).0.iter().any(|r| *r) {
+            if cause_rejected(cause_gof_p, alpha) {
                 (Verdict::Unexplained, None)
             } else {
                 (Verdict::Extension, Some(b))
@@ -396,7 +408,7 @@ pub fn one_draw_caution(
             let n = replicates[k];
             let p = inp.extensions[k].p_value;
             // p = (1 + against)/(n + 1): the replicates at or above the ratio (or failed).
-            let against = (p * (n + 1) as f64).round() as i64 - 1;
+            let against = at_or_above(p, n);
             // Significant on its own at α: where it is not, the one replicate came early
             // (a family stopped after 10–20 replicates) and says little about the test.
             if n == 0 || against != 1 || p > inp.alpha {
@@ -463,22 +475,22 @@ pub fn one_draw_cause_caution(
         return None;
     }
     let p: Vec<f64> = tests.iter().map(|t| t.p_value).collect();
-    let rejected = holm(&p, alpha).0.iter().any(|r| *r);
-    // (test, its count at or above, whether the run could extend it)
+    let rejected = cause_rejected(&p, alpha);
+    // (test, its count at or above)
     let hit: Vec<(usize, i64)> = (0..tests.len())
         .filter_map(|k| {
             let n = tests[k].replicates;
             if n == 0 || !p[k].is_finite() {
                 return None;
             }
-            let above = (p[k] * (n + 1) as f64).round() as i64 - 1;
+            let above = at_or_above(p[k], n);
             let moved = if rejected { above + 1 } else { above - 1 };
             if moved < 0 {
                 return None;
             }
             let mut q = p.clone();
             q[k] = (moved + 1) as f64 / (n + 1) as f64;
-            (holm(&q, alpha).0.iter().any(|r| *r) != rejected).then_some((k, above))
+            (cause_rejected(&q, alpha) != rejected).then_some((k, above))
         })
         .collect();
     if hit.is_empty() {
@@ -508,11 +520,10 @@ pub fn one_draw_cause_caution(
          to 639 replicates"
             .to_string()
     } else {
+        let deeper = 4 * (first + 1) - 1;
         format!(
-            "`--bootstrap {}` decides it on {} replicates (every test's bootstrap then runs \
-             that long)",
-            4 * (first + 1) - 1,
-            4 * (first + 1) - 1
+            "`--bootstrap {deeper}` decides it on {deeper} replicates (every test's bootstrap \
+             then runs that long)"
         )
     };
     Some(format!(
