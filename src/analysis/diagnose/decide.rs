@@ -427,12 +427,7 @@ pub fn one_draw_caution(
     if hit.is_empty() {
         return None;
     }
-    let more = if extended {
-        "more replicates ([diagnose] bootstrap_extended) decide it more finely"
-    } else {
-        "`--bootstrap-extended 639` ([diagnose] bootstrap_extended = 639) decides it on up to \
-         639 replicates"
-    };
+    let more = more_replicates(first, extended, true);
     Some(format!(
         "a single null replicate decided {} test(s) ({}): each is significant at α on its \
          own but not at Holm's level, and without that replicate it would be, so another seed \
@@ -440,6 +435,32 @@ pub fn one_draw_caution(
         hit.len(),
         hit.join("; ")
     ))
+}
+
+/// The deeper bootstrap a caution advises: four times the first run's resolution,
+/// 4·(`first` + 1) − 1 replicates (639 at the default 159, p-values in steps of 1/640).
+pub fn deeper_bootstrap(first: usize) -> usize {
+    4 * (first + 1) - 1
+}
+
+/// The advice of a caution that more replicates would settle: `bootstrap_extended` where the
+/// test is one it extends (`extendable`: p ≤ α/2 after `first` replicates) and the run did
+/// not already have it (`extended`), a deeper `bootstrap` for every test where it is not.
+fn more_replicates(first: usize, extended: bool, extendable: bool) -> String {
+    let deeper = deeper_bootstrap(first);
+    if extendable && extended {
+        "more replicates ([diagnose] bootstrap_extended) decide it more finely".to_string()
+    } else if extendable {
+        format!(
+            "`--bootstrap-extended {deeper}` ([diagnose] bootstrap_extended = {deeper}) decides \
+             it on up to {deeper} replicates"
+        )
+    } else {
+        format!(
+            "`--bootstrap {deeper}` decides it on {deeper} replicates (every test's bootstrap \
+             then runs that long)"
+        )
+    }
 }
 
 /// One test of the cause's own goodness of fit, as [`one_draw_cause_caution`] reads it: its
@@ -513,19 +534,7 @@ pub fn one_draw_cause_caution(
         .collect();
     // `bootstrap_extended` extends a test whose p after `first` replicates is at most α/2.
     let extendable = hit.iter().any(|&(k, _)| p[k] <= alpha / 2.0 * (1.0 + 1e-9));
-    let more = if extendable && extended {
-        "more replicates ([diagnose] bootstrap_extended) decide it more finely".to_string()
-    } else if extendable {
-        "`--bootstrap-extended 639` ([diagnose] bootstrap_extended = 639) decides it on up \
-         to 639 replicates"
-            .to_string()
-    } else {
-        let deeper = 4 * (first + 1) - 1;
-        format!(
-            "`--bootstrap {deeper}` decides it on {deeper} replicates (every test's bootstrap \
-             then runs that long)"
-        )
-    };
+    let more = more_replicates(first, extended, extendable);
     Some(format!(
         "a single null replicate decided the verdict through {cause}'s own goodness of fit \
          ({}): with one replicate {one} at or above its statistic the verdict would be {then}, \
@@ -808,6 +817,20 @@ mod tests {
                 assert!(text.contains(w), "{ps:?}: '{w}' not in {text}");
             }
         }
+        // The advice follows the run's own bootstrap: at 99 replicates (p in steps of 1/100)
+        // four times as fine is 399, extended or not.
+        let at99 =
+            |p: f64| one_draw_cause_caution("ls", &t(&[(p, 99), (0.5, 99)]), 0.05, 99, false);
+        let text = at99(2.0 / 100.0).unwrap();
+        assert!(
+            text.contains("`--bootstrap-extended 399`") && !text.contains("639"),
+            "{text}"
+        );
+        let text = at99(3.0 / 100.0).unwrap();
+        assert!(
+            text.contains("`--bootstrap 399` decides it on 399"),
+            "{text}"
+        );
     }
 
     #[test]
@@ -939,6 +962,14 @@ mod tests {
         assert!(
             text.contains("1 test(s) (e3: 1 of its 70 null replicates reached its ratio 164.6)")
                 && text.contains("--bootstrap-extended 639"),
+            "{text}"
+        );
+        // At a first run of 319 replicates (the test would run to 319 without its one
+        // replicate: 1/320 rejects) the advice is 4 × 320 − 1 = 1279.
+        let text = super::one_draw_caution(&inp, &sel, &lr, &n, 319, false).unwrap();
+        assert!(
+            text.contains("`--bootstrap-extended 1279` ([diagnose] bootstrap_extended = 1279)")
+                && !text.contains("639"),
             "{text}"
         );
     }
