@@ -408,6 +408,8 @@ fn diagnosis_json_keeps_its_contract() {
             continue;
         }
         let n = c["null_replicates"].as_u64().unwrap() as f64;
+        // The second run's effect is counted over the test's own replicates.
+        assert_eq!(e["replicates"], c["null_replicates"], "{}: {e}", c["name"]);
         let above = e["at_or_above"][1].as_u64().unwrap() as f64;
         let p = c["p_value"].as_f64().unwrap();
         assert!(
@@ -442,7 +444,7 @@ fn diagnosis_json_keeps_its_contract() {
                 "{}: {} of {} replicates' ratios raised, {} → {} at or above the data's",
                 c["name"].as_str().unwrap(),
                 e["raised"],
-                c["null_replicates"],
+                e["replicates"],
                 e["at_or_above"][0],
                 e["at_or_above"][1]
             )

@@ -642,6 +642,10 @@ pub struct AgainEffect {
     pub raised: usize,
     /// Replicates at or above the observed ratio: first run, second run.
     pub at_or_above: [usize; 2],
+    /// The replicates counted: those of the second run (the test's `null_replicates`; 0 in
+    /// a file written before session 79).
+    #[serde(default)]
+    pub replicates: usize,
 }
 
 /// [`AgainEffect`] of `second` (the second run's column) against `first` over the second
@@ -651,6 +655,7 @@ pub fn again_effect(first: &[f64], second: &[f64], obs: f64) -> AgainEffect {
     let mut e = AgainEffect {
         raised: 0,
         at_or_above: [0, 0],
+        replicates: second.len(),
     };
     for (b, &a) in second.iter().enumerate() {
         let f = first.get(b).copied().unwrap_or(f64::NAN);
@@ -705,6 +710,7 @@ mod tests {
             let e = super::again_effect(&first, &second, obs);
             assert_eq!(e.raised, raised, "{first:?} {second:?}");
             assert_eq!(e.at_or_above, at, "{first:?} {second:?}");
+            assert_eq!(e.replicates, second.len());
             // Whatever the second run changed, p_value over its replicates is its count.
             let n = second.len();
             let p = super::p_value(obs, &second);

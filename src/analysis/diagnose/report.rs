@@ -401,12 +401,12 @@ fn again_md(d: &Diagnosis) -> String {
         .candidates
         .iter()
         .filter(|c| c.null_again)
-        .map(|c| match (c.null_again_effect, c.null_replicates) {
-            (Some(e), Some(n)) => format!(
-                "{}: {} of {n} replicates' ratios raised, {} → {} at or above the data's",
-                c.name, e.raised, e.at_or_above[0], e.at_or_above[1]
+        .map(|c| match c.null_again_effect {
+            Some(e) => format!(
+                "{}: {} of {} replicates' ratios raised, {} → {} at or above the data's",
+                c.name, e.raised, e.replicates, e.at_or_above[0], e.at_or_above[1]
             ),
-            _ => c.name.clone(),
+            None => c.name.clone(),
         })
         .collect();
     if again.is_empty() {
