@@ -1804,17 +1804,11 @@ pub fn diagnose_observed(
             },
         )?;
         for k in (0..n_ext).filter(|&k| again[k]) {
-            // Over the replicates both runs computed (the second's, as a test that rejected
-            // was never dropped from the first).
-            let n = second.computed[k].min(sampled.computed[k]);
-            let column = |s: &bootstrap::Sampled| -> Vec<f64> {
-                (0..n)
-                    .map(|b| s.reps.get(b).map_or(f64::NAN, |r| r[k]))
-                    .collect()
-            };
+            // Over the second run's replicates, all of which the first computed too (a test
+            // that rejected was never dropped from the first run).
             again_effect[k] = Some(bootstrap::again_effect(
-                &column(&sampled),
-                &column(&second),
+                &sampled.column(k),
+                &second.column(k),
                 observed[k],
             ));
         }
