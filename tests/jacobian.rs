@@ -202,3 +202,62 @@ fn fused_residuals_and_jacobian_agree_with_the_separate_calls() {
         .residuals_and_jacobian(&POINTS[0], &mut r, &mut j)
         .is_none());
 }
+
+/// A rupture within `HORIZON_MARGIN` of the horizon counts as none with sensitivities and as
+/// a rupture without: the optimiser's trial points (evaluated with sensitivities) then stay
+/// where the value-only evaluation of its result agrees. Before the margin, a sweep of a
+/// generated far material (`tests/data/far_random_304`) lost starts at t_r = 0.999999999 ×
+/// the horizon, accepted with sensitivities and failed without. The curve here has the
+/// horizon 1.0001 × (and, as control, 1.01 ×) the rupture time the model predicts.
+#[test]
+fn a_rupture_at_the_horizons_edge_is_none_with_sensitivities() {
+    use creepfit::model::objective::{HORIZON_FACTOR, HORIZON_MARGIN};
+    let cfg = config("590C.toml");
+    let data = cfg.load_data().unwrap();
+    let model = registry("khd").unwrap();
+    let settings = FitSettings::from_config(&cfg).objective();
+    let space = cfg.space();
+    let u = POINTS[0];
+    let mut x = vec![0.0; 6];
+    space.from_unit(&u, &mut x);
+    let c0 = &data.curves[0];
+    let t_r = Objective::new(
+        model.as_ref(),
+        std::slice::from_ref(c0),
+        vec![1.0],
+        settings,
+    )
+    .evaluate(&x)
+    .curves[0]
+        .rupture_time_h;
+    assert!(t_r.is_finite() && t_r > 0.0);
+    assert!(1e-4 < HORIZON_MARGIN && HORIZON_MARGIN < 1e-2);
+    for (beyond, inside_margin) in [(1e-4, true), (1e-2, false)] {
+        // A measured life that puts the horizon (HORIZON_FACTOR × the life) just past t_r.
+        let life = t_r * (1.0 + beyond) / HORIZON_FACTOR;
+        let mut c = c0.clone();
+        c.times_h = vec![0.0, 0.5 * life, life];
+        c.strains = vec![0.0, 0.5 * c0.rupture_strain, c0.rupture_strain];
+        c.rupture_time_h = Some(life);
+        c.groups = None;
+        let curves = [c];
+        let problem = CreepProblem {
+            objective: Objective::new(model.as_ref(), &curves, vec![1.0], settings),
+            space: space.clone(),
+            jacobian: JacobianMethod::Sensitivity,
+        };
+        let (m, n) = (problem.n_residuals(), problem.n_params());
+        let mut r = vec![0.0; m];
+        // Without sensitivities it ruptures inside the horizon either way.
+        problem.residuals(&u, &mut r).unwrap();
+        let mut jac = DMatrix::zeros(m, n);
+        let with = problem
+            .residuals_and_jacobian(&u, &mut r, &mut jac)
+            .unwrap();
+        match (inside_margin, with) {
+            (true, Err(e)) => assert!(e.0.contains("horizon"), "{}", e.0),
+            (false, Ok(())) => {}
+            (m, w) => panic!("horizon {beyond} past t_r, inside the margin {m}: {w:?}"),
+        }
+    }
+}
