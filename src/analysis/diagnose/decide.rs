@@ -427,7 +427,12 @@ pub fn one_draw_caution(
     if hit.is_empty() {
         return None;
     }
-    let more = more_replicates(first, extended, true);
+    // `bootstrap_extended` extends a test whose p after `first` replicates is at most α/2:
+    // with its one replicate that is 2/(first + 1) (or it ran beyond `first`, extended
+    // already), as the cause's caution asks of its tests.
+    let extendable = replicates.iter().any(|&n| n > first)
+        || 2.0 / (first + 1) as f64 <= inp.alpha / 2.0 * (1.0 + 1e-9);
+    let more = more_replicates(first, extended, extendable);
     Some(format!(
         "a single null replicate decided {} test(s) ({}): each is significant at α on its \
          own but not at Holm's level, and without that replicate it would be, so another seed \
@@ -962,6 +967,22 @@ mod tests {
         assert!(
             text.contains("1 test(s) (e3: 1 of its 70 null replicates reached its ratio 164.6)")
                 && text.contains("--bootstrap-extended 639"),
+            "{text}"
+        );
+        // A first run of 39 replicates with six of the family of 8 rejected before it (four
+        // extensions and the base's two tests): e3 is Holm's seventh step, at 0.05/2. One of
+        // its 39 replicates above gives p 2/40 ≤ α; without it 1/40 rejects. 2/40 > α/2, so
+        // `bootstrap_extended` would not extend it: the advice is a deeper `--bootstrap`
+        // (4 × 40 − 1 = 159), as the cause's caution gives.
+        let mut few = family(&[1e-3, 1e-3, 1e-3, 2.0 / 40.0, 1e-3, 0.5], &a);
+        few.base_gof_p = vec![1e-3, 1e-3];
+        let few_sel = super::select(&few);
+        assert!(!few_sel.rejected[3] && few_sel.rejected[0], "{few_sel:?}");
+        let text = super::one_draw_caution(&few, &few_sel, &lr, &[39; 6], 39, false).unwrap();
+        assert!(
+            text.contains("e3: 1 of its 39 null replicates")
+                && text.contains("`--bootstrap 159` decides it on 159 replicates")
+                && !text.contains("--bootstrap-extended"),
             "{text}"
         );
         // At a first run of 319 replicates (the test would run to 319 without its one
