@@ -568,8 +568,11 @@ impl<'a> Objective<'a> {
                     && res.t_end.re() > (1.0 - HORIZON_MARGIN) * self.ode_for(c).t_end =>
             {
                 Err(EvalFailure(format!(
-                    "{} °C {} MPa: ruptures within {} of the horizon (sensitivities)",
-                    c.temperature_c, c.stress_mpa, HORIZON_MARGIN
+                    "{} °C {} MPa: ruptures within {} % of the integration horizon \
+                     (with sensitivities: counted as no rupture)",
+                    c.temperature_c,
+                    c.stress_mpa,
+                    100.0 * HORIZON_MARGIN
                 )))
             }
             Outcome::Ruptured => {
