@@ -402,7 +402,7 @@ pub fn one_draw_caution(
     first: usize,
     extended: bool,
 ) -> Option<String> {
-    let hit: Vec<String> = (0..inp.extensions.len())
+    let hit: Vec<(usize, String)> = (0..inp.extensions.len())
         .filter(|&k| !sel.rejected[k] && inp.extensions[k].aic.is_finite())
         .filter_map(|k| {
             let n = replicates[k];
@@ -417,10 +417,11 @@ pub fn one_draw_caution(
             let mut without = inp.clone();
             without.extensions[k].p_value = 1.0 / (n.max(first) + 1) as f64;
             select(&without).rejected[k].then(|| {
-                format!(
+                let text = format!(
                     "{}: 1 of its {n} null replicates reached its ratio {:.1}",
                     inp.extensions[k].name, lr[k]
-                )
+                );
+                (n, text)
             })
         })
         .collect();
@@ -428,17 +429,18 @@ pub fn one_draw_caution(
         return None;
     }
     // `bootstrap_extended` extends a test whose p after `first` replicates is at most α/2:
-    // with its one replicate that is 2/(first + 1) (or it ran beyond `first`, extended
+    // with its one replicate that is 2/(first + 1) (or the test ran beyond `first`, extended
     // already), as the cause's caution asks of its tests.
-    let extendable = replicates.iter().any(|&n| n > first)
+    let extendable = hit.iter().any(|&(n, _)| n > first)
         || 2.0 / (first + 1) as f64 <= inp.alpha / 2.0 * (1.0 + 1e-9);
     let more = more_replicates(first, extended, extendable);
+    let named: Vec<&str> = hit.iter().map(|(_, t)| t.as_str()).collect();
     Some(format!(
         "a single null replicate decided {} test(s) ({}): each is significant at α on its \
          own but not at Holm's level, and without that replicate it would be, so another seed \
          may decide otherwise; {more}",
         hit.len(),
-        hit.join("; ")
+        named.join("; ")
     ))
 }
 
