@@ -818,6 +818,8 @@ fn holdout_leaves_a_campaign_out() {
     assert!(s["held_out_temperature_C"].is_null());
     // Trained on P's four tests, at 560 and 590 °C; 575 °C lies between them.
     assert_eq!(s["training_lifetime_err_pct"].as_array().unwrap().len(), 4);
+    // A training fit that follows every life carries no caution (the key is there, null).
+    assert_eq!(s.get("training_caution"), Some(&serde_json::Value::Null));
     assert_eq!(
         s["training_temperatures_C"],
         serde_json::json!([560.0, 590.0])

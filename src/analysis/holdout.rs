@@ -298,6 +298,19 @@ pub struct Holdout {
 }
 
 impl Holdout {
+    /// The training fit's cautions about its rupture times ([`crate::fit::no_fit_caution`],
+    /// [`crate::fit::missed_lives_caution`]), one sentence each, joined; `None` without any.
+    /// A training fit that gives up some tests' lives predicts held-out tests near them
+    /// with the same miss.
+    pub fn training_caution(&self) -> Option<String> {
+        let errs = &self.fit.fits[self.fit.best].lifetime_err_pct;
+        let labels: Vec<String> = self.training.curves.iter().map(Curve::label).collect();
+        let all: Vec<String> = crate::fit::no_fit_caution(errs)
+            .into_iter()
+            .chain(crate::fit::missed_lives_caution(&labels, errs))
+            .collect();
+        (!all.is_empty()).then(|| all.join("; "))
+    }
     /// creepfit's mean |log10 error| of the rupture time over the held-out tests.
     pub fn model_mean_abs_log10(&self) -> f64 {
         mean_abs(
@@ -595,6 +608,9 @@ pub fn table(h: &Holdout) -> String {
                 o => format!("  {}", o.as_str()),
             }
         ));
+    }
+    if let Some(c) = h.training_caution() {
+        s.push_str(&format!("caution (the training fit): {c}\n"));
     }
     s.push_str(&format!(
         "mean |log10 error| of the rupture time: creepfit {:.3}, Larson–Miller {:.3}\n",
