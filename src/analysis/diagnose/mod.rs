@@ -2010,6 +2010,12 @@ pub fn diagnose_observed(
             let largest: Vec<f64> = curves.iter().map(|c| 100.0 * c.largest_strain()).collect();
             crate::fit::written_off_caution(&labels, &n.strain_sd_pct, &largest)
         }),
+        // A base fit that misses every life, or some, by 10× or more: the tests judge a fit
+        // that has given those lives up.
+        crate::fit::no_fit_caution(&base.lifetime_errs_pct).or_else(|| {
+            let labels: Vec<String> = curves.iter().map(Curve::label).collect();
+            crate::fit::missed_lives_caution(&labels, &base.lifetime_errs_pct)
+        }),
         decide::failed_refits_caution(&failed_per_test, dc.alpha),
         decide::one_draw_caution(
             &select_input,
