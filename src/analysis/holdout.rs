@@ -298,18 +298,12 @@ pub struct Holdout {
 }
 
 impl Holdout {
-    /// The training fit's cautions about its rupture times ([`crate::fit::no_fit_caution`],
-    /// [`crate::fit::missed_lives_caution`]), one sentence each, joined; `None` without any.
-    /// A training fit that gives up some tests' lives predicts held-out tests near them
-    /// with the same miss.
+    /// The training fit's caution about its rupture times ([`crate::fit::lives_caution`]);
+    /// `None` without one. A training fit that gives up some tests' lives predicts held-out
+    /// tests near them with the same miss.
     pub fn training_caution(&self) -> Option<String> {
-        let errs = &self.fit.fits[self.fit.best].lifetime_err_pct;
         let labels: Vec<String> = self.training.curves.iter().map(Curve::label).collect();
-        let all: Vec<String> = crate::fit::no_fit_caution(errs)
-            .into_iter()
-            .chain(crate::fit::missed_lives_caution(&labels, errs))
-            .collect();
-        (!all.is_empty()).then(|| all.join("; "))
+        crate::fit::lives_caution(&labels, &self.fit.fits[self.fit.best].lifetime_err_pct)
     }
     /// creepfit's mean |log10 error| of the rupture time over the held-out tests.
     pub fn model_mean_abs_log10(&self) -> f64 {

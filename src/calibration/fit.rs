@@ -475,6 +475,14 @@ pub fn missed_lives_caution(labels: &[String], lifetime_err_pct: &[f64]) -> Opti
     ))
 }
 
+/// The caution about a fit's rupture times, if any: [`no_fit_caution`] where every life is
+/// missed by [`NO_FIT_FACTOR`] or more, else [`missed_lives_caution`] where some are (`labels`
+/// one per curve, as `lifetime_err_pct`). `fit`, `holdout` (its training fit) and `diagnose`
+/// (its base fit) say it.
+pub fn lives_caution(labels: &[String], lifetime_err_pct: &[f64]) -> Option<String> {
+    no_fit_caution(lifetime_err_pct).or_else(|| missed_lives_caution(labels, lifetime_err_pct))
+}
+
 /// Index of the best fit by the documented rule (module docs); `None` if no fit is usable.
 pub fn choose_best(fits: &[LocalFit], use_min_rate: bool) -> Option<usize> {
     let ok: Vec<usize> = (0..fits.len()).filter(|&i| fits[i].ok()).collect();
@@ -1429,6 +1437,12 @@ mod tests {
         assert!(text.contains("worst b: 30× too long"), "{text}");
         let text = missed_lives_caution(&labels, &[-99.98, 2900.0, 0.0]).unwrap();
         assert!(text.contains("worst a: 5000× too short"), "{text}");
+        // Together: every life missed is no_fit_caution's sentence, some is this one's.
+        let all = lives_caution(&labels, &[-99.0, -99.9, 1e4]).unwrap();
+        assert!(all.contains("has not fitted"), "{all}");
+        let some = lives_caution(&labels, &[-99.0, 5.0, 1.0]).unwrap();
+        assert!(some.starts_with("1 of 3 "), "{some}");
+        assert!(lives_caution(&labels, &[-50.0, 5.0, 1.0]).is_none());
     }
 
     fn cand(w: f64, norm: f64, life: f64) -> LocalFit {

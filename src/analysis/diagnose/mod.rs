@@ -2012,10 +2012,10 @@ pub fn diagnose_observed(
         }),
         // A base fit that misses every life, or some, by 10× or more: the tests judge a fit
         // that has given those lives up.
-        crate::fit::no_fit_caution(&base.lifetime_errs_pct).or_else(|| {
-            let labels: Vec<String> = curves.iter().map(Curve::label).collect();
-            crate::fit::missed_lives_caution(&labels, &base.lifetime_errs_pct)
-        }),
+        crate::fit::lives_caution(
+            &curves.iter().map(Curve::label).collect::<Vec<_>>(),
+            &base.lifetime_errs_pct,
+        ),
         decide::failed_refits_caution(&failed_per_test, dc.alpha),
         decide::one_draw_caution(
             &select_input,

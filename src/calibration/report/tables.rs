@@ -607,12 +607,8 @@ pub fn fit_summary(cfg: &RunConfig, run: &FitRun, curves: &[Curve]) -> Value {
     let error_model = error_model_json(cfg, run, curves);
     // Every caution that applies, in one sentence each.
     let labels: Vec<String> = curves.iter().map(Curve::label).collect();
-    let mut cautions: Vec<String> = crate::fit::no_fit_caution(&best.lifetime_err_pct)
+    let mut cautions: Vec<String> = crate::fit::lives_caution(&labels, &best.lifetime_err_pct)
         .into_iter()
-        .chain(crate::fit::missed_lives_caution(
-            &labels,
-            &best.lifetime_err_pct,
-        ))
         .collect();
     if cfg.objective.kind == crate::model::objective::ObjectiveKind::Likelihood {
         let per_curve = |key: &str| -> Vec<f64> {
