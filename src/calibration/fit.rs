@@ -426,8 +426,9 @@ fn misses_by_factor(e: f64) -> bool {
 /// A caution for a fit whose predicted rupture times miss some, but not all, of their
 /// measurements by [`NO_FIT_FACTOR`] or more (where all do, [`no_fit_caution`] speaks):
 /// how many, and the worst with its `labels` entry (one per curve, as `lifetime_err_pct`;
-/// NaN where a curve has no measured rupture). A likelihood weighs each rupture time against
-/// a whole curve of readings, so its optimum can give up some tests' lives altogether.
+/// NaN where a curve has no measured rupture). Each rupture time is one term against a whole
+/// curve of readings (in the likelihood, and in eq. 8, whose `late` term does not count a
+/// short life), so an optimum can give up some tests' lives altogether.
 /// Measured (session 81): the Kachanov–Rabotnov family with Arrhenius laws on the Alloy 617
 /// curves at 750, 850 and 950 °C, the best of 300 starts at −2 ln L −12465.0 against
 /// −12357.8 from the guess, every 850 and 950 °C life 17–5,900× too short and the 750 °C
@@ -467,7 +468,7 @@ pub fn missed_lives_caution(labels: &[String], lifetime_err_pct: &[f64]) -> Opti
     Some(format!(
         "{} of {} predicted rupture times miss their measurements by a factor of \
          {NO_FIT_FACTOR} or more (worst {}: {how}): the fit gives up those tests' lives \
-         (a likelihood weighs each against a whole curve of readings), and predictions near \
+         (each weighs one term against a whole curve of readings), and predictions near \
          their conditions inherit the miss",
         missed.len(),
         finite.len(),
