@@ -432,7 +432,7 @@ fn misses_by_factor(e: f64) -> bool {
 /// Measured (session 81): the Kachanov–Rabotnov family with Arrhenius laws on the Alloy 617
 /// curves at 750, 850 and 950 °C, the best of 300 starts at −2 ln L −12465.0 against
 /// −12357.8 from the guess, every 850 and 950 °C life 15–5,900× too short and the 750 °C
-/// ones within 30 %; its held-out 900 °C lives were 260–810× too short.
+/// ones within 30 %; its held-out 900 °C lives were 190–810× too short.
 pub fn missed_lives_caution(labels: &[String], lifetime_err_pct: &[f64]) -> Option<String> {
     let finite: Vec<(usize, f64)> = lifetime_err_pct
         .iter()
