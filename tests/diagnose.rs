@@ -243,21 +243,7 @@ fn same_verdict_on_every_tenth_point(temps: &[u32]) {
 #[test]
 fn a_base_fit_that_gives_up_a_life_says_so() {
     let dir = TempDir::new().unwrap();
-    let lives = std::fs::read_to_string(root().join("data/lifetimes.csv")).unwrap();
-    let edited = lives.replace("560,110,31111,", "560,110,3111100,");
-    assert_ne!(edited, lives, "the 110 MPa life is in the file");
-    std::fs::write(dir.path().join("lifetimes.csv"), edited).unwrap();
-    std::fs::copy(
-        root().join("data/creep_560C.csv"),
-        dir.path().join("creep_560C.csv"),
-    )
-    .unwrap();
-    let cfg = std::fs::read_to_string(root().join("configs/560C.toml"))
-        .unwrap()
-        .replace("../data/creep_560C.csv", "creep_560C.csv")
-        .replace("../data/lifetimes.csv", "lifetimes.csv");
-    let path = dir.path().join("c.toml");
-    std::fs::write(&path, cfg).unwrap();
+    let path = seed_560_with_life(dir.path(), "560,110,31111,", "560,110,3111100,");
     let out = dir.path().join("d");
     // The caution, not the calibration: few starts and replicates, as the contract test.
     let o = creepfit(&[

@@ -836,3 +836,43 @@ fn data_config(set: &str, name: &str) -> String {
         .replace("\"curves.csv\"", &abs("curves.csv"))
         .replace("\"ruptures.csv\"", &abs("ruptures.csv"))
 }
+
+/// The best fit's caution about rupture times (`fit`'s rule, `sweep::best_caution`): the
+/// seed's 560 °C data with an extra digit in the 110 MPa rupture time (311,110 h for
+/// 31,111 h) — the best of a small sweep misses it 11× (measured 2026-12-06) and the
+/// summary and stdout name it; the same sweep on the data as shipped has no caution.
+#[test]
+fn a_best_fit_that_misses_a_mistyped_life_says_so() {
+    let dir = TempDir::new().unwrap();
+    for (life, named) in [("311110", true), ("31111", false)] {
+        let path =
+            common::seed_560_with_life(dir.path(), "560,110,31111,", &format!("560,110,{life},"));
+        let out = dir.path().join(format!("sw{life}"));
+        let o = creepfit(&[
+            "sweep",
+            path.to_str().unwrap(),
+            "--starts",
+            "4",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        ok(&o);
+        let caution = &summary(&out)["caution"];
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        if named {
+            let c = caution.as_str().expect("a caution");
+            assert!(
+                c.starts_with("1 of 3 predicted rupture times miss")
+                    && c.contains("worst 560 °C, 110 MPa"),
+                "{c}"
+            );
+            assert!(
+                stdout.contains("caution (the best fit): 1 of 3"),
+                "{stdout}"
+            );
+        } else {
+            assert!(caution.is_null(), "{caution}");
+            assert!(!stdout.contains("caution"), "{stdout}");
+        }
+    }
+}

@@ -339,6 +339,13 @@ pub const TIE_SCORE: f64 = 0.05;
 /// between heats, so a model off by 10× or more on every curve has fitted nothing.
 pub const NO_FIT_FACTOR: f64 = 10.0;
 
+/// The factor by which some predicted rupture times may miss their measurements before a fit
+/// is said to give those lives up ([`missed_lives_caution`]): beyond the factor of 2–3 of
+/// heats' scatter with room to spare. Measured (session 82): honest misses at most 4.2× (the
+/// shipped joint Alloy 617 fit at 950 °C, 18 MPa), 2.3× on 25 generated scatter sets, while an
+/// extra digit in one rupture time is missed 8.3× to just under 10×, so 10× let it pass.
+pub const MISSED_LIFE_FACTOR: f64 = 5.0;
+
 /// A caution for a likelihood fit whose reading error (the error model at the chosen
 /// constants: `phi` and marginal `sd_pct` per curve) is correlated to
 /// [`crate::errmodel::PHI_ABSORBS`] or more on at least half of its curves
@@ -400,8 +407,7 @@ pub fn no_fit_caution(lifetime_err_pct: &[f64]) -> Option<String> {
         .copied()
         .filter(|e| e.is_finite())
         .collect();
-    // t_pred / t_f = 1 + e/100, off when outside (1/NO_FIT_FACTOR, NO_FIT_FACTOR).
-    if errs.is_empty() || !errs.iter().all(|e| misses_by_factor(*e)) {
+    if errs.is_empty() || !errs.iter().all(|e| misses_by_factor(*e, NO_FIT_FACTOR)) {
         return None;
     }
     let (lo, hi) = errs
@@ -416,19 +422,20 @@ pub fn no_fit_caution(lifetime_err_pct: &[f64]) -> Option<String> {
     ))
 }
 
-/// Whether a predicted rupture time misses its measurement by [`NO_FIT_FACTOR`] or more
-/// (`e`: (t_pred − t_f)/t_f in %).
-fn misses_by_factor(e: f64) -> bool {
+/// Whether a predicted rupture time misses its measurement by `factor` or more (`e`:
+/// (t_pred − t_f)/t_f in %; t_pred / t_f = 1 + e/100 outside (1/factor, factor)).
+fn misses_by_factor(e: f64, factor: f64) -> bool {
     let r = 1.0 + e / 100.0;
-    !(r > 1.0 / NO_FIT_FACTOR && r < NO_FIT_FACTOR)
+    !(r > 1.0 / factor && r < factor)
 }
 
-/// A caution for a fit whose predicted rupture times miss some, but not all, of their
-/// measurements by [`NO_FIT_FACTOR`] or more (where all do, [`no_fit_caution`] speaks):
-/// how many, and the worst with its `labels` entry (one per curve, as `lifetime_err_pct`;
-/// NaN where a curve has no measured rupture). Each rupture time is one term against a whole
-/// curve of readings (in the likelihood, and in eq. 8, whose `late` term does not count a
-/// short life), so an optimum can give up some tests' lives altogether.
+/// A caution for a fit whose predicted rupture times miss some of their measurements by
+/// [`MISSED_LIFE_FACTOR`] or more, unless every one misses by [`NO_FIT_FACTOR`] (then
+/// [`no_fit_caution`] speaks): how many, and the worst with its `labels` entry (one per curve,
+/// as `lifetime_err_pct`; NaN where a curve has no measured rupture). Each rupture time is one
+/// term against a whole curve of readings (in the likelihood, and in eq. 8, whose `late` term
+/// does not count a short life), so an optimum can give up some tests' lives altogether; and a
+/// typo in one rupture time (an extra digit) shows as one life the fit cannot follow.
 /// Measured (session 81): the Kachanov–Rabotnov family with Arrhenius laws on the Alloy 617
 /// curves at 750, 850 and 950 °C, the best of 300 starts at −2 ln L −12465.0 against
 /// −12357.8 from the guess, every 850 and 950 °C life 15–5,900× too short and the 750 °C
@@ -443,9 +450,12 @@ pub fn missed_lives_caution(labels: &[String], lifetime_err_pct: &[f64]) -> Opti
     let missed: Vec<(usize, f64)> = finite
         .iter()
         .copied()
-        .filter(|(_, e)| misses_by_factor(*e))
+        .filter(|(_, e)| misses_by_factor(*e, MISSED_LIFE_FACTOR))
         .collect();
-    if missed.is_empty() || missed.len() == finite.len() {
+    let all_by_ten = finite
+        .iter()
+        .all(|(_, e)| misses_by_factor(*e, NO_FIT_FACTOR));
+    if missed.is_empty() || all_by_ten {
         return None;
     }
     // The worst by the factor of the miss, |ln(t_pred/t_f)|.
@@ -467,9 +477,10 @@ pub fn missed_lives_caution(labels: &[String], lifetime_err_pct: &[f64]) -> Opti
     };
     Some(format!(
         "{} of {} predicted rupture times miss their measurements by a factor of \
-         {NO_FIT_FACTOR} or more (worst {}: {how}): the fit gives up those tests' lives \
+         {MISSED_LIFE_FACTOR} or more (worst {}: {how}): the fit gives up those tests' lives \
          (each weighs one term against a whole curve of readings), and predictions near \
-         their conditions inherit the miss",
+         their conditions inherit the miss; where one test stands alone, check its rupture \
+         time in the file (an extra or lost digit is a factor of 10)",
         missed.len(),
         finite.len(),
         labels.get(i).map_or("?", |s| s.as_str()),
@@ -477,7 +488,8 @@ pub fn missed_lives_caution(labels: &[String], lifetime_err_pct: &[f64]) -> Opti
 }
 
 /// The caution about a fit's rupture times, if any: [`no_fit_caution`] where every life is
-/// missed by [`NO_FIT_FACTOR`] or more, else [`missed_lives_caution`] where some are (`labels`
+/// missed by [`NO_FIT_FACTOR`] or more, else [`missed_lives_caution`] where some are missed by
+/// [`MISSED_LIFE_FACTOR`] or more (`labels`
 /// one per curve, as `lifetime_err_pct`). `fit`, `holdout` (its training fit) and `diagnose`
 /// (its base fit) say it.
 pub fn lives_caution(labels: &[String], lifetime_err_pct: &[f64]) -> Option<String> {
@@ -1410,14 +1422,17 @@ mod tests {
     }
 
     #[test]
-    fn a_caution_where_some_but_not_all_lives_are_missed_by_ten() {
+    fn a_caution_where_some_lives_are_missed_by_five() {
         let nan = f64::NAN;
         let table: &[(&[f64], Option<usize>)] = &[
             (&[-99.98, 20.0, -30.0], Some(1)),
             (&[-95.0, 950.0, 10.0], Some(2)), // 20x short and 10.5x long
-            (&[-89.0, 800.0, 0.0], None),     // 9.1x and 9x: within
-            (&[-90.0, 5.0], Some(1)),         // exactly 10x counts, as in no_fit_caution
-            (&[-99.0, -99.9], None),          // every one: no_fit_caution's case
+            (&[-89.0, 800.0, 0.0], Some(2)),  // 9.1x and 9x: beyond 5x
+            (&[-79.0, 380.0, 0.0], None),     // 4.8x both ways: within
+            (&[-80.0, 5.0], Some(1)),         // exactly 5x counts
+            (&[400.0, 5.0], Some(1)),         // exactly 5x long
+            (&[-99.0, -99.9], None),          // every one by 10x: no_fit_caution's case
+            (&[-85.0, -99.9], Some(2)),       // every one by 5x, not all by 10x
             (&[nan, -99.0, 3.0], Some(1)),    // a curve without rupture time is not counted
             (&[nan, -99.0], None),
             (&[], None),

@@ -23,6 +23,28 @@ pub fn creepfit(args: &[&str]) -> Output {
         .expect("binary runs")
 }
 
+/// A copy of the seed's 560 °C configuration and data in `dir` with the rupture-time row
+/// `from` of `data/lifetimes.csv` replaced by `to` (e.g. `"560,110,31111,"` →
+/// `"560,110,3111100,"`: the 110 MPa life 100× longer); returns the configuration's path.
+pub fn seed_560_with_life(dir: &Path, from: &str, to: &str) -> PathBuf {
+    let lives = std::fs::read_to_string(root().join("data/lifetimes.csv")).unwrap();
+    let edited = lives.replace(from, to);
+    assert!(from == to || edited != lives, "{from} is in the file");
+    std::fs::write(dir.join("lifetimes.csv"), edited).unwrap();
+    std::fs::copy(
+        root().join("data/creep_560C.csv"),
+        dir.join("creep_560C.csv"),
+    )
+    .unwrap();
+    let cfg = std::fs::read_to_string(root().join("configs/560C.toml"))
+        .unwrap()
+        .replace("../data/creep_560C.csv", "creep_560C.csv")
+        .replace("../data/lifetimes.csv", "lifetimes.csv");
+    let path = dir.join("c.toml");
+    std::fs::write(&path, cfg).unwrap();
+    path
+}
+
 /// A JSON file, parsed.
 pub fn json(path: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()

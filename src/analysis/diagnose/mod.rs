@@ -2010,7 +2010,7 @@ pub fn diagnose_observed(
             let largest: Vec<f64> = curves.iter().map(|c| 100.0 * c.largest_strain()).collect();
             crate::fit::written_off_caution(&labels, &n.strain_sd_pct, &largest)
         }),
-        // A base fit that misses every life, or some, by 10× or more: the tests judge a fit
+        // A base fit that misses every life by 10×, or some by 5×, or more: the tests judge a fit
         // that has given those lives up.
         crate::fit::lives_caution(
             &curves.iter().map(Curve::label).collect::<Vec<_>>(),

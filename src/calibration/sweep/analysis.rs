@@ -453,6 +453,7 @@ pub fn summary(
         "distinct_minima": a.clusters.len(),
         "best_basin_fraction": a.clusters.first().map(|c| c.fraction),
         "best": if a.completed > 0 { sol_json(0) } else { Value::Null },
+        "caution": best_caution(header, a),
         "best_by_w": best_by_w,
         "pareto": pareto,
         "pinned_at_bounds": a.pinned.iter().map(|(n, s, v)| json!({"name": n, "bound": s, "value": v})).collect::<Vec<_>>(),
@@ -472,6 +473,16 @@ pub fn summary(
         "wall_s": wall_s,
         "threads": threads,
     })
+}
+
+/// The caution about the best fit's rupture times ([`crate::fit::lives_caution`], `fit`'s rule:
+/// every life missed by 10× or more, or some by 5×), naming the worst curve; `None` without a
+/// completed fit.
+pub fn best_caution(header: &Header, a: &Analysis) -> Option<String> {
+    if a.completed == 0 {
+        return None;
+    }
+    crate::fit::lives_caution(&header.curve_labels(), &a.ranked[0].lifetime_errs_pct)
 }
 
 #[cfg(test)]

@@ -56,6 +56,10 @@ pub struct Header {
     pub w: Vec<Vec<f64>>,
     /// Stresses of the curves (ascending), MPa.
     pub stresses: Vec<f64>,
+    /// The curves' labels ([`crate::data::Curve::label`]: temperature, stress, specimen), in
+    /// the order of `stresses`; empty in journals of earlier versions.
+    #[serde(default)]
+    pub labels: Vec<String>,
     /// (I, N) of the part this journal holds.
     pub shard: (usize, usize),
     /// Latin-hypercube starts that could not be evaluated where they were drawn and were
@@ -94,6 +98,7 @@ impl Header {
             extra_start,
             w: w.to_vec(),
             stresses: data.curves.iter().map(|c| c.stress_mpa).collect(),
+            labels: data.curves.iter().map(|c| c.label()).collect(),
             shard: (1, 1),
             repaired_starts: Vec::new(),
         }
@@ -131,6 +136,15 @@ impl Header {
                     other.fingerprint.clone(),
                 ))
             })
+    }
+
+    /// The curves' labels: `labels`, or for a journal of an earlier version without them, each
+    /// curve's stress (`110 MPa`).
+    pub fn curve_labels(&self) -> Vec<String> {
+        if self.labels.len() == self.stresses.len() {
+            return self.labels.clone();
+        }
+        self.stresses.iter().map(|s| format!("{s} MPa")).collect()
     }
 
     /// Number of starts including the extra one.

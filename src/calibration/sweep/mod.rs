@@ -18,7 +18,9 @@ mod analysis;
 pub mod array;
 mod journal;
 
-pub use analysis::{analyse, minima_table, ranked_table, summary, Analysis, Cluster, Spread};
+pub use analysis::{
+    analyse, best_caution, minima_table, ranked_table, summary, Analysis, Cluster, Spread,
+};
 /// Read a sweep journal (`None` when the file does not exist): for tests and tools.
 pub use journal::read as read_journal;
 pub use journal::{Header, Solution};

@@ -120,6 +120,9 @@ fn print_sweep(h: &sweep::Header, a: &sweep::Analysis) {
         b.lifetime_err_pct,
         100.0 * a.clusters[0].fraction
     );
+    if let Some(c) = sweep::best_caution(h, a) {
+        println!("caution (the best fit): {c}");
+    }
     for (n, side, v) in &a.pinned {
         println!("  {n} = {v:.6e} on its {side} bound");
     }
