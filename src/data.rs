@@ -1966,8 +1966,14 @@ pub fn data_hash(data: &Dataset) -> String {
     format!("{h:016x}")
 }
 
-/// Record in the run's manifest the data points the loader dropped (`outliers = "drop"`).
+/// Record in the run's manifest the data points the loader dropped (`outliers = "drop"`) and
+/// its warnings (`data_warnings`: a rupture time before the curve's last reading, negative
+/// strains kept, repeated points — printed on stderr too), so that the folder says on what
+/// data its numbers stand.
 pub fn note_data(folder: &mut crate::output::RunFolder, data: &Dataset) {
+    if !data.warnings.is_empty() {
+        folder.note("data_warnings", serde_json::json!(data.warnings));
+    }
     if !data.dropped.is_empty() {
         folder.note(
             "dropped_points",

@@ -1403,3 +1403,50 @@ fn a_likelihood_fit_that_writes_curves_off_as_noise_is_marked() {
         s["caution"]
     );
 }
+
+/// A rupture time with a lost digit (3,111 h for the seed's 560 °C, 110 MPa life of 31,111 h,
+/// whose curve runs to about 31,000 h) is before the curve's last reading: the loader's
+/// warning names file and line on stderr and in `manifest.json` → `data_warnings`; the data as
+/// shipped carry no such warning.
+#[test]
+fn a_rupture_time_before_its_curves_end_is_marked_in_the_manifest() {
+    let tmp = TempDir::new().unwrap();
+    for (life, marked) in [("3111", true), ("31111", false)] {
+        let dir = tmp.path().join(life);
+        std::fs::create_dir(&dir).unwrap();
+        let cfg = seed_560_with_life(&dir, "560,110,31111,", &format!("560,110,{life},"));
+        let out = dir.join("fit");
+        let o = creepfit(&["fit", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{err}");
+        let m = json(&out.join("manifest.json"));
+        let before = |w: &str| w.contains("is before the last measured time");
+        let noted: Vec<String> = m["data_warnings"]
+            .as_array()
+            .map(|a| a.iter().map(|v| v.as_str().unwrap().to_string()).collect())
+            .unwrap_or_default();
+        if marked {
+            let lives = dir.join("lifetimes.csv");
+            let line = std::fs::read_to_string(&lives)
+                .unwrap()
+                .lines()
+                .position(|l| l.starts_with("560,110,3111,"))
+                .unwrap()
+                + 1;
+            let w = noted
+                .iter()
+                .find(|w| before(w))
+                .expect("the warning in the manifest");
+            assert!(
+                w.starts_with(&format!(
+                    "{}:{line}: rupture_time_h = 3111",
+                    lives.display()
+                )),
+                "{w}"
+            );
+            assert!(err.contains(&format!("warning: {w}")), "{err}");
+        } else {
+            assert!(!noted.iter().any(|w| before(w)), "{noted:?}");
+        }
+    }
+}
