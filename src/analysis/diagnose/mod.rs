@@ -2000,22 +2000,19 @@ pub fn diagnose_observed(
             (name, reps[..n].iter().filter(|r| r[k].is_nan()).count(), n)
         })
         .collect();
+    let labels: Vec<String> = curves.iter().map(Curve::label).collect();
     let cautions: Vec<String> = [
         base.noise
             .as_ref()
             .and_then(|n| decide::absorbed_misfit_caution(&n.phi, &n.strain_sd_pct)),
         // A curve the base's reading error writes off: the tests see nothing of its shape.
         base.noise.as_ref().and_then(|n| {
-            let labels: Vec<String> = curves.iter().map(Curve::label).collect();
             let largest: Vec<f64> = curves.iter().map(|c| 100.0 * c.largest_strain()).collect();
             crate::fit::written_off_caution(&labels, &n.strain_sd_pct, &largest)
         }),
         // A base fit that misses every life by 10×, or some by 5×, or more: the tests judge a fit
         // that has given those lives up.
-        crate::fit::lives_caution(
-            &curves.iter().map(Curve::label).collect::<Vec<_>>(),
-            &base.lifetime_errs_pct,
-        ),
+        crate::fit::lives_caution(&labels, &base.lifetime_errs_pct),
         decide::failed_refits_caution(&failed_per_test, dc.alpha),
         decide::one_draw_caution(
             &select_input,

@@ -98,7 +98,7 @@ impl Header {
             extra_start,
             w: w.to_vec(),
             stresses: data.curves.iter().map(|c| c.stress_mpa).collect(),
-            labels: data.curves.iter().map(|c| c.label()).collect(),
+            labels: data.curves.iter().map(crate::data::Curve::label).collect(),
             shard: (1, 1),
             repaired_starts: Vec::new(),
         }
