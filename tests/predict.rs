@@ -624,7 +624,9 @@ fn holdout_predicts_a_temperature_left_out() {
         }
         // The life as % of the measured one, and the curve compared up to its rupture.
         assert!((v(14) - 100.0 * v(3) / meas).abs() < 1e-9 * v(14));
-        let outcome = if v(3) >= meas {
+        // Against the curve's last point (law_data's: 29/30 of the life), not the life:
+        // a prediction as exact as this one falls on either side of the life by rounding.
+        let outcome = if v(3) >= meas * 29.0 / 30.0 {
             "complete"
         } else {
             "ruptured_early"

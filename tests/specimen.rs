@@ -1280,7 +1280,9 @@ fn the_restricted_design_is_the_jacobian_of_the_raw_strain_residuals() {
 }
 
 /// A nested extension refitted from the base's hierarchical optimum with the extension
-/// switched off starts at the base's likelihood and must not end above it. Measured on a
+/// switched off starts at the base's likelihood and must not end above it (the base refitted
+/// first from the optimum stored with the data, the extensions from where it ends, as
+/// `diagnose` starts a replicate's extensions from its base refit). Measured on a
 /// generated set (seed 100002, `tests/data/warm_drop/`, hidden constant load λ 239, six
 /// specimens with rate scatter 0.12 and reading error 0.01 % strain): the base's optimum
 /// carries ductility effects of ±0.25 % with a scatter of 0.0013 (near the floor 0.001), and
@@ -1329,6 +1331,9 @@ fn a_nested_warm_fit_never_ends_above_the_base_optimum() {
         hold_scatter: None,
     };
     let mut base_ll = f64::NAN;
+    // The base refitted from the stored optimum; the extensions start where it ends, as in
+    // `diagnose` (a replicate's base refit, then each extension from it).
+    let (mut base, mut start) = (base, start);
     let mut checked = 0;
     for v in &setup.variants {
         let names: Vec<&str> = v.model.constants().iter().map(|c| c.name).collect();
@@ -1354,11 +1359,13 @@ fn a_nested_warm_fit_never_ends_above_the_base_optimum() {
         eprintln!("{}: −2 ln L {:.2}", v.name, f.neg2ll);
         assert!(f.ok(), "{}", v.name);
         if v.name == "base" {
+            // The base refitted from its own optimum does not end above it (it may go on
+            // below: since session 83's step-size control it ends at −4597.06 against the
+            // stored −4592.34, whose fit had stopped in a crawl).
             base_ll = f.neg2ll;
-            assert!(
-                (base_ll - b["neg2ll"].as_f64().unwrap()).abs() < 0.5,
-                "{base_ll}"
-            );
+            assert!(base_ll <= b["neg2ll"].as_f64().unwrap() + 0.5, "{base_ll}");
+            base = f.params.clone();
+            start = EffectStart::from(f.specimen.as_ref().expect("specimen effects fitted"));
         } else {
             assert!(
                 f.neg2ll <= base_ll + 0.01,
