@@ -13,8 +13,14 @@ use std::time::Instant;
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
+    if args.len() < 3 {
+        anyhow::bail!("usage: eval_cost CONFIG A,B,H*,h,Kc,C");
+    }
     let (cfg, data) = RunConfig::resolve(Path::new(&args[1]), &Overrides::default())?;
-    let params: Vec<f64> = args[2].split(',').map(|s| s.parse().unwrap()).collect();
+    let params: Vec<f64> = args[2]
+        .split(',')
+        .map(|s| s.parse())
+        .collect::<Result<_, _>>()?;
     let model = build(&cfg.model, &cfg.extensions)?;
     let settings = FitSettings::from_config(&cfg);
     let ode = settings.ode;

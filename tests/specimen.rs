@@ -1306,8 +1306,10 @@ fn a_nested_warm_fit_never_ends_above_the_base_optimum() {
             .map(|x| x.as_f64().unwrap())
             .collect()
     };
-    let base = nums(&b["constants"]);
-    let start = EffectStart {
+    // The stored optimum; once the base is refitted from it, the extensions start where that
+    // refit ends, as in `diagnose` (a replicate's base refit, then each extension from it).
+    let mut base = nums(&b["constants"]);
+    let mut start = EffectStart {
         kinds: b["kinds"]
             .as_array()
             .unwrap()
@@ -1331,9 +1333,6 @@ fn a_nested_warm_fit_never_ends_above_the_base_optimum() {
         hold_scatter: None,
     };
     let mut base_ll = f64::NAN;
-    // The base refitted from the stored optimum; the extensions start where it ends, as in
-    // `diagnose` (a replicate's base refit, then each extension from it).
-    let (mut base, mut start) = (base, start);
     let mut checked = 0;
     for v in &setup.variants {
         let names: Vec<&str> = v.model.constants().iter().map(|c| c.name).collect();

@@ -742,20 +742,23 @@ mod tests {
     #[test]
     fn the_predictive_controller_follows_a_shrinking_time_scale() {
         for g in [2.0_f64, 5.0, 10.0] {
-            let c = 0.4 / 1.0_f64.powi(5);
-            let err_at = |h: f64, n: i32| c * h.powi(5) * g.powi(n);
+            // err = 0.4 at h = 1 and n = 0.
+            let err_at = |h: f64, n: i32| 0.4 * h.powi(5) * g.powi(n);
             // Two accepted steps: h0 = 1 (n = 0), h1 with err 0.4 at n = 1.
             let (h0, e0) = (1.0, err_at(1.0, 0));
-            let h1 = (0.4 / (c * g)).powf(0.2);
+            let h1 = g.powf(-0.2);
             let e1 = err_at(h1, 1);
             let h2 = h1 / predictive_fac(h1, e1, h0, e0.max(ERRACC_MIN));
             let e2 = err_at(h2, 2);
             assert!(e2 <= 1.0, "g = {g}: predicted step {h2} has error {e2}");
-            // The same step again (the PI controller's cap after a rejection) fails.
-            assert!(err_at(h1, 2) > 1.0 || g < 2.6, "g = {g}");
-            // Where the error does not grow, the prediction does not shrink the step.
-            let flat = predictive_fac(1.0, 0.4, 1.0, 0.4);
-            assert!(flat < 1.0, "flat trend: h/h_new = {flat}");
+            // The same step again (the PI controller's cap after a rejection) fails where
+            // the error grows faster than 2.5× a step.
+            if g > 2.5 {
+                assert!(err_at(h1, 2) > 1.0, "g = {g}");
+            }
         }
+        // Where the error does not grow, the prediction does not shrink the step.
+        let flat = predictive_fac(1.0, 0.4, 1.0, 0.4);
+        assert!(flat < 1.0, "flat trend: h/h_new = {flat}");
     }
 }
