@@ -876,3 +876,89 @@ fn a_best_fit_that_misses_a_mistyped_life_says_so() {
         }
     }
 }
+
+/// Under the likelihood with specimen effects, `sweep`'s local fits carry no effects: its
+/// objective is −2 ln L of the population model, the number `fit` reports as
+/// `specimens.neg2ll_without_effects` before it adds them. summary.json and stdout say so
+/// (Alloy 617 at 950 °C, two replicates: `auto` fits rate and ductility factors; measured
+/// 2026-12-06: the sweep's best −2848.4, `fit` with effects −3620.4), and `fit` started at the
+/// sweep's best ends without effects no higher and with them lower. Under eq. 8 there is
+/// nothing to say.
+#[test]
+fn a_likelihood_sweep_says_its_objective_leaves_out_the_specimen_effects() {
+    let d = TempDir::new().unwrap();
+    let data = root().join("data/alloy617");
+    let base = read(&root().join("configs/alloy617-950C.toml"))
+        .replace("\"../data/alloy617/", &format!("\"{}/", data.display()))
+        .replace(
+            "[objective]\n",
+            "[objective]\nkind = \"likelihood\"\nmax_points = 40\n",
+        );
+    assert!(base.contains("kind = \"likelihood\"") && base.contains(&*data.to_string_lossy()));
+    let cfg = d.path().join("l950.toml");
+    std::fs::write(&cfg, &base).unwrap();
+    let sw = d.path().join("sweep");
+    let o = creepfit(&[
+        "sweep",
+        cfg.to_str().unwrap(),
+        "--starts",
+        "3",
+        "--out",
+        sw.to_str().unwrap(),
+    ]);
+    ok(&o);
+    let s = summary(&sw);
+    assert_eq!(s["objective_kind"], "likelihood", "{s}");
+    assert_eq!(
+        s["specimen_effects_not_fitted"],
+        serde_json::json!(["rate", "ductility"]),
+        "{s}"
+    );
+    let note = s["objective_note"].as_str().expect("a note");
+    assert!(
+        note.contains("without specimen effects") && note.contains("neg2ll_without_effects"),
+        "{note}"
+    );
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains(&format!("note: {note}")), "{stdout}");
+
+    // `fit` from the sweep's best: the same model without effects ends there or lower, and
+    // the effects lower it further, so the two commands' objectives differ by the effects.
+    let best = &s["best"];
+    let best_objective = best["objective"].as_f64().unwrap();
+    let mut text = base.clone();
+    for name in ["A", "B", "Hstar", "h", "Kc", "C"] {
+        let line = text
+            .lines()
+            .find(|l| l.starts_with(&format!("{name} ")))
+            .unwrap()
+            .to_string();
+        let v = best["constants"][name].as_f64().unwrap();
+        let with = line.replace(" }", &format!(", start = {v:e} }}"));
+        text = text.replace(&line, &with);
+    }
+    let cfg_best = d.path().join("best.toml");
+    std::fs::write(&cfg_best, &text).unwrap();
+    let fit = d.path().join("fit");
+    fit_from_config(&cfg_best, &fit);
+    let f = summary(&fit);
+    let plain = f["specimens"]["neg2ll_without_effects"].as_f64().unwrap();
+    let with = f["objective"].as_f64().unwrap();
+    assert!(
+        plain <= best_objective + 1e-6 * best_objective.abs(),
+        "fit without effects from the sweep's best: {plain} against {best_objective}"
+    );
+    assert!(with < plain, "with effects {with}, without {plain}");
+
+    // Eq. 8 (the small sweep's configuration): no effects, no note.
+    let eq8 = d.path().join("eq8");
+    ok(&sweep(&eq8, &["--starts", "2"]));
+    let s = summary(&eq8);
+    assert_eq!(s["objective_kind"], "eq8", "{s}");
+    assert_eq!(
+        s["specimen_effects_not_fitted"],
+        serde_json::json!([]),
+        "{s}"
+    );
+    assert!(s["objective_note"].is_null(), "{s}");
+}

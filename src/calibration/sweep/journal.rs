@@ -14,7 +14,8 @@ use crate::config::RunConfig;
 use crate::data::Dataset;
 use crate::error::{Error, Result};
 use crate::identity::{first_difference, hash_value};
-use crate::model::objective::ParamSpace;
+use crate::likelihood::EffectKind;
+use crate::model::objective::{ObjectiveKind, ParamSpace};
 use crate::model::Scale;
 use crate::output;
 
@@ -66,6 +67,16 @@ pub struct Header {
     /// pulled toward the extra start ([`crate::fit::repair_starts`]), by start_id.
     #[serde(default)]
     pub repaired_starts: Vec<usize>,
+    /// What every fit's `objective` is: eq. 8 at its w, or −2 ln L (`None` in journals of
+    /// earlier versions).
+    #[serde(default)]
+    pub objective_kind: Option<ObjectiveKind>,
+    /// The specimen effects the configuration's likelihood asks for on these data, which the
+    /// sweep's local fits do not carry: their −2 ln L is the population model's alone, the
+    /// number `fit` reports as `specimens.neg2ll_without_effects` before it adds them (empty
+    /// under eq. 8, without effects, and in journals of earlier versions).
+    #[serde(default)]
+    pub effects_not_fitted: Vec<EffectKind>,
 }
 
 impl Header {
@@ -101,7 +112,25 @@ impl Header {
             labels: data.curves.iter().map(crate::data::Curve::label).collect(),
             shard: (1, 1),
             repaired_starts: Vec::new(),
+            objective_kind: Some(cfg.objective.kind),
+            effects_not_fitted: match cfg.objective.kind {
+                ObjectiveKind::Likelihood => cfg.objective.specimen_options(&data.curves).0.kinds(),
+                ObjectiveKind::Eq8 => Vec::new(),
+            },
         }
+    }
+
+    /// What the objective of this sweep's fits is and is not, for a user comparing it with
+    /// `fit`'s: a sentence where the configuration's specimen effects are left out, else `None`.
+    pub fn objective_note(&self) -> Option<String> {
+        if self.effects_not_fitted.is_empty() {
+            return None;
+        }
+        let kinds: Vec<&str> = self.effects_not_fitted.iter().map(|k| k.name()).collect();
+        Some(format!(
+            "the objective is −2 ln L of the population model without specimen effects: the configuration's {} effects are not fitted by sweep's local fits; `fit` adds them to its best start, and its summary.json → specimens.neg2ll_without_effects is the number to compare with this one",
+            kinds.join(" and ")
+        ))
     }
 
     /// The first setting in which `other`'s sweep differs from this one: (dotted field,

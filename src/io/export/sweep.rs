@@ -123,6 +123,9 @@ fn print_sweep(h: &sweep::Header, a: &sweep::Analysis) {
     if let Some(c) = sweep::best_caution(h, a) {
         println!("caution (the best fit): {c}");
     }
+    if let Some(n) = h.objective_note() {
+        println!("note: {n}");
+    }
     for (n, side, v) in &a.pinned {
         println!("  {n} = {v:.6e} on its {side} bound");
     }
