@@ -769,16 +769,9 @@ fn fit_from_a_sweeps_best_keeps_it() {
     let best = ranked.records().next().unwrap().unwrap();
     let col = |name: &str| &best[header.iter().position(|h| h == name).unwrap()];
     let best_objective: f64 = col("objective").parse().unwrap();
-    let mut text = far_material_config("980C.toml");
-    for name in ["A", "B", "Hstar", "h", "Kc", "C"] {
-        let line = text
-            .lines()
-            .find(|l| l.starts_with(&format!("{name} ")))
-            .unwrap()
-            .to_string();
-        let with = line.replace(" }", &format!(", start = {} }}", col(name)));
-        text = text.replace(&line, &with);
-    }
+    let text = with_starts(&far_material_config("980C.toml"), |name| {
+        col(name).to_string()
+    });
     let cfg = d.path().join("best.toml");
     std::fs::write(&cfg, &text).unwrap();
     let fit = d.path().join("fit");
@@ -788,6 +781,35 @@ fn fit_from_a_sweeps_best_keeps_it() {
         objective <= best_objective + 1e-6 * best_objective.abs(),
         "fit from the sweep's best: {objective} against {best_objective}"
     );
+}
+
+/// Configuration text `text` with a start value (`value(name)`) on each KHD constant's line.
+fn with_starts(text: &str, value: impl Fn(&str) -> String) -> String {
+    let mut text = text.to_string();
+    for name in ["A", "B", "Hstar", "h", "Kc", "C"] {
+        let line = text
+            .lines()
+            .find(|l| l.starts_with(&format!("{name} ")))
+            .unwrap()
+            .to_string();
+        let with = line.replace(" }", &format!(", start = {} }}", value(name)));
+        text = text.replace(&line, &with);
+    }
+    text
+}
+
+/// `creepfit sweep CFG --starts N --out OUT`, which must succeed; its output.
+fn sweep_with_starts(cfg: &Path, starts: usize, out: &Path) -> Output {
+    let o = creepfit(&[
+        "sweep",
+        cfg.to_str().unwrap(),
+        "--starts",
+        &starts.to_string(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    ok(&o);
+    o
 }
 
 /// `creepfit fit --start config CFG --out OUT --quiet`, which must succeed.
@@ -848,15 +870,7 @@ fn a_best_fit_that_misses_a_mistyped_life_says_so() {
         let path =
             common::seed_560_with_life(dir.path(), "560,110,31111,", &format!("560,110,{life},"));
         let out = dir.path().join(format!("sw{life}"));
-        let o = creepfit(&[
-            "sweep",
-            path.to_str().unwrap(),
-            "--starts",
-            "4",
-            "--out",
-            out.to_str().unwrap(),
-        ]);
-        ok(&o);
+        let o = sweep_with_starts(&path, 4, &out);
         let caution = &summary(&out)["caution"];
         let stdout = String::from_utf8_lossy(&o.stdout);
         if named {
@@ -898,15 +912,7 @@ fn a_likelihood_sweep_says_its_objective_leaves_out_the_specimen_effects() {
     let cfg = d.path().join("l950.toml");
     std::fs::write(&cfg, &base).unwrap();
     let sw = d.path().join("sweep");
-    let o = creepfit(&[
-        "sweep",
-        cfg.to_str().unwrap(),
-        "--starts",
-        "3",
-        "--out",
-        sw.to_str().unwrap(),
-    ]);
-    ok(&o);
+    let o = sweep_with_starts(&cfg, 3, &sw);
     let s = summary(&sw);
     assert_eq!(s["objective_kind"], "likelihood", "{s}");
     assert_eq!(
@@ -926,17 +932,9 @@ fn a_likelihood_sweep_says_its_objective_leaves_out_the_specimen_effects() {
     // the effects lower it further, so the two commands' objectives differ by the effects.
     let best = &s["best"];
     let best_objective = best["objective"].as_f64().unwrap();
-    let mut text = base.clone();
-    for name in ["A", "B", "Hstar", "h", "Kc", "C"] {
-        let line = text
-            .lines()
-            .find(|l| l.starts_with(&format!("{name} ")))
-            .unwrap()
-            .to_string();
-        let v = best["constants"][name].as_f64().unwrap();
-        let with = line.replace(" }", &format!(", start = {v:e} }}"));
-        text = text.replace(&line, &with);
-    }
+    let text = with_starts(&base, |name| {
+        format!("{:e}", best["constants"][name].as_f64().unwrap())
+    });
     let cfg_best = d.path().join("best.toml");
     std::fs::write(&cfg_best, &text).unwrap();
     let fit = d.path().join("fit");
