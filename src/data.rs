@@ -649,8 +649,10 @@ pub struct RuptureRecord {
 /// same), and by specimen when both the curve and the record have one. A record with a
 /// specimen equal to the curve's wins over a record without specimen; two equally good
 /// records for one curve are an error. Records at a temperature that has no curve at all are
-/// ignored silently (a lifetimes file may hold other temperatures); records at a temperature
-/// with curves that match no curve give a warning. A test declared interrupted gets no
+/// ignored silently where `opts` keeps one temperature (a lifetimes file may hold others), and
+/// with one warning line for all of them where it keeps every temperature (life-only tests,
+/// which are not fitted); records at a temperature with curves that match no curve give a
+/// warning each. A test declared interrupted gets no
 /// rupture time even if a record exists (the record is then ignored, with a warning).
 pub fn load(curves: &Path, ruptures: &Path, opts: &LoadOptions) -> Result<Dataset> {
     let (raw, warnings) = read_curves(curves)?;
@@ -756,6 +758,30 @@ fn load_read(
         out.push(finish_curve(c, rec, curves, ruptures, &mut warnings)?);
     }
 
+    // Records at temperatures without curves: silent where the configuration keeps one
+    // temperature (a lifetimes file may hold others), one line where it keeps them all: a
+    // life-only test is not fitted, and its life is not in any output.
+    if opts.temperature_c.is_none() {
+        let lone: Vec<&RuptureRecord> = records
+            .iter()
+            .zip(&used)
+            .filter(|(r, u)| !**u && !out.iter().any(|c| c.temperature_c == r.temperature_c))
+            .map(|(r, _)| r)
+            .collect();
+        if let Some(first) = lone.first() {
+            let mut temps: Vec<f64> = lone.iter().map(|r| r.temperature_c).collect();
+            temps.sort_by(f64::total_cmp);
+            temps.dedup();
+            let temps: Vec<String> = temps.iter().map(|t| format!("{t}")).collect();
+            warnings.push(format!(
+                "{}:{}: {} rupture record(s) at {} °C, where the curves file has no curve, not fitted (first on this line): creepfit fits tests with curves only, so these lives are in no output",
+                ruptures.display(),
+                first.line,
+                lone.len(),
+                temps.join(", ")
+            ));
+        }
+    }
     // Unused records at a temperature that has curves.
     for (r, u) in records.iter().zip(&used) {
         if !*u && out.iter().any(|c| c.temperature_c == r.temperature_c) {
@@ -2362,6 +2388,50 @@ mod tests {
         .unwrap_err()
         .to_string();
         assert_eq!(e, "<t>:5: column 'time_h': must not be negative (got -20)");
+    }
+
+    /// A rupture record at a temperature without curves (a life-only test): one warning line
+    /// where every temperature is kept, naming the file, the first line, the count and the
+    /// temperatures; none where the configuration keeps one temperature.
+    #[test]
+    fn life_only_records_are_named_where_every_temperature_is_kept() {
+        let curves = "temperature_C,stress_MPa,time_h,strain_pct\n\
+            560,100,0,0\n560,100,10,1.5\n560,100,20,3\n560,100,30,7.25\n";
+        let ruptures = "temperature_C,stress_MPa,rupture_time_h\n560,100,31\n600,80,900\n\
+            600,90,400\n650,70,120\n";
+        let load_with = |temperature_c| {
+            load_bytes(
+                Path::new("c.csv"),
+                curves.as_bytes(),
+                Path::new("r.csv"),
+                ruptures.as_bytes(),
+                &LoadOptions {
+                    temperature_c,
+                    ..LoadOptions::default()
+                },
+            )
+            .unwrap()
+        };
+        let all = load_with(None);
+        assert_eq!(all.curves.len(), 1);
+        let w: Vec<&String> = all
+            .warnings
+            .iter()
+            .filter(|w| w.contains("not fitted"))
+            .collect();
+        assert_eq!(w.len(), 1, "{:?}", all.warnings);
+        assert!(
+            w[0].starts_with("r.csv:3: 3 rupture record(s) at 600, 650 °C"),
+            "{}",
+            w[0]
+        );
+        let one = load_with(Some(560.0));
+        assert_eq!(one.curves, all.curves);
+        assert!(
+            one.warnings.iter().all(|w| !w.contains("not fitted")),
+            "{:?}",
+            one.warnings
+        );
     }
 
     #[test]
