@@ -758,6 +758,23 @@ fn load_read(
         out.push(finish_curve(c, rec, curves, ruptures, &mut warnings)?);
     }
 
+    // Unused records at a temperature that has curves.
+    for (r, u) in records.iter().zip(&used) {
+        if !*u && out.iter().any(|c| c.temperature_c == r.temperature_c) {
+            warnings.push(format!(
+                "{}:{}: rupture record at {} °C, {} MPa{} matches no curve; ignored",
+                ruptures.display(),
+                r.line,
+                r.temperature_c,
+                r.stress_mpa,
+                r.specimen
+                    .as_ref()
+                    .map(|s| format!(", specimen {s}"))
+                    .unwrap_or_default()
+            ));
+        }
+    }
+
     // Records at temperatures without curves: silent where the configuration keeps one
     // temperature (a lifetimes file may hold others), one line where it keeps them all: a
     // life-only test is not fitted, and its life is not in any output.
@@ -779,22 +796,6 @@ fn load_read(
                 first.line,
                 lone.len(),
                 temps.join(", ")
-            ));
-        }
-    }
-    // Unused records at a temperature that has curves.
-    for (r, u) in records.iter().zip(&used) {
-        if !*u && out.iter().any(|c| c.temperature_c == r.temperature_c) {
-            warnings.push(format!(
-                "{}:{}: rupture record at {} °C, {} MPa{} matches no curve; ignored",
-                ruptures.display(),
-                r.line,
-                r.temperature_c,
-                r.stress_mpa,
-                r.specimen
-                    .as_ref()
-                    .map(|s| format!(", specimen {s}"))
-                    .unwrap_or_default()
             ));
         }
     }
@@ -2595,10 +2596,19 @@ mod tests {
         assert_eq!(s2.rupture_time_h, Some(30.0));
         assert_eq!(s2.rupture_strain, 0.03);
         assert_eq!(s2.min_rate_measured, Some(0.0005));
-        // one duplicate, one unused record at 600 °C (the 700 °C one is silent)
-        assert_eq!(ds.warnings.len(), 2, "{:?}", ds.warnings);
+        // One duplicate, one unused record at 600 °C, and (every temperature kept) the record
+        // at 700 °C, where no curve is, named as a life-only test.
+        assert_eq!(ds.warnings.len(), 3, "{:?}", ds.warnings);
         assert!(ds.warnings[0].contains("c.csv:5: duplicate point"));
         assert!(ds.warnings[1].contains("r.csv:4:"));
+        assert!(ds.warnings[2].contains("r.csv:5: 1 rupture record(s) at 700 °C"));
+        // Keeping 600 °C only, the 700 °C record is silent.
+        let at600 = LoadOptions {
+            temperature_c: Some(600.0),
+            ..LoadOptions::default()
+        };
+        let ds = load(&c, &r, &at600).unwrap();
+        assert_eq!(ds.warnings.len(), 2, "{:?}", ds.warnings);
     }
 
     #[test]

@@ -753,6 +753,8 @@ fn holdout_predicts_a_temperature_left_out() {
     assert_eq!(r["constants"].as_array().unwrap().len(), 8);
     assert_eq!(s["inside_pred95"]["inside"], 2);
     assert_eq!(s["inside_pred95"]["tests"], 2);
+    // A temperature left out: the interval's scope needs no word.
+    assert_eq!(s.get("interval_scope"), Some(&serde_json::Value::Null));
     // Leaving out a temperature that leaves one to fit is refused.
     let o = creepfit(&[
         "holdout",
@@ -828,6 +830,29 @@ fn holdout_leaves_a_campaign_out() {
     );
     assert_eq!(s["temperature_extrapolation"], false);
     assert_eq!(s["tests"], 3);
+    // Without intervals there is no interval to scope.
+    assert_eq!(s.get("interval_scope"), Some(&serde_json::Value::Null));
+    // With them, the interval of a new test is said to hold the training campaign's scatter
+    // and not the held-out campaign's own level, in the printout and the summary.
+    let out_i = tmp.path().join("hqi");
+    let stdout = ok(&[
+        "holdout",
+        cfg.to_str().unwrap(),
+        "--campaign",
+        "Q",
+        "--intervals",
+        "--out",
+        out_i.to_str().unwrap(),
+    ]);
+    let s = json(&out_i.join("summary.json"));
+    assert_eq!(s["inside_pred95"]["tests"], 3, "{s}");
+    let scope = s["interval_scope"].as_str().expect("a scope");
+    assert!(
+        scope.contains("campaign(s) P,") || scope.contains("campaign(s) P "),
+        "{scope}"
+    );
+    assert!(scope.contains("not campaign Q's own level"), "{scope}");
+    assert!(stdout.contains(&format!("note: {scope}")), "{stdout}");
     // A campaign the data lack is refused in one line naming the ones they have.
     let o = creepfit(&[
         "holdout",

@@ -136,6 +136,7 @@ pub fn write(cfg: &RunConfig, data: &Dataset, h: &Holdout, out: &Path) -> Result
         "model_mean_abs_log10_err": jnum(h.model_mean_abs_log10()),
         "lmp_mean_abs_log10_err": jnum(h.lmp_mean_abs_log10()),
         "inside_pred95": inside_pred95,
+        "interval_scope": h.interval_scope(),
         "intervals_refit": h.intervals_refit.as_ref().map(|r| json!({
             "what": "the intervals and ml_rupture_time_h come from the maximum-likelihood refit of the training fit's constants",
             "neg2ll": jnum(r.neg2ll),
