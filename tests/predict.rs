@@ -786,15 +786,15 @@ fn holdout_leaves_a_campaign_out() {
             (590.0, 90.0, "Q-a"),
         ],
     );
-    let out = tmp.path().join("hq");
-    let stdout = ok(&[
-        "holdout",
-        cfg.to_str().unwrap(),
-        "--campaign",
-        "Q",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    // `holdout CFG --campaign Q --out DIR` with `extra` arguments: (stdout, DIR).
+    let hold_q = |dir: &str, extra: &[&str]| {
+        let out = tmp.path().join(dir);
+        let mut args = vec!["holdout", cfg.to_str().unwrap(), "--campaign", "Q"];
+        args.extend_from_slice(extra);
+        args.extend(["--out", out.to_str().unwrap()]);
+        (ok(&args), out)
+    };
+    let (stdout, out) = hold_q("hq", &[]);
     assert!(stdout.contains("held out campaign Q: 3 tests"), "{stdout}");
     let h = csv(&out.join("holdout.csv"));
     assert_eq!(h[0][..3], ["temperature_C", "stress_MPa", "rupture_time_h"]);
@@ -834,16 +834,7 @@ fn holdout_leaves_a_campaign_out() {
     assert_eq!(s.get("interval_scope"), Some(&serde_json::Value::Null));
     // With them, the interval of a new test is said to hold the training campaign's scatter
     // and not the held-out campaign's own level, in the printout and the summary.
-    let out_i = tmp.path().join("hqi");
-    let stdout = ok(&[
-        "holdout",
-        cfg.to_str().unwrap(),
-        "--campaign",
-        "Q",
-        "--intervals",
-        "--out",
-        out_i.to_str().unwrap(),
-    ]);
+    let (stdout, out_i) = hold_q("hqi", &["--intervals"]);
     let s = json(&out_i.join("summary.json"));
     assert_eq!(s["inside_pred95"]["tests"], 3, "{s}");
     let scope = s["interval_scope"].as_str().expect("a scope");
