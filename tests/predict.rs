@@ -859,3 +859,67 @@ fn holdout_leaves_a_campaign_out() {
         "{e}"
     );
 }
+
+/// `holdout`'s training fit under eq. 8 (the configuration's objective) fits every specimen
+/// as the population's: on training data with a replicate pair, where `specimen_effects =
+/// "auto"` resolves to both kinds, summary.json and stdout say so; without the pair, nothing.
+#[test]
+fn holdout_says_its_eq8_training_fit_leaves_the_specimen_effects_out() {
+    let tmp = TempDir::new().unwrap();
+    let run = |tests: &[(f64, f64, &str)], dir: &str| {
+        let d = tmp.path().join(dir);
+        std::fs::create_dir_all(&d).unwrap();
+        let cfg = law_data(&d, tests);
+        let out = d.join("ho");
+        let stdout = ok(&[
+            "holdout",
+            cfg.to_str().unwrap(),
+            "--temperature",
+            "575",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        (stdout, json(&out.join("summary.json")))
+    };
+    let (stdout, s) = run(
+        &[
+            (560.0, 85.0, "a"),
+            (560.0, 100.0, "b"),
+            (560.0, 100.0, "c"),
+            (575.0, 95.0, "d"),
+            (590.0, 75.0, "e"),
+            (590.0, 100.0, "f"),
+        ],
+        "pair",
+    );
+    assert_eq!(s["objective_kind"], "eq8", "{s}");
+    assert_eq!(
+        s["specimen_effects_not_fitted"],
+        serde_json::json!(["rate", "ductility"]),
+        "{s}"
+    );
+    let note = s["objective_note"].as_str().expect("a note");
+    assert!(note.contains("eq. 8"), "{note}");
+    assert!(
+        stdout.contains(&format!("note (the training fit): {note}")),
+        "{stdout}"
+    );
+    // One specimen per load: `auto` fits none, and there is nothing to say.
+    let (stdout, s) = run(
+        &[
+            (560.0, 85.0, "a"),
+            (560.0, 100.0, "b"),
+            (575.0, 95.0, "d"),
+            (590.0, 75.0, "e"),
+            (590.0, 100.0, "f"),
+        ],
+        "single",
+    );
+    assert_eq!(
+        s["specimen_effects_not_fitted"],
+        serde_json::json!([]),
+        "{s}"
+    );
+    assert!(s["objective_note"].is_null(), "{s}");
+    assert!(!stdout.contains("note (the training fit)"), "{stdout}");
+}

@@ -947,6 +947,10 @@ fn a_likelihood_sweep_says_its_objective_leaves_out_the_specimen_effects() {
         "fit without effects from the sweep's best: {plain} against {best_objective}"
     );
     assert!(with < plain, "with effects {with}, without {plain}");
+    // The likelihood fit carries the effects: nothing left out, no note.
+    assert_eq!(f["objective_kind"], "likelihood", "{f}");
+    assert_eq!(f["specimen_effects_not_fitted"], serde_json::json!([]));
+    assert!(f["objective_note"].is_null(), "{f}");
 
     // Eq. 8 (the small sweep's configuration): no effects, no note.
     let eq8 = d.path().join("eq8");
@@ -959,4 +963,64 @@ fn a_likelihood_sweep_says_its_objective_leaves_out_the_specimen_effects() {
         "{s}"
     );
     assert!(s["objective_note"].is_null(), "{s}");
+}
+
+/// Under eq. 8 (which has no specimen effects) `fit` and `sweep` fit every specimen as the
+/// population's whatever `specimen_effects` says; on data with replicates, where `auto`
+/// resolves to effects, both say so in summary.json and on stdout. With
+/// `specimen_effects = []` there is nothing to say.
+#[test]
+fn eq8_fit_and_sweep_say_the_configured_specimen_effects_are_not_fitted() {
+    let d = TempDir::new().unwrap();
+    let data = root().join("data/alloy617");
+    // Alloy 617 at 950 °C: two specimens at 29 MPa (INL2-a, INL2-b), so `auto` is both kinds.
+    let base = read(&root().join("configs/alloy617-950C.toml"))
+        .replace("\"../data/alloy617/", &format!("\"{}/", data.display()))
+        .replace("[objective]\n", "[objective]\nmax_points = 40\n");
+    assert!(base.contains("specimen_effects = \"auto\"") && !base.contains("kind ="));
+    let cfg = d.path().join("e950.toml");
+    std::fs::write(&cfg, &base).unwrap();
+    let said = |o: &Output, s: &serde_json::Value| {
+        assert_eq!(s["objective_kind"], "eq8", "{s}");
+        assert_eq!(
+            s["specimen_effects_not_fitted"],
+            serde_json::json!(["rate", "ductility"]),
+            "{s}"
+        );
+        let note = s["objective_note"].as_str().expect("a note");
+        assert!(
+            note.contains("eq. 8") && note.contains("rate and ductility"),
+            "{note}"
+        );
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        assert!(stdout.contains(&format!("note: {note}")), "{stdout}");
+    };
+    let fit = d.path().join("fit");
+    let o = creepfit(&["fit", cfg.to_str().unwrap(), "--out", fit.to_str().unwrap()]);
+    ok(&o);
+    said(&o, &summary(&fit));
+    let sw = d.path().join("sweep");
+    let o = sweep_with_starts(&cfg, 2, &sw);
+    said(&o, &summary(&sw));
+
+    // No effects configured: nothing left out.
+    let none = d.path().join("none.toml");
+    std::fs::write(
+        &none,
+        base.replace("specimen_effects = \"auto\"", "specimen_effects = []"),
+    )
+    .unwrap();
+    let fit = d.path().join("fit-none");
+    let o = creepfit(&[
+        "fit",
+        none.to_str().unwrap(),
+        "--out",
+        fit.to_str().unwrap(),
+    ]);
+    ok(&o);
+    let s = summary(&fit);
+    assert_eq!(s["objective_kind"], "eq8", "{s}");
+    assert_eq!(s["specimen_effects_not_fitted"], serde_json::json!([]));
+    assert!(s["objective_note"].is_null(), "{s}");
+    assert!(!String::from_utf8_lossy(&o.stdout).contains("note: the objective"));
 }

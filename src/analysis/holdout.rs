@@ -295,9 +295,17 @@ pub struct Holdout {
     /// Under `--intervals`: the maximum-likelihood refit of the training fit's constants the
     /// intervals (and `ml_rupture_time_h`) come from.
     pub intervals_refit: Option<crate::uncertainty::predict::Refit>,
+    /// The training fit's objective, and the configured specimen effects it leaves out
+    /// ([`crate::config::ObjectiveConfig::effects_left_out`]: all of them under eq. 8).
+    pub objective_kind: crate::model::objective::ObjectiveKind,
+    pub effects_left_out: Vec<crate::likelihood::EffectKind>,
 }
 
 impl Holdout {
+    /// What the training fit's objective leaves out ([`crate::config::objective_note`]).
+    pub fn objective_note(&self) -> Option<String> {
+        crate::config::objective_note(self.objective_kind, &self.effects_left_out)
+    }
     /// The training fit's caution about its rupture times ([`crate::fit::lives_caution`]);
     /// `None` without one. A training fit that gives up some tests' lives predicts held-out
     /// tests near them with the same miss.
@@ -591,6 +599,10 @@ pub fn holdout_observed(
         baselines,
         tests,
         curves: test,
+        objective_kind: cfg.objective.kind,
+        effects_left_out: cfg
+            .objective
+            .effects_left_out(&train_data.curves, crate::config::LocalFits::Fit),
         training: train_data,
         intervals_refit,
     })
@@ -627,6 +639,9 @@ pub fn table(h: &Holdout) -> String {
     }
     if let Some(c) = h.training_caution() {
         s.push_str(&format!("caution (the training fit): {c}\n"));
+    }
+    if let Some(n) = h.objective_note() {
+        s.push_str(&format!("note (the training fit): {n}\n"));
     }
     s.push_str(&format!(
         "mean |log10 error| of the rupture time: creepfit {:.3}, Larson–Miller {:.3}\n",

@@ -139,6 +139,55 @@ impl ObjectiveConfig {
         let (o, note) = self.specimen_effects.resolve(curves, self.specimen_scatter);
         (o.with_scatter(self.specimen_scatter), note)
     }
+
+    /// The specimen effects this configuration asks for on `curves` (`auto` resolved) that
+    /// the local fits of `fit` and `sweep` leave out: all of them under eq. 8, which has
+    /// none; under the likelihood, those of `sweep` only (`fit` adds them to its best start).
+    pub fn effects_left_out(
+        &self,
+        curves: &[crate::data::Curve],
+        command: LocalFits,
+    ) -> Vec<crate::likelihood::EffectKind> {
+        match (self.kind, command) {
+            (ObjectiveKind::Likelihood, LocalFits::Fit) => Vec::new(),
+            _ => self.specimen_options(curves).0.kinds(),
+        }
+    }
+}
+
+/// The command whose local fits [`objective_note`] speaks of.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LocalFits {
+    /// `fit`: its best start carries the effects under the likelihood.
+    Fit,
+    /// `sweep`: no local fit carries effects.
+    Sweep,
+}
+
+/// What the objective of `fit`'s or `sweep`'s local fits leaves out, for a user comparing
+/// its number with another command's: a sentence where the configuration's specimen effects
+/// `left_out` ([`ObjectiveConfig::effects_left_out`]) are not fitted, else `None`. Under the
+/// likelihood only `sweep` leaves them out.
+pub fn objective_note(
+    kind: ObjectiveKind,
+    left_out: &[crate::likelihood::EffectKind],
+) -> Option<String> {
+    if left_out.is_empty() {
+        return None;
+    }
+    let kinds = left_out
+        .iter()
+        .map(|k| k.name())
+        .collect::<Vec<_>>()
+        .join(" and ");
+    Some(match kind {
+        ObjectiveKind::Likelihood => format!(
+            "the objective is −2 ln L of the population model without specimen effects: the configuration's {kinds} effects are not fitted by sweep's local fits; `fit` adds them to its best start, and its summary.json → specimens.neg2ll_without_effects is the number to compare with this one"
+        ),
+        ObjectiveKind::Eq8 => format!(
+            "the objective is eq. 8, which has no specimen effects: every specimen is fitted as the population's, and the configuration's {kinds} effects (specimen_effects, on these data) are not fitted; they belong to the likelihood, which `diagnose`, `profile` and `predict --intervals` use, and `fit` fits them with [objective] kind = \"likelihood\""
+        ),
+    })
 }
 
 /// `[objective] specimen_effects`: `"auto"` or a list of kinds.
@@ -2271,6 +2320,69 @@ rtol = 1e-8
         // A list is taken as it is.
         let list = SpecimenEffects::Kinds(vec![crate::likelihood::EffectKind::Rate]);
         assert!(!list.resolve(&three, beyond).0.ductility);
+    }
+
+    /// Which configured specimen effects `fit`'s and `sweep`'s local fits leave out, as a
+    /// table: all of them under eq. 8, `sweep`'s alone under the likelihood, none where none
+    /// are configured or `auto` finds no replicates; the note names the kinds and the
+    /// objective.
+    #[test]
+    fn the_effects_left_out_by_objective_and_command() {
+        use crate::likelihood::EffectKind::{Ductility, Rate};
+        let curve = |t: f64, s: f64| crate::data::Curve::two_point(t, s, None);
+        let pair = vec![curve(750.0, 100.0), curve(750.0, 100.0)];
+        let single = vec![curve(750.0, 100.0), curve(750.0, 120.0)];
+        let (fit, sweep) = (LocalFits::Fit, LocalFits::Sweep);
+        for (kind, effects, curves, command, want, note) in [
+            (
+                "eq8",
+                "\"auto\"",
+                &pair,
+                fit,
+                vec![Rate, Ductility],
+                Some("eq. 8"),
+            ),
+            (
+                "eq8",
+                "\"auto\"",
+                &pair,
+                sweep,
+                vec![Rate, Ductility],
+                Some("eq. 8"),
+            ),
+            (
+                "eq8",
+                "[\"rate\"]",
+                &single,
+                fit,
+                vec![Rate],
+                Some("rate effects"),
+            ),
+            ("eq8", "[]", &pair, fit, vec![], None),
+            ("eq8", "\"auto\"", &single, fit, vec![], None),
+            ("likelihood", "\"auto\"", &pair, fit, vec![], None),
+            (
+                "likelihood",
+                "\"auto\"",
+                &pair,
+                sweep,
+                vec![Rate, Ductility],
+                Some("−2 ln L"),
+            ),
+            ("likelihood", "[]", &pair, sweep, vec![], None),
+        ] {
+            let cfg = parse(&format!(
+                "curves = \"a.csv\"\nruptures = \"b.csv\"\n{CONSTANTS}\n[objective]\nkind = \"{kind}\"\nspecimen_effects = {effects}\n"
+            ))
+            .unwrap();
+            let left = cfg.objective.effects_left_out(curves, command);
+            assert_eq!(left, want, "{kind} {effects} {command:?}");
+            let n = objective_note(cfg.objective.kind, &left);
+            match note {
+                None => assert!(n.is_none(), "{n:?}"),
+                Some(t) => assert!(n.as_deref().is_some_and(|n| n.contains(t)), "{n:?}"),
+            }
+        }
     }
 
     /// `specimen_scatter`: the estimate beyond the stress trend by default (since

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use serde_json::{json, Value};
 
-use crate::config::RunConfig;
+use crate::config::{LocalFits, RunConfig};
 use crate::data::Curve;
 use crate::error::{Error, Result};
 use crate::fit::{FitRun, LocalFit};
@@ -665,6 +665,12 @@ pub fn fit_summary(cfg: &RunConfig, run: &FitRun, curves: &[Curve]) -> Value {
         "ode": {"rtol": run.settings.ode.rtol, "atol": run.settings.ode.atol},
         "candidates": candidates,
     });
+    // What the objective is, and the configured specimen effects it leaves out (eq. 8 has
+    // none): a user comparing with `diagnose` or a likelihood fit is told.
+    let left_out = cfg.objective.effects_left_out(curves, LocalFits::Fit);
+    summary["objective_kind"] = json!(cfg.objective.kind);
+    summary["objective_note"] = json!(crate::config::objective_note(cfg.objective.kind, &left_out));
+    summary["specimen_effects_not_fitted"] = json!(left_out);
     // A joint calibration across temperatures (or the likelihood objective) says so, with
     // the errors and the model's constants at each temperature.
     if cfg.has_laws() || cfg.objective.kind != crate::model::objective::ObjectiveKind::Eq8 {
@@ -687,7 +693,6 @@ pub fn fit_summary(cfg: &RunConfig, run: &FitRun, curves: &[Curve]) -> Value {
                 v
             })
             .collect();
-        summary["objective_kind"] = json!(cfg.objective.kind);
         summary["T_ref_C"] = json!(cfg.t_ref);
         summary["per_temperature"] = json!(per_t);
         summary["initial_guess"]["procedure"] = json!(run.guess.procedure);

@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 use crate::config::identity;
-use crate::config::RunConfig;
+use crate::config::{LocalFits, RunConfig};
 use crate::data::Dataset;
 use crate::error::{Error, Result};
 use crate::identity::{first_difference, hash_value};
@@ -113,24 +113,19 @@ impl Header {
             shard: (1, 1),
             repaired_starts: Vec::new(),
             objective_kind: Some(cfg.objective.kind),
-            effects_not_fitted: match cfg.objective.kind {
-                ObjectiveKind::Likelihood => cfg.objective.specimen_options(&data.curves).0.kinds(),
-                ObjectiveKind::Eq8 => Vec::new(),
-            },
+            effects_not_fitted: cfg
+                .objective
+                .effects_left_out(&data.curves, LocalFits::Sweep),
         }
     }
 
     /// What the objective of this sweep's fits is and is not, for a user comparing it with
     /// `fit`'s: a sentence where the configuration's specimen effects are left out, else `None`.
     pub fn objective_note(&self) -> Option<String> {
-        if self.effects_not_fitted.is_empty() {
-            return None;
-        }
-        let kinds: Vec<&str> = self.effects_not_fitted.iter().map(|k| k.name()).collect();
-        Some(format!(
-            "the objective is −2 ln L of the population model without specimen effects: the configuration's {} effects are not fitted by sweep's local fits; `fit` adds them to its best start, and its summary.json → specimens.neg2ll_without_effects is the number to compare with this one",
-            kinds.join(" and ")
-        ))
+        crate::config::objective_note(
+            self.objective_kind.unwrap_or_default(),
+            &self.effects_not_fitted,
+        )
     }
 
     /// The first setting in which `other`'s sweep differs from this one: (dotted field,

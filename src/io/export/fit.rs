@@ -73,6 +73,9 @@ pub fn write(cfg: &RunConfig, data: &Dataset, run: &FitRun, out: &Path) -> Resul
     if let Some(c) = summary.get("caution").and_then(|c| c.as_str()) {
         println!("caution: {c}");
     }
+    if let Some(n) = summary.get("objective_note").and_then(|n| n.as_str()) {
+        println!("note: {n}");
+    }
     print_specimens(&run.specimens);
     if let Some(a) = summary.get("activation_energy") {
         print_activation(a);

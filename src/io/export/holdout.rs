@@ -132,6 +132,8 @@ pub fn write(cfg: &RunConfig, data: &Dataset, h: &Holdout, out: &Path) -> Result
         "training_termination": best.lm.termination,
         "training_lifetime_err_pct": best.lifetime_err_pct.iter().map(|v| jnum(*v)).collect::<Vec<_>>(),
         "training_caution": h.training_caution(),
+        "specimen_effects_not_fitted": h.effects_left_out,
+        "objective_note": h.objective_note(),
         "tests": h.tests.len(),
         "model_mean_abs_log10_err": jnum(h.model_mean_abs_log10()),
         "lmp_mean_abs_log10_err": jnum(h.lmp_mean_abs_log10()),
