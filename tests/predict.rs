@@ -830,6 +830,43 @@ fn holdout_leaves_a_campaign_out() {
     );
     assert_eq!(s["temperature_extrapolation"], false);
     assert_eq!(s["tests"], 3);
+    // creepfit against every baseline: the mean difference of |log10 error| recomputed from
+    // holdout.csv, over the 3 tests at 3 conditions, inside its own interval.
+    let col = |name: &str| h[0].iter().position(|c| c == name).unwrap();
+    for (b, prefix) in s["baselines"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(["lmp", "osd", "mh", "wilshire"])
+    {
+        let Some(d) = b.get("creepfit_difference") else {
+            continue;
+        };
+        let (m, e) = (col("model_log10_err"), col(&format!("{prefix}_log10_err")));
+        let want = h[1..]
+            .iter()
+            .map(|r| r[m].parse::<f64>().unwrap().abs() - r[e].parse::<f64>().unwrap().abs())
+            .sum::<f64>()
+            / 3.0;
+        let mean = d["mean"].as_f64().unwrap();
+        assert!(
+            (mean - want).abs() < 1e-9,
+            "{prefix}: {mean} against {want}"
+        );
+        assert_eq!(
+            (d["tests"].as_u64(), d["conditions"].as_u64()),
+            (Some(3), Some(3))
+        );
+        let (lo, hi) = (d["lo95"].as_f64().unwrap(), d["hi95"].as_f64().unwrap());
+        assert!(lo <= mean && mean <= hi, "{d}");
+    }
+    let k = s["one_to_beat"]["creepfit_difference"]["mean"]
+        .as_f64()
+        .unwrap();
+    assert!(
+        stdout.contains(&format!("{k:+.3} in mean |log10 error|")),
+        "{stdout}"
+    );
     // Without intervals there is no interval to scope.
     assert_eq!(s.get("interval_scope"), Some(&serde_json::Value::Null));
     // With them, the interval of a new test is said to hold the training campaign's scatter

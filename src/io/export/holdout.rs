@@ -106,6 +106,7 @@ pub fn write(cfg: &RunConfig, data: &Dataset, h: &Holdout, out: &Path) -> Result
             if b.fit.is_ok() {
                 j["mean_abs_log10_err"] = jnum(v);
                 j["tests_predicted"] = json!(c);
+                j["creepfit_difference"] = difference_json(h.versus(k));
             }
             j
         })
@@ -115,6 +116,7 @@ pub fn write(cfg: &RunConfig, data: &Dataset, h: &Holdout, out: &Path) -> Result
             "kind": h.baselines[k].kind,
             "name": h.baselines[k].kind.name(),
             "mean_abs_log10_err": jnum(h.baseline_score(k).0),
+            "creepfit_difference": difference_json(h.versus(k)),
         })
     });
     let [complete, early, no_rupture, failed] = h.curve_outcomes();
@@ -292,4 +294,18 @@ pub fn write(cfg: &RunConfig, data: &Dataset, h: &Holdout, out: &Path) -> Result
     );
     println!("wrote {}", out.display());
     plots_done(out, failures)
+}
+
+/// A [`crate::holdout::PairedDifference`] as JSON (its NaN ends as null), null without one.
+fn difference_json(d: Option<crate::holdout::PairedDifference>) -> serde_json::Value {
+    d.map_or(serde_json::Value::Null, |d| {
+        json!({
+            "mean": jnum(d.mean),
+            "lo95": jnum(d.lo95),
+            "hi95": jnum(d.hi95),
+            "tests": d.tests,
+            "conditions": d.conditions,
+            "comparison": d.comparison,
+        })
+    })
 }
