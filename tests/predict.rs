@@ -929,14 +929,7 @@ fn holdout_says_its_eq8_training_fit_leaves_the_specimen_effects_out() {
         ],
         "pair",
     );
-    assert_eq!(s["objective_kind"], "eq8", "{s}");
-    assert_eq!(
-        s["specimen_effects_not_fitted"],
-        serde_json::json!(["rate", "ductility"]),
-        "{s}"
-    );
-    let note = s["objective_note"].as_str().expect("a note");
-    assert!(note.contains("eq. 8"), "{note}");
+    let note = left_out_note(&s, "eq8", &["rate", "ductility"], "eq. 8");
     assert!(
         stdout.contains(&format!("note (the training fit): {note}")),
         "{stdout}"

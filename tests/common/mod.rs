@@ -123,3 +123,38 @@ pub fn synth_set(dir: &Path, seed: u64, scenario: &str) -> PathBuf {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     sets.join(format!("set-{seed}"))
 }
+
+/// Asserts that `summary` (a summary.json of `fit`, `sweep` or `holdout`) says its objective
+/// `kind` leaves out the specimen effects `kinds`, in a note that contains `word`; the note.
+#[allow(dead_code)]
+pub fn left_out_note<'a>(
+    summary: &'a serde_json::Value,
+    kind: &str,
+    kinds: &[&str],
+    word: &str,
+) -> &'a str {
+    assert_eq!(summary["objective_kind"], kind, "{summary}");
+    assert_eq!(
+        summary["specimen_effects_not_fitted"],
+        serde_json::json!(kinds),
+        "{summary}"
+    );
+    let note = summary["objective_note"].as_str().expect("a note");
+    assert!(note.contains(word), "{note}");
+    note
+}
+
+/// The configuration `configs/alloy617-<t>C.toml` with its data paths made absolute and
+/// `objective` lines added under `[objective]`, written to `dir/name`; its path and text.
+#[allow(dead_code)]
+pub fn alloy617_at(dir: &Path, t: u32, objective: &str, name: &str) -> (PathBuf, String) {
+    let data = root().join("data/alloy617");
+    let text = std::fs::read_to_string(root().join(format!("configs/alloy617-{t}C.toml")))
+        .unwrap()
+        .replace("\"../data/alloy617/", &format!("\"{}/", data.display()))
+        .replace("[objective]\n", &format!("[objective]\n{objective}"));
+    assert!(text.contains(&*data.to_string_lossy()) && text.contains(objective));
+    let path = dir.join(name);
+    std::fs::write(&path, &text).unwrap();
+    (path, text)
+}
