@@ -94,6 +94,21 @@ fn missing_column() {
     has(&e, &["ruptures.csv:1", "rupture_time_h"]);
 }
 
+/// A spreadsheet's export with ';' between fields (and decimal commas) is named as such.
+#[test]
+fn semicolon_separated_curves_are_named() {
+    let e = curves_error(&CURVES.replace(',', ";").replace(";1\n", ";1,0\n"));
+    has(
+        &e,
+        &[
+            "curves.csv:1",
+            "missing required column 'temperature_C'",
+            "separated by ';'",
+        ],
+    );
+    assert!(!curves_error("temperature_C,stress_MPa,time_h\n600,100,0\n").contains("separated by"));
+}
+
 #[test]
 fn unparsable_number() {
     let e = curves_error(&CURVES.replace("600,100,10,1\n", "600,100,10,1.2.3\n"));

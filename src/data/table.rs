@@ -95,6 +95,26 @@ pub(crate) struct Table<'a> {
     rows: usize,
 }
 
+/// A header that is one field holding another separator (`;`, as spreadsheets write where
+/// the decimal mark is a comma, or a tab) is not comma-separated: the words the user needs,
+/// appended to the missing-column error; empty otherwise.
+fn separator_hint(header: &csv::StringRecord) -> String {
+    if header.len() != 1 {
+        return String::new();
+    }
+    let only = header.get(0).unwrap_or("");
+    let sep = if only.contains(';') {
+        "';'"
+    } else if only.contains('\t') {
+        "tabs"
+    } else {
+        return String::new();
+    };
+    format!(
+        "; the header is separated by {sep}: creepfit reads comma-separated files with a decimal point (in a spreadsheet, save as CSV with ',' between fields and '.' as the decimal mark)"
+    )
+}
+
 impl<'a> Table<'a> {
     /// Parse the header; every name in `required` must be a column. A repeated column name
     /// is an error.
@@ -143,8 +163,9 @@ impl<'a> Table<'a> {
                     path,
                     header_line,
                     format!(
-                        "missing required column '{name}' (header must contain {})",
-                        required.join(", ")
+                        "missing required column '{name}' (header must contain {}){}",
+                        required.join(", "),
+                        separator_hint(&header)
                     ),
                 ));
             }
@@ -263,6 +284,25 @@ mod tests {
             e.contains("t.csv:1: column 'a' appears more than once"),
             "{e}"
         );
+        // Another separator is named.
+        for (bytes, word) in [
+            (&b"a;b\n1,5;2\n"[..], "separated by ';'"),
+            (&b"a\tb\n1\t2\n"[..], "separated by tabs"),
+        ] {
+            let e = Table::open(path, bytes, &["a"], None)
+                .err()
+                .unwrap()
+                .to_string();
+            assert!(
+                e.starts_with("t.csv:1: missing required column 'a'") && e.contains(word),
+                "{e}"
+            );
+        }
+        let e = Table::open(path, b"x,y\n", &["a"], None)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(!e.contains("separated by"), "{e}");
         let e = Table::open(path, b"", &["a"], None)
             .err()
             .unwrap()
