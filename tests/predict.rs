@@ -456,6 +456,134 @@ fn bad_conditions_are_one_line_errors() {
     }
 }
 
+#[test]
+fn predict_tests_scores_a_file_of_measured_lives() {
+    let tmp = TempDir::new().unwrap();
+    let constants = joint_constants(tmp.path());
+    let c = constants.to_str().unwrap();
+    // Another campaign's lives: a replicate pair at a temperature between the tested ones,
+    // one test at a tested temperature, with a specimen label and a column of its own order.
+    let tests = tmp.path().join("campaign.csv");
+    std::fs::write(
+        &tests,
+        "stress_MPa,temperature_C,rupture_time_h,specimen\n\
+         100,575,20000,X-1\n\
+         110,590,5000,X-2\n\
+         100,575,31000,X-3\n",
+    )
+    .unwrap();
+    // `predict configs/cmv-joint.toml --tests FILE --out DIR` at the fit's constants.
+    let predict_tests = |out: &Path| {
+        creepfit(&[
+            "predict",
+            "configs/cmv-joint.toml",
+            "--constants",
+            c,
+            "--tests",
+            tests.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+    };
+    let pred = tmp.path().join("pred");
+    let o = predict_tests(&pred);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    // One prediction per distinct condition, in file order (the configuration's `at` replaced).
+    let p = csv(&pred.join("predictions.csv"));
+    assert_eq!(p.len(), 3, "{p:?}");
+    assert_eq!((p[1][0].as_str(), p[1][1].as_str()), ("575", "100"));
+    assert_eq!((p[2][0].as_str(), p[2][1].as_str()), ("590", "110"));
+    let t = csv(&pred.join("tests.csv"));
+    let col = |name: &str| {
+        t[0].iter()
+            .position(|h| h == name)
+            .unwrap_or_else(|| panic!("{name}: {:?}", t[0]))
+    };
+    assert_eq!(t.len(), 4, "one row per test");
+    let f = |r: &[String], name: &str| r[col(name)].parse::<f64>().unwrap();
+    let measured = [20000.0, 5000.0, 31000.0];
+    for (k, r) in t[1..].iter().enumerate() {
+        assert_eq!(f(r, "rupture_time_h"), measured[k]);
+        assert_eq!(r[col("line")], (k + 2).to_string());
+        assert_eq!(r[col("specimen")], format!("X-{}", k + 1));
+        // creepfit's life is predictions.csv's at the test's condition, to the digit.
+        let row = p[1..]
+            .iter()
+            .find(|q| q[0] == r[col("temperature_C")] && q[1] == r[col("stress_MPa")])
+            .unwrap();
+        assert_eq!(r[col("model_rupture_time_h")], row[2]);
+        let e = (f(r, "model_rupture_time_h") / measured[k]).log10();
+        assert!((f(r, "model_log10_err") - e).abs() < 1e-9, "{r:?}");
+        let e = (f(r, "lmp_rupture_time_h") / measured[k]).log10();
+        assert!((f(r, "lmp_log10_err") - e).abs() < 1e-9, "{r:?}");
+    }
+    assert_eq!(t[1][col("extrapolation")], "none");
+    // The summary's means are those of the file's errors; the one to beat is the baseline
+    // with the smallest among those that predicted every test.
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(pred.join("summary.json")).unwrap()).unwrap();
+    let mean = |name: &str| t[1..].iter().map(|r| f(r, name).abs()).sum::<f64>() / 3.0;
+    let j = &s["tests"];
+    assert_eq!(j["tests"], 3);
+    assert_eq!(j["conditions"], 2);
+    let m = j["model_mean_abs_log10_err"].as_f64().unwrap();
+    assert!((m - mean("model_log10_err")).abs() < 1e-9, "{j}");
+    let mut best: Option<(String, f64)> = None;
+    for b in j["baselines"].as_array().unwrap() {
+        let Some(v) = b["mean_abs_log10_err"].as_f64() else {
+            continue;
+        };
+        let key = match b["kind"].as_str().unwrap() {
+            "larson_miller" => "lmp".to_string(),
+            "orr_sherby_dorn" => "osd".to_string(),
+            "manson_haferd" => "mh".to_string(),
+            k => k.to_string(),
+        };
+        assert!((v - mean(&format!("{key}_log10_err"))).abs() < 1e-9, "{b}");
+        if b["tests_predicted"] == 3 && best.as_ref().is_none_or(|(_, w)| v < *w) {
+            best = Some((b["name"].as_str().unwrap().to_string(), v));
+        }
+    }
+    let (name, v) = best.expect("a baseline predicted every test");
+    assert_eq!(j["one_to_beat"]["name"], name.as_str(), "{j}");
+    let verdict = if m < v { "beats" } else { "does_not_beat" };
+    assert_eq!(j["creepfit_vs_one_to_beat"], verdict);
+    assert!(
+        stdout.contains("over the 3 tests of")
+            && stdout.contains(&format!("the one to beat: {name}")),
+        "{stdout}"
+    );
+    // A test the configuration cannot predict, and a bad cell: one line naming file and line.
+    for (row, want) in [
+        ("100,900,1000,X-9", ":3: test at 900 °C, 100 MPa"),
+        ("100,575,abc,X-9", ":3:"),
+    ] {
+        std::fs::write(
+            &tests,
+            format!("stress_MPa,temperature_C,rupture_time_h,specimen\n100,575,20000,X-1\n{row}\n"),
+        )
+        .unwrap();
+        let o = predict_tests(&tmp.path().join("bad"));
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{row}");
+        assert!(e.contains("campaign.csv") && e.contains(want), "{row}: {e}");
+        assert_eq!(e.trim().lines().count(), 1, "{e}");
+    }
+    // --tests replaces --at: both at once is refused.
+    let o = creepfit(&[
+        "predict",
+        "configs/cmv-joint.toml",
+        "--constants",
+        c,
+        "--tests",
+        tests.to_str().unwrap(),
+        "--at",
+        "575:100",
+    ]);
+    assert!(!o.status.success());
+}
+
 /// Curves and rupture times at `tests` (°C, MPa, specimen label; no `specimen` column when
 /// every label is empty) made by the KHD model with Arrhenius A and Kc (30 points to
 /// rupture), written into `dir` with the hold-out configuration h.toml, whose path it returns.
@@ -867,6 +995,73 @@ fn holdout_leaves_a_campaign_out() {
         stdout.contains(&format!("{k:+.3} in mean |log10 error|")),
         "{stdout}"
     );
+    // `predict --tests` of the held-out campaign's lives, at the training fit's constants and
+    // on the training data alone, is the hold-out by another road: creepfit's lives (a
+    // simulation to rupture at each condition, against the hold-out's evaluation along each
+    // measured curve) and every baseline's are the same, and so are the means.
+    let keep = |file: &str, to: &str, campaign: &str| {
+        let text = std::fs::read_to_string(tmp.path().join(file)).unwrap();
+        let mut lines = text.lines();
+        let mut kept = format!("{}\n", lines.next().unwrap());
+        for l in lines.filter(|l| l.contains(&format!(",{campaign}-"))) {
+            kept += &format!("{l}\n");
+        }
+        std::fs::write(tmp.path().join(to), kept).unwrap();
+    };
+    keep("c.csv", "c_p.csv", "P");
+    keep("r.csv", "r_p.csv", "P");
+    keep("r.csv", "r_q.csv", "Q");
+    let cfg_p = tmp.path().join("p.toml");
+    std::fs::write(
+        &cfg_p,
+        std::fs::read_to_string(&cfg)
+            .unwrap()
+            .replace("\"c.csv\"", "\"c_p.csv\"")
+            .replace("\"r.csv\"", "\"r_p.csv\""),
+    )
+    .unwrap();
+    let pred = tmp.path().join("pq");
+    ok(&[
+        "predict",
+        cfg_p.to_str().unwrap(),
+        "--constants",
+        out.join("constants.csv").to_str().unwrap(),
+        "--tests",
+        tmp.path().join("r_q.csv").to_str().unwrap(),
+        "--out",
+        pred.to_str().unwrap(),
+    ]);
+    let t = csv(&pred.join("tests.csv"));
+    assert_eq!(t.len(), h.len());
+    let tcol = |name: &str| t[0].iter().position(|c| c == name).unwrap();
+    for (r, q) in h[1..].iter().zip(&t[1..]) {
+        assert_eq!((&r[0], &r[1]), (&q[0], &q[1]));
+        for name in [
+            "model_rupture_time_h",
+            "lmp_rupture_time_h",
+            "osd_rupture_time_h",
+            "mh_rupture_time_h",
+            "wilshire_rupture_time_h",
+        ] {
+            let (a, b) = (&r[col(name)], &q[tcol(name)]);
+            if a.is_empty() || b.is_empty() {
+                assert_eq!(a, b, "{name}: absent in one only");
+                continue;
+            }
+            let (a, b): (f64, f64) = (a.parse().unwrap(), b.parse().unwrap());
+            assert!(
+                (a - b).abs() <= 1e-7 * a.abs(),
+                "{name}: holdout {a}, predict --tests {b}"
+            );
+        }
+    }
+    let sp = json(&pred.join("summary.json"));
+    let (a, b) = (
+        s["model_mean_abs_log10_err"].as_f64().unwrap(),
+        sp["tests"]["model_mean_abs_log10_err"].as_f64().unwrap(),
+    );
+    assert!((a - b).abs() < 1e-7, "{a} {b}");
+    assert_eq!(sp["tests"]["one_to_beat"]["name"], s["one_to_beat"]["name"]);
     // Without intervals there is no interval to scope.
     assert_eq!(s.get("interval_scope"), Some(&serde_json::Value::Null));
     // With them, the interval of a new test is said to hold the training campaign's scatter

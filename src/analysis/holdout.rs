@@ -15,6 +15,7 @@
 //! reported beside it (predicted life as % of the measured one, [`CurveOutcome`]).
 
 use serde::Serialize;
+use serde_json::json;
 
 use crate::baseline::{self, Baseline, BaselineKind, BaselineSettings};
 use crate::config::RunConfig;
@@ -25,6 +26,7 @@ use crate::lmp::LarsonMiller;
 use crate::model::objective::{mean_abs, CurvePrediction, Objective};
 use crate::model::Load;
 use crate::ode::Outcome;
+use crate::report::tables::jnum;
 
 /// What a hold-out leaves out of the fit.
 #[derive(Debug, Clone, PartialEq)]
@@ -371,6 +373,84 @@ fn t_quantile_975(df: usize) -> f64 {
         .unwrap_or(f64::NAN)
 }
 
+/// Rupture-time errors log10(t_predicted / t_measured) of creepfit and of every classical
+/// baseline over a set of tests with measured lives (NaN where a method predicted none), and
+/// what they say: each one's mean |log10 error|, the one to beat, creepfit against each. The
+/// held-out tests of `holdout` and the measured tests of `predict --tests` are scored so.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LifeScores {
+    /// Per test: its condition (°C, MPa).
+    pub conditions: Vec<(f64, f64)>,
+    /// Per test: creepfit's log10 error.
+    pub model: Vec<f64>,
+    /// Per baseline ([`BaselineKind::ALL`]'s order), per test: its log10 error.
+    pub baselines: Vec<Vec<f64>>,
+}
+
+impl LifeScores {
+    /// The scores of tests given as (condition (°C, MPa), measured life, creepfit's life,
+    /// every baseline's life), lives in h (NaN: not predicted).
+    pub fn of<'a>(tests: impl Iterator<Item = ((f64, f64), f64, f64, &'a [f64])>) -> LifeScores {
+        let mut s = LifeScores {
+            conditions: Vec::new(),
+            model: Vec::new(),
+            baselines: Vec::new(),
+        };
+        for (c, measured, model, baselines) in tests {
+            s.conditions.push(c);
+            s.model.push((model / measured).log10());
+            s.baselines.resize(baselines.len(), Vec::new());
+            for (column, b) in s.baselines.iter_mut().zip(baselines) {
+                column.push((b / measured).log10());
+            }
+        }
+        if s.baselines.is_empty() {
+            s.baselines = vec![Vec::new(); BaselineKind::ALL.len()];
+        }
+        s
+    }
+    /// Number of tests.
+    pub fn len(&self) -> usize {
+        self.model.len()
+    }
+    /// Whether there are no tests.
+    pub fn is_empty(&self) -> bool {
+        self.model.is_empty()
+    }
+    /// creepfit's (mean |log10 error|, tests it predicted a life for).
+    pub fn model_score(&self) -> (f64, usize) {
+        score(&self.model)
+    }
+    /// Baseline `k`'s (mean |log10 error|, tests it predicted).
+    pub fn baseline_score(&self, k: usize) -> (f64, usize) {
+        score(&self.baselines[k])
+    }
+    /// The one to beat ([`one_to_beat`]).
+    pub fn one_to_beat(&self) -> Option<usize> {
+        let scores: Vec<(f64, usize)> = (0..self.baselines.len())
+            .map(|k| self.baseline_score(k))
+            .collect();
+        one_to_beat(&scores, self.len())
+    }
+    /// creepfit against baseline `k` over the tests both predicted ([`paired_difference`]).
+    pub fn versus(&self, k: usize) -> Option<PairedDifference> {
+        paired_difference(&self.conditions, &self.model, &self.baselines[k])
+    }
+    /// Whether creepfit beats the one to beat ([`verdict`]).
+    pub fn verdict(&self) -> Verdict {
+        verdict(
+            self.model_score(),
+            self.one_to_beat().map(|k| self.baseline_score(k)),
+            self.len(),
+        )
+    }
+}
+
+/// (mean |e|, finite entries) of log10 errors `e`.
+fn score(e: &[f64]) -> (f64, usize) {
+    (mean_abs(e), e.iter().filter(|v| v.is_finite()).count())
+}
+
 /// What a hold-out run computed.
 pub struct Holdout {
     /// What was left out.
@@ -461,41 +541,36 @@ impl Holdout {
                 .collect::<Vec<_>>(),
         )
     }
+    /// The held-out tests' rupture-time errors, creepfit's and every baseline's.
+    pub fn scores(&self) -> LifeScores {
+        LifeScores::of(self.tests.iter().map(|t| {
+            (
+                (t.temperature_c, t.stress_mpa),
+                t.rupture_time_h,
+                t.model_rupture_time_h,
+                &t.baseline_rupture_time_h[..],
+            )
+        }))
+    }
     /// creepfit's (mean |log10 error|, held-out tests it predicted a life for).
     pub fn model_score(&self) -> (f64, usize) {
-        let e: Vec<f64> = self.tests.iter().map(|t| t.model_log10_err()).collect();
-        (mean_abs(&e), e.iter().filter(|v| v.is_finite()).count())
+        self.scores().model_score()
     }
     /// Baseline `k`'s (mean |log10 error|, held-out tests it predicted).
     pub fn baseline_score(&self, k: usize) -> (f64, usize) {
-        let e: Vec<f64> = self.tests.iter().map(|t| t.baseline_log10_err(k)).collect();
-        (mean_abs(&e), e.iter().filter(|v| v.is_finite()).count())
+        self.scores().baseline_score(k)
     }
     /// The one to beat ([`one_to_beat`]).
     pub fn one_to_beat(&self) -> Option<usize> {
-        let scores: Vec<(f64, usize)> = (0..self.baselines.len())
-            .map(|k| self.baseline_score(k))
-            .collect();
-        one_to_beat(&scores, self.tests.len())
+        self.scores().one_to_beat()
     }
     /// creepfit against baseline `k` over the held-out tests ([`paired_difference`]).
     pub fn versus(&self, k: usize) -> Option<PairedDifference> {
-        let cond: Vec<(f64, f64)> = self
-            .tests
-            .iter()
-            .map(|t| (t.temperature_c, t.stress_mpa))
-            .collect();
-        let m: Vec<f64> = self.tests.iter().map(|t| t.model_log10_err()).collect();
-        let b: Vec<f64> = self.tests.iter().map(|t| t.baseline_log10_err(k)).collect();
-        paired_difference(&cond, &m, &b)
+        self.scores().versus(k)
     }
     /// Whether creepfit beats it ([`verdict`]).
     pub fn verdict(&self) -> Verdict {
-        verdict(
-            self.model_score(),
-            self.one_to_beat().map(|k| self.baseline_score(k)),
-            self.tests.len(),
-        )
+        self.scores().verdict()
     }
     /// Held-out tests per [`CurveOutcome`]: complete, ruptured early, no rupture, failed.
     pub fn curve_outcomes(&self) -> [usize; 4] {
@@ -804,61 +879,123 @@ pub fn table(h: &Holdout) -> String {
     s
 }
 
+/// `summary.json`'s `baselines` (each baseline's own entry with, where fitted, its
+/// `mean_abs_log10_err`, `tests_predicted` and `creepfit_difference`) and `one_to_beat` of
+/// `scores` (`holdout`'s held-out tests, `predict --tests`'s measured ones).
+pub fn scores_json(
+    scores: &LifeScores,
+    baselines: &[Baseline],
+) -> (Vec<serde_json::Value>, Option<serde_json::Value>) {
+    let entries = baselines
+        .iter()
+        .enumerate()
+        .map(|(k, b)| {
+            let (v, c) = scores.baseline_score(k);
+            let mut j = b.to_json();
+            if b.fit.is_ok() {
+                j["mean_abs_log10_err"] = jnum(v);
+                j["tests_predicted"] = json!(c);
+                j["creepfit_difference"] = difference_json(scores.versus(k));
+            }
+            j
+        })
+        .collect();
+    let one_to_beat = scores.one_to_beat().map(|k| {
+        json!({
+            "kind": baselines[k].kind,
+            "name": baselines[k].kind.name(),
+            "mean_abs_log10_err": jnum(scores.baseline_score(k).0),
+            "creepfit_difference": difference_json(scores.versus(k)),
+        })
+    });
+    (entries, one_to_beat)
+}
+
+/// A [`PairedDifference`] as JSON (its NaN ends as null), null without one.
+pub fn difference_json(d: Option<PairedDifference>) -> serde_json::Value {
+    d.map_or(serde_json::Value::Null, |d| {
+        json!({
+            "mean": jnum(d.mean),
+            "lo95": jnum(d.lo95),
+            "hi95": jnum(d.hi95),
+            "tests": d.tests,
+            "conditions": d.conditions,
+            "comparison": d.comparison,
+        })
+    })
+}
+
 /// The printed comparison with the classical baselines: each one's mean |log10 error| over the
 /// held-out tests beside creepfit's, its constants or why it is absent, and the one to beat.
 pub fn baselines_table(h: &Holdout) -> String {
-    let n = h.tests.len();
-    let (m, m_n) = h.model_score();
-    let mut s = format!(
-        "mean |log10 error| of the rupture time over the {n} held-out tests, classical baselines fitted to the same training rupture times:\n  {:<16} {:>6.3}{}\n",
-        "creepfit",
-        m,
-        if m_n < n {
-            format!("  (a life for {m_n} of {n} tests)")
+    scores_table(
+        &h.scores(),
+        &h.baselines,
+        &format!(
+            "mean |log10 error| of the rupture time over the {} held-out tests, classical baselines fitted to the same training rupture times:",
+            h.tests.len()
+        ),
+        "held-out test",
+    )
+}
+
+/// The printed comparison of `scores`: `header`, then creepfit's and each of `baselines`'
+/// mean |log10 error| (with its constants or why it is absent), the one to beat and creepfit
+/// against it. `tests` names the tests ("held-out test") where none predicted every one.
+pub fn scores_table(
+    scores: &LifeScores,
+    baselines: &[Baseline],
+    header: &str,
+    tests: &str,
+) -> String {
+    let n = scores.len();
+    let (m, m_n) = scores.model_score();
+    let of = |c: usize| {
+        if c < n {
+            format!("  (a life for {c} of {n} tests)")
         } else {
             String::new()
         }
-    );
-    for (k, b) in h.baselines.iter().enumerate() {
+    };
+    let mut s = format!("{header}\n  {:<16} {:>6.3}{}\n", "creepfit", m, of(m_n));
+    for (k, b) in baselines.iter().enumerate() {
         match &b.fit {
             Ok(_) => {
-                let (v, c) = h.baseline_score(k);
+                let (v, c) = scores.baseline_score(k);
                 s.push_str(&format!(
                     "  {:<16} {:>6.3}{}  [{}]\n",
                     b.kind.name(),
                     v,
-                    if c < n {
-                        format!("  (a life for {c} of {n} tests)")
-                    } else {
-                        String::new()
-                    },
+                    of(c),
                     b.describe()
                 ));
             }
             Err(e) => s.push_str(&format!("  {:<16} absent: {e}\n", b.kind.name())),
         }
     }
-    match h.one_to_beat() {
+    match scores.one_to_beat() {
         Some(k) => {
-            let v = h.baseline_score(k).0;
+            let v = scores.baseline_score(k).0;
             s.push_str(&format!(
                 "the one to beat: {} {:.3}; creepfit {:.3} {}\n",
-                h.baselines[k].kind.name(),
+                baselines[k].kind.name(),
                 v,
                 m,
-                match h.verdict() {
+                match scores.verdict() {
                     Verdict::Beats => "beats it",
                     _ => "does NOT beat it",
                 }
             ));
-            if let Some(d) = h.versus(k) {
+            if let Some(d) = scores.versus(k) {
                 s.push_str(&format!(
                     "  {}\n",
-                    versus_text(h.baselines[k].kind.name(), &d)
+                    versus_text(baselines[k].kind.name(), &d)
                 ));
             }
         }
-        None => s.push_str("the one to beat: none (no baseline predicted every held-out test)\n"),
+        None => s.push_str(&format!(
+            "the one to beat: none (no baseline predicted every {tests})\n"
+        )),
     }
     s
 }
@@ -880,10 +1017,22 @@ pub fn versus_text(name: &str, d: &PairedDifference) -> String {
             Comparison::CreepfitBetter => "creepfit's errors are smaller",
             Comparison::BaselineBetter => "the baseline's errors are smaller",
             Comparison::NotToldApart =>
-                "the held-out tests do not tell the two apart (the interval contains zero)",
+                "the tests do not tell the two apart (the interval contains zero)",
         }
     )
 }
+
+/// The first columns of `holdout.csv` and of `predict --tests`'s `tests.csv`: the condition,
+/// the measured life, creepfit's and Larson–Miller's, and their log10 errors.
+pub const LIFE_COLUMNS: [&str; 7] = [
+    "temperature_C",
+    "stress_MPa",
+    "rupture_time_h",
+    "model_rupture_time_h",
+    "lmp_rupture_time_h",
+    "model_log10_err",
+    "lmp_log10_err",
+];
 
 /// `holdout.csv`'s columns under `--intervals` (after `curve_rms_pct`): the 95 % prediction
 /// interval of a new test, the 95 % confidence interval of the model's prediction, and the

@@ -235,6 +235,13 @@ pub enum Command {
         /// configuration's [predict] at).
         #[arg(long, allow_hyphen_values = true)]
         at: Option<String>,
+        /// Tests to predict and score: a rupture-times file (ruptures format:
+        /// temperature_C,stress_MPa,rupture_time_h[,specimen]), e.g. another campaign's. Each
+        /// test's condition is predicted (instead of --at / [predict] at), its measured life
+        /// compared with creepfit's and every classical baseline's in tests.csv, and their mean
+        /// |log10 error| in summary.json (`tests`).
+        #[arg(long, value_name = "FILE", conflicts_with = "at")]
+        tests: Option<PathBuf>,
         /// Add the 95 % prediction interval of a new test and the 95 % confidence interval
         /// of the model's prediction (profile likelihood) to predictions.csv.
         #[arg(long)]
@@ -351,22 +358,31 @@ pub fn run(cli: Cli) -> Result<()> {
             config,
             constants,
             at,
+            tests,
             intervals,
             out,
             quiet,
         } => {
-            let at = at
+            let mut at = at
                 .map(|s| {
                     crate::data::Condition::parse_list(&s)
                         .map_err(|m| Error::Invalid(format!("--at: {m}")))
                 })
                 .transpose()?;
+            let tests = match tests {
+                Some(file) => {
+                    let records = crate::predict::measured::read(&file)?;
+                    at = Some(crate::predict::measured::conditions(&records));
+                    Some((file, records))
+                }
+                None => None,
+            };
             let cli = Overrides {
                 predict_at: at,
                 predict_intervals: intervals.then_some(true),
                 ..long_run(out, quiet, None)
             };
-            commands::predict(&config, &constants, &cli)
+            commands::predict(&config, &constants, tests.as_ref(), &cli)
         }
         Command::Holdout {
             config,

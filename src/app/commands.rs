@@ -130,13 +130,24 @@ pub fn simulate(
 /// `creepfit predict` at the constants of `constants`: at them, or under `--intervals` at
 /// the maximum-likelihood refit the intervals are centred on (the given constants'
 /// predictions beside).
-pub fn predict(config: &Path, constants: &Path, cli: &Overrides) -> Result<()> {
+///
+/// With `tests` (`--tests FILE`: the file and its records) the conditions are the tests', and
+/// their measured lives are scored against the predictions.
+pub fn predict(
+    config: &Path,
+    constants: &Path,
+    tests: Option<&(PathBuf, Vec<crate::data::RuptureRecord>)>,
+    cli: &Overrides,
+) -> Result<()> {
     let (cfg, data) = load(config, cli)?;
     crate::predict::check_asked(&cfg)?;
     let model = cfg.build_model()?;
     let params = crate::report::tables::read_constants_for(constants, &cfg, model.as_ref())?;
     // What the configuration can predict: refused before anything is written.
-    crate::predict::check_conditions(&cfg, &data, cli.predict_at.is_some())?;
+    match tests {
+        Some((file, records)) => crate::predict::measured::check(file, records, &cfg, &data)?,
+        None => crate::predict::check_conditions(&cfg, &data, cli.predict_at.is_some())?,
+    }
     let out = cfg.out_dir("predict");
     let mut folder = RunFolder::begin(&out, "predict")?;
     note_data(&mut folder, &data);
@@ -148,9 +159,14 @@ pub fn predict(config: &Path, constants: &Path, cli: &Overrides) -> Result<()> {
     };
     let outcome = (|| {
         let setup = cfg.predict_setup(&data);
-        let run = crate::predict::run_observed(&setup, &data, model.as_ref(), &params, &hooks);
+        let mut run = crate::predict::run_observed(&setup, &data, model.as_ref(), &params, &hooks)?;
         bars.clear();
-        export::predict::write(&cfg, &data, model.as_ref(), &run?, &out)
+        if let Some((file, records)) = tests {
+            run.measured = Some(crate::predict::measured::MeasuredTests::of(
+                file, records, &run,
+            ));
+        }
+        export::predict::write(&cfg, &data, model.as_ref(), &run, &out)
     })();
     folder.finish(outcome)
 }

@@ -10,6 +10,7 @@
 //! (stress–rupture, Norton, Larson–Miller) with the asked conditions on them.
 
 pub mod diagrams;
+pub mod measured;
 
 use std::path::Path;
 
@@ -106,6 +107,8 @@ pub struct PredictRun {
     pub output_names: Vec<&'static str>,
     /// Intervals per condition under `--intervals` ([`crate::uncertainty::predict::intervals_at`]).
     pub intervals: Option<Vec<crate::uncertainty::predict::ConditionIntervals>>,
+    /// Under `--tests FILE`: its measured lives against the predictions ([`measured`]).
+    pub measured: Option<measured::MeasuredTests>,
 }
 
 /// `predictions.csv`'s interval columns under `--intervals`, with the quantity and interval
@@ -275,6 +278,7 @@ pub fn predict(
         baselines,
         output_names: model.output_names(),
         intervals: None,
+        measured: None,
     }
 }
 
@@ -659,6 +663,11 @@ pub fn write_outputs(
             .collect();
         write_csv(&out.join("band.csv"), &BAND_COLUMNS, &rows)?;
     }
+    if let Some(m) = &run.measured {
+        let (header, rows) = m.csv();
+        let header: Vec<&str> = header.iter().map(String::as_str).collect();
+        write_csv(&out.join("tests.csv"), &header, &rows)?;
+    }
     let summary = summary_json(cfg, data, model, run);
     write_text(
         &out.join("summary.json"),
@@ -748,6 +757,7 @@ pub fn summary_json(cfg: &RunConfig, data: &Dataset, model: &dyn Model, run: &Pr
         },
         "baselines": run.baselines.iter().map(Baseline::to_json).collect::<Vec<_>>(),
         "extrapolation": extrapolation_notes(&tested, &run.predictions.iter().map(|p| p.condition).collect::<Vec<_>>()),
+        "tests": run.measured.as_ref().map(|m| m.json(run)),
     })
 }
 

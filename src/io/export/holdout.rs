@@ -67,16 +67,8 @@ pub fn write(cfg: &RunConfig, data: &Dataset, h: &Holdout, out: &Path) -> Result
             r
         })
         .collect();
-    let mut header = vec![
-        "temperature_C",
-        "stress_MPa",
-        "rupture_time_h",
-        "model_rupture_time_h",
-        "lmp_rupture_time_h",
-        "model_log10_err",
-        "lmp_log10_err",
-        "curve_rms_pct",
-    ];
+    let mut header = crate::holdout::LIFE_COLUMNS.to_vec();
+    header.push("curve_rms_pct");
     if with_intervals {
         header.extend(INTERVAL_COLUMNS);
     }
@@ -96,29 +88,8 @@ pub fn write(cfg: &RunConfig, data: &Dataset, h: &Holdout, out: &Path) -> Result
         let (inside, with) = h.inside_pred95();
         json!({"inside": inside, "tests": with})
     };
-    let baselines: Vec<serde_json::Value> = h
-        .baselines
-        .iter()
-        .enumerate()
-        .map(|(k, b)| {
-            let (v, c) = h.baseline_score(k);
-            let mut j = b.to_json();
-            if b.fit.is_ok() {
-                j["mean_abs_log10_err"] = jnum(v);
-                j["tests_predicted"] = json!(c);
-                j["creepfit_difference"] = difference_json(h.versus(k));
-            }
-            j
-        })
-        .collect();
-    let one_to_beat = h.one_to_beat().map(|k| {
-        json!({
-            "kind": h.baselines[k].kind,
-            "name": h.baselines[k].kind.name(),
-            "mean_abs_log10_err": jnum(h.baseline_score(k).0),
-            "creepfit_difference": difference_json(h.versus(k)),
-        })
-    });
+    let scores = h.scores();
+    let (baselines, one_to_beat) = crate::holdout::scores_json(&scores, &h.baselines);
     let [complete, early, no_rupture, failed] = h.curve_outcomes();
     let summary = json!({
         "held_out_temperature_C": h.left_out.temperature_c(),
@@ -294,18 +265,4 @@ pub fn write(cfg: &RunConfig, data: &Dataset, h: &Holdout, out: &Path) -> Result
     );
     println!("wrote {}", out.display());
     plots_done(out, failures)
-}
-
-/// A [`crate::holdout::PairedDifference`] as JSON (its NaN ends as null), null without one.
-fn difference_json(d: Option<crate::holdout::PairedDifference>) -> serde_json::Value {
-    d.map_or(serde_json::Value::Null, |d| {
-        json!({
-            "mean": jnum(d.mean),
-            "lo95": jnum(d.lo95),
-            "hi95": jnum(d.hi95),
-            "tests": d.tests,
-            "conditions": d.conditions,
-            "comparison": d.comparison,
-        })
-    })
 }

@@ -30,6 +30,9 @@ pub fn write(
     println!("{}: model {}", cfg.name, model.name());
     let names: Vec<&str> = model.constants().iter().map(|c| c.name).collect();
     print!("{}", crate::predict::table(run, &names));
+    if let Some(m) = &run.measured {
+        print!("{}", m.table(run));
+    }
     let failures = crate::predict::write_outputs(out, cfg, data, model, run)?;
     println!("wrote {}", out.display());
     plots_done(out, failures)
