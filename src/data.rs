@@ -1519,6 +1519,12 @@ pub fn read_ruptures(path: &Path) -> Result<Vec<RuptureRecord>> {
     read_ruptures_from(path, &bytes, progress)
 }
 
+/// [`read_ruptures`] of a table's CSV text in memory, named `path` in errors (the Python
+/// package's DataFrames).
+pub fn read_ruptures_bytes(path: &Path, bytes: &[u8]) -> Result<Vec<RuptureRecord>> {
+    read_ruptures_from(path, bytes, None)
+}
+
 /// [`read_ruptures`] of the file's bytes, named `path` in errors.
 fn read_ruptures_from(
     path: &Path,

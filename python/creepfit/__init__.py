@@ -369,6 +369,7 @@ def predict(
     *,
     at: Optional[Iterable[Tuple[float, float]]] = None,
     intervals: Optional[bool] = None,
+    tests: Any = None,
 ) -> pd.DataFrame:
     """``creepfit predict``: rupture time, rupture strain and minimum creep rate at untested
     conditions; predictions.csv as a DataFrame, summary.json in ``.attrs["summary"]``.
@@ -378,10 +379,27 @@ def predict(
             constants.csv path.
         at: conditions ``[(T °C, stress MPa), ...]`` (default: ``[predict] at``).
         intervals: add the 95 % intervals (``--intervals``; default: ``[predict]``'s).
+        tests: measured tests to predict and score (``--tests FILE``): a DataFrame or a path
+            of rupture times (temperature_C, stress_MPa, rupture_time_h[, specimen]), e.g.
+            another campaign's, instead of ``at``; tests.csv in ``.attrs["tests"]``, their
+            mean |log10 error| against the classical baselines in the summary's ``tests``.
     """
     text, kind = _config(config)
     c, r = _tables(curves, ruptures)
     ctext, cname = _constants(constants)
+    ttext, tname = None, None
+    if tests is not None:
+        if at is not None:
+            raise CreepfitError("give `at` or `tests`, not both")
+        if isinstance(tests, (str, os.PathLike)):
+            tname = os.fspath(tests)
+            try:
+                with open(tname, encoding="utf-8", newline="") as f:
+                    ttext = f.read()
+            except OSError as e:
+                raise CreepfitError(f"{tname}: {e.strerror}") from None
+        else:
+            ttext = _csv(tests, RUPTURE_COLUMNS, "tests")
     at_text = None
     if at is not None:
         pairs = []
@@ -390,10 +408,13 @@ def predict(
             pairs.append(f"{float(t)!r}:{float(s)!r}")
         at_text = ",".join(pairs)
     out, warns = _native.predict(
-        text, kind, ctext, cname, c, r, at_text, None if intervals is None else bool(intervals)
+        text, kind, ctext, cname, c, r, at_text, None if intervals is None else bool(intervals),
+        ttext, tname,
     )
     _warn(warns)
     df = _frame(out["predictions"])
     df.attrs["summary"] = json.loads(out["summary"])
+    if "tests" in out:
+        df.attrs["tests"] = _frame(out["tests"])
     return df
 

@@ -55,4 +55,6 @@ def predict(
     ruptures: Optional[str] = None,
     at: Optional[str] = None,
     intervals: Optional[bool] = None,
+    tests: Optional[str] = None,
+    tests_name: Optional[str] = None,
 ) -> _Outputs: ...

@@ -41,6 +41,8 @@ const CONFIG_NAME: &str = "<config>";
 const CURVES_NAME: &str = "<curves DataFrame>";
 const RUPTURES_NAME: &str = "<ruptures DataFrame>";
 const CONSTANTS_NAME: &str = "<constants>";
+/// The name a `tests` table has in errors when it did not come from a file.
+const TESTS_NAME: &str = "<tests DataFrame>";
 
 /// The library's error as a `CreepfitError` with its message and, for a file's error, the
 /// file and line.
@@ -540,7 +542,7 @@ fn diagnose(
 /// table's CSV text (name,value[,…]), named `constants_name` in errors; `at` the conditions as `T:σ[,T:σ…]` (default:
 /// the configuration's `[predict] at`).
 #[pyfunction]
-#[pyo3(signature = (config, kind, constants, constants_name=None, curves=None, ruptures=None, at=None, intervals=None))]
+#[pyo3(signature = (config, kind, constants, constants_name=None, curves=None, ruptures=None, at=None, intervals=None, tests=None, tests_name=None))]
 #[allow(clippy::too_many_arguments)]
 fn predict(
     py: Python<'_>,
@@ -552,12 +554,27 @@ fn predict(
     ruptures: Option<String>,
     at: Option<String>,
     intervals: Option<bool>,
+    tests: Option<String>,
+    tests_name: Option<String>,
 ) -> PyResult<Outputs> {
     let src = Source::new(kind, config)?;
     let tables = tables_of(curves, ruptures)?;
-    let at = at
+    let mut at = at
         .map(|s| Condition::parse_list(&s).map_err(|m| py_err(Error::Invalid(format!("at: {m}")))))
         .transpose()?;
+    let tests = match tests {
+        Some(text) => {
+            if at.is_some() {
+                return Err(CreepfitError::new_err("give `at` or `tests`, not both"));
+            }
+            let name = PathBuf::from(tests_name.as_deref().unwrap_or(TESTS_NAME));
+            let records =
+                creepfit::predict::measured::read_bytes(&name, text.as_bytes()).map_err(py_err)?;
+            at = Some(creepfit::predict::measured::conditions(&records));
+            Some((name, records))
+        }
+        None => None,
+    };
     let cli = Overrides {
         predict_at: at,
         predict_intervals: intervals,
@@ -571,15 +588,27 @@ fn predict(
         let name = PathBuf::from(constants_name.as_deref().unwrap_or(CONSTANTS_NAME));
         let params =
             tables::read_constants_bytes(&name, constants.as_bytes(), &cfg, model.as_ref())?;
-        creepfit::predict::check_conditions(&cfg, &data, cli.predict_at.is_some())?;
+        match &tests {
+            Some((name, records)) => {
+                creepfit::predict::measured::check(name, records, &cfg, &data)?
+            }
+            None => creepfit::predict::check_conditions(&cfg, &data, cli.predict_at.is_some())?,
+        }
         let tested = creepfit::baseline::Tested::of(&data, cfg.has_laws());
         warnings.extend(creepfit::predict::extrapolation_notes(
             &tested,
             &cfg.predict.at,
         ));
-        let run =
+        let mut run =
             creepfit::predict::run(&cfg.predict_setup(&data), &data, model.as_ref(), &params)?;
         let mut out = HashMap::new();
+        if let Some((name, records)) = &tests {
+            let m = creepfit::predict::measured::MeasuredTests::of(name, records, &run);
+            let (h, rows) = m.csv();
+            let h: Vec<&str> = h.iter().map(String::as_str).collect();
+            out.insert("tests", tables::csv_text(&h, rows.iter()));
+            run.measured = Some(m);
+        }
         let (h, rows) = creepfit::predict::predictions_table(&run);
         out.insert("predictions", tables::csv_text(&h, rows.iter()));
         out.insert(

@@ -128,6 +128,39 @@ def test_predict_equals_cli(run_cli, cli_fit, tmp_path, curves, ruptures, interv
     assert ("rupture_time_lo95_h" in res.columns) == intervals
 
 
+def test_predict_tests_equals_cli(run_cli, cli_fit, tmp_path, curves, ruptures):
+    # Another campaign's lives (a replicate pair and one more test) as a DataFrame and as the
+    # file the command line reads: the same tests.csv, predictions and summary.
+    tests = pd.DataFrame({
+        "temperature_C": [560.0, 560.0, 560.0],
+        "stress_MPa": [100.0, 90.0, 100.0],
+        "rupture_time_h": [1500.0, 9000.0, 2500.0],
+        "specimen": ["N-1", "N-2", "N-3"],
+    })
+    path = tmp_path / "campaign.csv"
+    tests.to_csv(path, index=False)
+    out = tmp_path / "cli"
+    run_cli("predict", CONFIG, "--constants", cli_fit / "constants.csv",
+            "--tests", path, "--out", out)
+    constants = read_table(cli_fit / "constants.csv")
+    res = creepfit.predict(CONFIG, constants, curves, ruptures, tests=tests)
+    assert_same_table(read_table(out / "predictions.csv"), res, "predictions.csv")
+    assert_same_table(read_table(out / "tests.csv"), res.attrs["tests"], "tests.csv")
+    cli_summary = json.loads((out / "summary.json").read_text())
+    summary = res.attrs["summary"]
+    assert summary["tests"]["tests"] == 3 and summary["tests"]["conditions"] == 2
+    # The file's name differs (a DataFrame has none); every number is the same.
+    summary["tests"]["file"] = cli_summary["tests"]["file"]
+    assert summary == cli_summary
+    errs = res.attrs["tests"]["model_log10_err"].abs().mean()
+    assert errs == pytest.approx(summary["tests"]["model_mean_abs_log10_err"], rel=1e-12)
+    # From the path, the file's name is the command line's.
+    res = creepfit.predict(CONFIG, constants, curves, ruptures, tests=path)
+    assert res.attrs["summary"]["tests"]["file"] == cli_summary["tests"]["file"]
+    with pytest.raises(creepfit.CreepfitError, match="not both"):
+        creepfit.predict(CONFIG, constants, curves, ruptures, tests=tests, at=[(560, 100)])
+
+
 def test_predict_from_a_fit_result_and_a_dict(cli_fit, curves, ruptures):
     fitted = creepfit.fit(CONFIG, curves, ruptures)
     a = creepfit.predict(CONFIG, fitted, curves, ruptures, at=[(560, 100)])

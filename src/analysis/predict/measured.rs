@@ -68,7 +68,15 @@ pub struct MeasuredTests {
 /// optional `specimen`, `rupture_strain_pct`, `min_rate_pct_per_h`; errors name file, line and
 /// field); a file without a test is an error.
 pub fn read(file: &Path) -> Result<Vec<RuptureRecord>> {
-    let records = crate::data::read_ruptures(file)?;
+    non_empty(file, crate::data::read_ruptures(file)?)
+}
+
+/// [`read`] of the table's CSV text in memory, named `name` in errors.
+pub fn read_bytes(name: &Path, bytes: &[u8]) -> Result<Vec<RuptureRecord>> {
+    non_empty(name, crate::data::read_ruptures_bytes(name, bytes)?)
+}
+
+fn non_empty(file: &Path, records: Vec<RuptureRecord>) -> Result<Vec<RuptureRecord>> {
     if records.is_empty() {
         return Err(Error::data(file, 0, "no tests (rows) to predict"));
     }
