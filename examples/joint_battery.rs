@@ -27,11 +27,7 @@ fn main() -> anyhow::Result<()> {
             println!("{seed} skipped: a curve does not rupture");
             continue;
         };
-        let data = Dataset {
-            curves,
-            warnings: Vec::new(),
-            dropped: Vec::new(),
-        };
+        let data = Dataset::of_curves(curves);
         let cfg = RunConfig::from_str(TWO_TEMPERATURE_CONFIG, Path::new("joint-battery.toml"))?
             .with_data(&data);
         let t0 = std::time::Instant::now();

@@ -398,6 +398,39 @@ pub struct Dataset {
     pub warnings: Vec<String>,
     /// Gross outliers dropped on load (`outliers = "drop"`), in file order.
     pub dropped: Vec<Outlier>,
+    /// Life-only tests: rupture records that match no curve (at the kept temperature where the
+    /// configuration keeps one), in file order. No fit uses them (creepfit fits tests with
+    /// curves, the classical baselines the same tests' lives); `holdout` predicts those it
+    /// leaves out.
+    pub lives: Vec<RuptureRecord>,
+}
+
+impl Dataset {
+    /// The data set of `curves` alone: no warnings, nothing dropped, no life-only tests.
+    pub fn of_curves(curves: Vec<Curve>) -> Dataset {
+        Dataset {
+            curves,
+            warnings: Vec::new(),
+            dropped: Vec::new(),
+            lives: Vec::new(),
+        }
+    }
+}
+
+impl RuptureRecord {
+    /// Its test campaign: the specimen label's text before the first `-` ([`campaign_of`]).
+    pub fn campaign(&self) -> Option<&str> {
+        self.specimen.as_deref().map(campaign_of)
+    }
+
+    /// A short human label, e.g. `560 °C, 85 MPa` or `560 °C, 85 MPa, specimen S3`.
+    pub fn label(&self) -> String {
+        let mut s = format!("{} °C, {} MPa", self.temperature_c, self.stress_mpa);
+        if let Some(sp) = &self.specimen {
+            s.push_str(&format!(", specimen {sp}"));
+        }
+        s
+    }
 }
 
 /// A test declared interrupted (it did not rupture: no rupture time, no lifetime term): a
@@ -758,11 +791,13 @@ fn load_read(
         out.push(finish_curve(c, rec, curves, ruptures, &mut warnings)?);
     }
 
-    // Unused records at a temperature that has curves.
+    // Unused records at a temperature that has curves: life-only tests.
+    let mut lives = Vec::new();
     for (r, u) in records.iter().zip(&used) {
         if !*u && out.iter().any(|c| c.temperature_c == r.temperature_c) {
+            lives.push(r.clone());
             warnings.push(format!(
-                "{}:{}: rupture record at {} °C, {} MPa{} matches no curve; ignored",
+                "{}:{}: rupture record at {} °C, {} MPa{} matches no curve: a life-only test, not fitted (`holdout` predicts it where it leaves it out)",
                 ruptures.display(),
                 r.line,
                 r.temperature_c,
@@ -785,13 +820,14 @@ fn load_read(
             .filter(|(r, u)| !**u && !out.iter().any(|c| c.temperature_c == r.temperature_c))
             .map(|(r, _)| r)
             .collect();
+        lives.extend(lone.iter().map(|r| (*r).clone()));
         if let Some(first) = lone.first() {
             let mut temps: Vec<f64> = lone.iter().map(|r| r.temperature_c).collect();
             temps.sort_by(f64::total_cmp);
             temps.dedup();
             let temps: Vec<String> = temps.iter().map(|t| format!("{t}")).collect();
             warnings.push(format!(
-                "{}:{}: {} rupture record(s) at {} °C, where the curves file has no curve, not fitted (first on this line): creepfit fits tests with curves only, so these lives are in no output",
+                "{}:{}: {} rupture record(s) at {} °C, where the curves file has no curve, not fitted (first on this line): creepfit fits tests with curves only; `holdout` predicts these lives where it leaves them out",
                 ruptures.display(),
                 first.line,
                 lone.len(),
@@ -806,10 +842,12 @@ fn load_read(
             .then(a.stress_mpa.total_cmp(&b.stress_mpa))
             .then_with(|| a.specimen.cmp(&b.specimen))
     });
+    lives.sort_by_key(|r| r.line);
     Ok(Dataset {
         curves: out,
         warnings,
         dropped,
+        lives,
     })
 }
 

@@ -584,12 +584,10 @@ fn predict_tests_scores_a_file_of_measured_lives() {
     assert!(!o.status.success());
 }
 
-/// Curves and rupture times at `tests` (°C, MPa, specimen label; no `specimen` column when
-/// every label is empty) made by the KHD model with Arrhenius A and Kc (30 points to
-/// rupture), written into `dir` with the hold-out configuration h.toml, whose path it returns.
-fn law_data(dir: &Path, tests: &[(f64, f64, &str)]) -> PathBuf {
+/// The model, constants and integrator [`law_data`] makes its tests with: KHD with Arrhenius A
+/// and Kc about 575 °C.
+fn law_truth() -> (Box<dyn creepfit::model::Model>, [f64; 8], OdeOptions) {
     use LawKind::*;
-    let truth = [1.2e-9, 0.12, 0.55, 6e4, 1.5e-5, 5.0, 350.0, 250.0];
     let model = with_laws(
         build("khd", &[]).unwrap(),
         &[Arrhenius, Constant, Constant, Constant, Arrhenius, Constant],
@@ -600,6 +598,18 @@ fn law_data(dir: &Path, tests: &[(f64, f64, &str)]) -> PathBuf {
         atol: 1e-15,
         ..OdeOptions::default()
     };
+    (
+        model,
+        [1.2e-9, 0.12, 0.55, 6e4, 1.5e-5, 5.0, 350.0, 250.0],
+        ode,
+    )
+}
+
+/// Curves and rupture times at `tests` (°C, MPa, specimen label; no `specimen` column when
+/// every label is empty) made by the KHD model with Arrhenius A and Kc (30 points to
+/// rupture), written into `dir` with the hold-out configuration h.toml, whose path it returns.
+fn law_data(dir: &Path, tests: &[(f64, f64, &str)]) -> PathBuf {
+    let (model, truth, ode) = law_truth();
     let labelled = tests.iter().any(|t| !t.2.is_empty());
     let col = |label: &str| {
         if labelled {
@@ -1090,6 +1100,120 @@ fn holdout_leaves_a_campaign_out() {
         !o.status.success() && e.contains("--campaign R") && e.contains("P, Q"),
         "{e}"
     );
+}
+
+/// Life-only tests (rupture records without a curve) are data too: the loader names them,
+/// no fit uses them, and `holdout` predicts those it leaves out by simulating to rupture — of
+/// a campaign with curves and of a campaign with lives only.
+#[test]
+fn holdout_predicts_life_only_tests() {
+    let tmp = TempDir::new().unwrap();
+    let cfg = law_data(
+        tmp.path(),
+        &[
+            (560.0, 85.0, "P-1"),
+            (560.0, 110.0, "P-2"),
+            (560.0, 100.0, "Q-a"),
+            (590.0, 75.0, "P-1"),
+            (590.0, 100.0, "P-2"),
+            (590.0, 90.0, "Q-a"),
+        ],
+    );
+    // Three lives without curves, made by the same model: Q's at 575 °C and at a tested
+    // temperature, and campaign R's only test.
+    let (model, truth, ode) = law_truth();
+    let life = |t: f64, s: f64| {
+        let r = model.simulate(&truth, &Load::new(s, t, 1.0 / 3.0), &[], &mut [], &ode);
+        assert!(r.ruptured());
+        r.t_end
+    };
+    let lone = [
+        (575.0, 95.0, "Q-b"),
+        (560.0, 90.0, "Q-c"),
+        (575.0, 85.0, "R-1"),
+    ];
+    let mut r = std::fs::read_to_string(tmp.path().join("r.csv")).unwrap();
+    for (t, s, label) in lone {
+        r += &format!("{t},{s},{},{label}\n", life(t, s));
+    }
+    std::fs::write(tmp.path().join("r.csv"), r).unwrap();
+    let hold = |campaign: &str| {
+        let out = tmp.path().join(campaign);
+        let o = creepfit(&[
+            "holdout",
+            cfg.to_str().unwrap(),
+            "--campaign",
+            campaign,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert!(o.status.success(), "{stderr}");
+        (String::from_utf8_lossy(&o.stdout).into_owned(), stderr, out)
+    };
+    let (stdout, stderr, out) = hold("Q");
+    // The loader names them: one at a tested temperature, two where no curve is.
+    assert!(
+        stderr.contains("560 °C, 90 MPa, specimen Q-c matches no curve: a life-only test"),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains("2 rupture record(s) at 575 °C, where the curves file has no curve"),
+        "{stderr}"
+    );
+    let h = csv(&out.join("holdout.csv"));
+    let col = |name: &str| h[0].iter().position(|c| c == name).unwrap();
+    let rows: Vec<(String, String, String, String)> = h[1..]
+        .iter()
+        .map(|r| {
+            (
+                r[0].clone(),
+                r[1].clone(),
+                r[col("specimen")].clone(),
+                r[col("curve_outcome")].clone(),
+            )
+        })
+        .collect();
+    let row = |t: &str, s: &str, sp: &str, o: &str| {
+        (t.to_string(), s.to_string(), sp.to_string(), o.to_string())
+    };
+    assert_eq!(
+        rows,
+        [
+            row("560", "90", "Q-c", "no_curve"),
+            row("560", "100", "Q-a", "complete"),
+            row("575", "95", "Q-b", "no_curve"),
+            row("590", "90", "Q-a", "complete"),
+        ]
+    );
+    // Every life predicted as the curves' are: to the recovered constants' accuracy.
+    for r in &h[1..] {
+        let err: f64 = r[col("model_log10_err")].parse().unwrap();
+        assert!(err.abs() < 1e-3, "{r:?}");
+        if r[col("curve_outcome")] == "no_curve" {
+            assert_eq!(
+                (
+                    r[col("curve_rms_pct")].as_str(),
+                    r[col("curve_points")].as_str()
+                ),
+                ("", "0")
+            );
+        }
+    }
+    assert!(stdout.contains("life only (no curve)"), "{stdout}");
+    let s = json(&out.join("summary.json"));
+    assert_eq!(s["tests"], 4);
+    assert_eq!(s["curve_outcomes"]["no_curve"], 2);
+    // The training fit is P's four curves: no life-only test trains it, R's included.
+    assert_eq!(s["training_lifetime_err_pct"].as_array().unwrap().len(), 4);
+    // A campaign with a life and no curve is held out too; its one test predicted the same way.
+    let (_, _, out) = hold("R");
+    let h = csv(&out.join("holdout.csv"));
+    assert_eq!(h.len(), 2);
+    assert_eq!((h[1][0].as_str(), h[1][1].as_str()), ("575", "85"));
+    let err: f64 = h[1][col("model_log10_err")].parse().unwrap();
+    assert!(err.abs() < 1e-3, "{:?}", h[1]);
+    assert!(!out.join("curves.png").exists());
 }
 
 /// `holdout`'s training fit under eq. 8 (the configuration's objective) fits every specimen

@@ -591,11 +591,7 @@ fn joint_diagnose_names_a_hidden_effect_and_passes_a_clean_set() {
         let curves = two_temperature_set(seed, effect)
             .unwrap()
             .expect("ruptures");
-        let data = creepfit::data::Dataset {
-            curves,
-            warnings: Vec::new(),
-            dropped: Vec::new(),
-        };
+        let data = creepfit::data::Dataset::of_curves(curves);
         let text = format!(
             "{TWO_TEMPERATURE_CONFIG}[diagnose]\nextensions = [\"constant_load\", \"loading_strain\"]\nbootstrap = 79\nbootstrap_extended = 79\n"
         );

@@ -19,7 +19,7 @@ use serde_json::json;
 
 use crate::baseline::{self, Baseline, BaselineKind, BaselineSettings};
 use crate::config::RunConfig;
-use crate::data::{Curve, Dataset};
+use crate::data::{Condition, Curve, Dataset, RuptureRecord};
 use crate::error::{Error, Result};
 use crate::fit::{run_fit_observed, FitRun};
 use crate::lmp::LarsonMiller;
@@ -41,9 +41,16 @@ pub enum LeftOut {
 impl LeftOut {
     /// Whether curve `c` is left out.
     pub fn contains(&self, c: &Curve) -> bool {
+        self.holds(c.temperature_c, c.campaign())
+    }
+    /// Whether the life-only test `r` is left out.
+    pub fn contains_record(&self, r: &RuptureRecord) -> bool {
+        self.holds(r.temperature_c, r.campaign())
+    }
+    fn holds(&self, temperature_c: f64, campaign: Option<&str>) -> bool {
         match self {
-            LeftOut::Temperature(t) => c.temperature_c == *t,
-            LeftOut::Campaign(name) => c.campaign() == Some(name.as_str()),
+            LeftOut::Temperature(t) => temperature_c == *t,
+            LeftOut::Campaign(name) => campaign == Some(name.as_str()),
         }
     }
     /// In text: "850 °C", "campaign KAERI2".
@@ -77,12 +84,18 @@ impl LeftOut {
     }
 }
 
-/// The campaigns of `data`'s specimen labels ([`crate::data::campaign_of`]), sorted, each once.
+/// The campaigns of `data`'s specimen labels ([`crate::data::campaign_of`]), of its curves and
+/// life-only tests, sorted, each once.
 pub fn campaigns(data: &Dataset) -> Vec<String> {
     let mut v: Vec<String> = data
         .curves
         .iter()
         .filter_map(|c| c.campaign().map(str::to_string))
+        .chain(
+            data.lives
+                .iter()
+                .filter_map(|r| r.campaign().map(str::to_string)),
+        )
         .collect();
     v.sort();
     v.dedup();
@@ -166,16 +179,19 @@ pub enum CurveOutcome {
     NoRupture,
     /// The simulation failed: no curve error.
     Failed,
+    /// A life-only test (a rupture record without a curve): no curve to compare.
+    NoCurve,
 }
 
 impl CurveOutcome {
-    /// The file form (`complete`, `ruptured_early`, `no_rupture`, `failed`).
+    /// The file form (`complete`, `ruptured_early`, `no_rupture`, `failed`, `no_curve`).
     pub fn as_str(self) -> &'static str {
         match self {
             CurveOutcome::Complete => "complete",
             CurveOutcome::RupturedEarly => "ruptured_early",
             CurveOutcome::NoRupture => "no_rupture",
             CurveOutcome::Failed => "failed",
+            CurveOutcome::NoCurve => "no_curve",
         }
     }
 }
@@ -572,14 +588,16 @@ impl Holdout {
     pub fn verdict(&self) -> Verdict {
         self.scores().verdict()
     }
-    /// Held-out tests per [`CurveOutcome`]: complete, ruptured early, no rupture, failed.
-    pub fn curve_outcomes(&self) -> [usize; 4] {
+    /// Held-out tests per [`CurveOutcome`]: complete, ruptured early, no rupture, failed,
+    /// no curve (life-only tests).
+    pub fn curve_outcomes(&self) -> [usize; 5] {
         let n = |o: CurveOutcome| self.tests.iter().filter(|t| t.curve_outcome == o).count();
         [
             n(CurveOutcome::Complete),
             n(CurveOutcome::RupturedEarly),
             n(CurveOutcome::NoRupture),
             n(CurveOutcome::Failed),
+            n(CurveOutcome::NoCurve),
         ]
     }
     /// The temperatures fitted on, °C, ascending.
@@ -601,9 +619,9 @@ impl Holdout {
         let (Some(lo), Some(hi)) = (temps.first(), temps.last()) else {
             return true;
         };
-        self.curves
+        self.tests
             .iter()
-            .any(|c| c.temperature_c < *lo || c.temperature_c > *hi)
+            .any(|t| t.temperature_c < *lo || t.temperature_c > *hi)
     }
 }
 
@@ -639,18 +657,24 @@ pub fn holdout_observed(
         .iter()
         .cloned()
         .partition(|c| left_out.contains(c));
+    // Life-only tests left out: predicted by simulation to rupture at their conditions.
+    let lives: Vec<&RuptureRecord> = data
+        .lives
+        .iter()
+        .filter(|r| left_out.contains_record(r))
+        .collect();
     let mut temps: Vec<f64> = train.iter().map(|c| c.temperature_c).collect();
     temps.sort_by(f64::total_cmp);
     temps.dedup();
     let what = left_out.option();
-    if test.is_empty() {
+    if test.is_empty() && lives.is_empty() {
         return Err(Error::Invalid(match left_out {
-            LeftOut::Temperature(_) => format!("{what}: no curves at that temperature"),
+            LeftOut::Temperature(_) => format!("{what}: no tests at that temperature"),
             LeftOut::Campaign(_) if campaigns(data).is_empty() => format!(
                 "{what}: the data have no specimen labels (a `specimen` column, e.g. INL2-a: campaign INL2) to tell campaigns by"
             ),
             LeftOut::Campaign(_) => format!(
-                "{what}: no curve's specimen is of that campaign (specimen labels NAME or NAME-…; the data's campaigns: {})",
+                "{what}: no test's specimen is of that campaign (specimen labels NAME or NAME-…; the data's campaigns: {})",
                 campaigns(data).join(", ")
             ),
         }));
@@ -662,7 +686,11 @@ pub fn holdout_observed(
     }
     // Tests at a temperature the training data lack are predicted through the temperature
     // laws, which need them and two or more training temperatures.
-    let new_temperature = test.iter().any(|c| !temps.contains(&c.temperature_c));
+    let new_temperature = test
+        .iter()
+        .map(|c| c.temperature_c)
+        .chain(lives.iter().map(|r| r.temperature_c))
+        .any(|t| !temps.contains(&t));
     if new_temperature && !cfg.has_laws() {
         return Err(Error::config(
             &cfg.path,
@@ -675,11 +703,7 @@ pub fn holdout_observed(
             temps.len()
         )));
     }
-    let train_data = Dataset {
-        curves: train,
-        warnings: Vec::new(),
-        dropped: Vec::new(),
-    };
+    let train_data = Dataset::of_curves(train);
     let fit = run_fit_observed(
         cfg.calibration(&train_data)?,
         &train_data,
@@ -709,6 +733,7 @@ pub fn holdout_observed(
         .iter()
         .filter(|c| c.rupture_time_h.is_some())
         .map(|c| (c.temperature_c, c.stress_mpa))
+        .chain(lives.iter().map(|r| (r.temperature_c, r.stress_mpa)))
         .collect();
     loads_tc.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
     loads_tc.dedup();
@@ -743,37 +768,83 @@ pub fn holdout_observed(
     } else {
         vec![None; loads_tc.len()]
     };
-    let tests = test
+    // One held-out test: at (°C, MPa), its specimen, measured and predicted lives (h) and how
+    // its curve compares.
+    let held = |t: f64,
+                sigma: f64,
+                specimen: &Option<String>,
+                measured: f64,
+                model: f64,
+                ce: CurveError| HeldOut {
+        temperature_c: t,
+        stress_mpa: sigma,
+        specimen: specimen.clone(),
+        rupture_time_h: measured,
+        model_rupture_time_h: model,
+        lmp_rupture_time_h: lmp.as_ref().map_or(f64::NAN, |l| l.rupture_time(t, sigma)),
+        baseline_rupture_time_h: baselines.iter().map(|b| b.predict(t, sigma)).collect(),
+        curve_rms_pct: ce.rms_pct,
+        curve_points: ce.points,
+        curve_outcome: ce.outcome,
+        predicted_life_pct: 100.0 * model / measured,
+        interval: loads_tc
+            .iter()
+            .position(|&l| l == (t, sigma))
+            .and_then(|k| by_load[k]),
+    };
+    let mut tests: Vec<HeldOut> = test
         .iter()
         .zip(&eval.curves)
         .filter(|(c, _)| c.rupture_time_h.is_some())
         .map(|(c, p)| {
-            let ce = curve_error(c, p);
-            let measured = c.rupture_time_h.unwrap_or(f64::NAN);
-            HeldOut {
-                temperature_c: c.temperature_c,
-                stress_mpa: c.stress_mpa,
-                specimen: c.specimen.clone(),
-                rupture_time_h: c.rupture_time_h.unwrap_or(f64::NAN),
-                model_rupture_time_h: p.rupture_time_h,
-                lmp_rupture_time_h: lmp
-                    .as_ref()
-                    .map_or(f64::NAN, |l| l.rupture_time(c.temperature_c, c.stress_mpa)),
-                baseline_rupture_time_h: baselines
-                    .iter()
-                    .map(|b| b.predict(c.temperature_c, c.stress_mpa))
-                    .collect(),
-                curve_rms_pct: ce.rms_pct,
-                curve_points: ce.points,
-                curve_outcome: ce.outcome,
-                predicted_life_pct: 100.0 * p.rupture_time_h / measured,
-                interval: loads_tc
-                    .iter()
-                    .position(|&l| l == (c.temperature_c, c.stress_mpa))
-                    .and_then(|k| by_load[k]),
-            }
+            held(
+                c.temperature_c,
+                c.stress_mpa,
+                &c.specimen,
+                c.rupture_time_h.unwrap_or(f64::NAN),
+                p.rupture_time_h,
+                curve_error(c, p),
+            )
         })
         .collect();
+    // The life-only tests: the model simulated to rupture at each condition, over the horizon
+    // `predict` gives it.
+    let no_curve = CurveError {
+        rms_pct: f64::NAN,
+        points: 0,
+        outcome: CurveOutcome::NoCurve,
+    };
+    for r in &lives {
+        let c = Condition {
+            temperature_c: r.temperature_c,
+            stress_mpa: r.stress_mpa,
+        };
+        let lmp_life = lmp
+            .as_ref()
+            .map_or(f64::NAN, |l| l.rupture_time(c.temperature_c, c.stress_mpa));
+        let sim = crate::predict::simulate_at(
+            fit.model.as_ref(),
+            &best.params,
+            c,
+            cfg.objective.omega_f,
+            &settings.ode,
+            crate::predict::horizon(&train_data, lmp_life),
+        );
+        let model = if sim.ruptured() { sim.t_end } else { f64::NAN };
+        tests.push(held(
+            r.temperature_c,
+            r.stress_mpa,
+            &r.specimen,
+            r.rupture_time_h,
+            model,
+            no_curve,
+        ));
+    }
+    tests.sort_by(|a, b| {
+        a.temperature_c
+            .total_cmp(&b.temperature_c)
+            .then(a.stress_mpa.total_cmp(&b.stress_mpa))
+    });
     Ok(Holdout {
         left_out: left_out.clone(),
         fit,
@@ -815,6 +886,7 @@ pub fn table(h: &Holdout) -> String {
                     "  ruptured early at {:.1} % of the measured life: rms over the first {} points",
                     t.predicted_life_pct, t.curve_points
                 ),
+                CurveOutcome::NoCurve => "  life only (no curve)".to_string(),
                 o => format!("  {}", o.as_str()),
             }
         ));

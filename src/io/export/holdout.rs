@@ -90,7 +90,7 @@ pub fn write(cfg: &RunConfig, data: &Dataset, h: &Holdout, out: &Path) -> Result
     };
     let scores = h.scores();
     let (baselines, one_to_beat) = crate::holdout::scores_json(&scores, &h.baselines);
-    let [complete, early, no_rupture, failed] = h.curve_outcomes();
+    let [complete, early, no_rupture, failed, no_curve] = h.curve_outcomes();
     let summary = json!({
         "held_out_temperature_C": h.left_out.temperature_c(),
         "held_out": match &h.left_out {
@@ -136,6 +136,7 @@ pub fn write(cfg: &RunConfig, data: &Dataset, h: &Holdout, out: &Path) -> Result
             "ruptured_early": early,
             "no_rupture": no_rupture,
             "failed": failed,
+            "no_curve": no_curve,
         },
         "training_temperatures_C": h.training_temperatures_c(),
         "temperature_extrapolation": h.temperature_extrapolation(),
@@ -146,11 +147,7 @@ pub fn write(cfg: &RunConfig, data: &Dataset, h: &Holdout, out: &Path) -> Result
     )?;
     print!("{}", table(h));
     let mut failures = Vec::new();
-    let held = Dataset {
-        curves: h.curves.clone(),
-        warnings: Vec::new(),
-        dropped: Vec::new(),
-    };
+    let held = Dataset::of_curves(h.curves.clone());
     let plots = crate::predict::curve_plots(
         cfg,
         &held,
@@ -158,7 +155,9 @@ pub fn write(cfg: &RunConfig, data: &Dataset, h: &Holdout, out: &Path) -> Result
         &h.fit.settings.ode,
         h.fit.model.as_ref(),
     );
-    if let Err(e) = plot_creep_curves(
+    if h.curves.is_empty() {
+        // Only life-only tests held out: no curve to draw.
+    } else if let Err(e) = plot_creep_curves(
         &out.join("curves.png"),
         &format!(
             "{} — {} held out: measured (points), predicted (lines)",
