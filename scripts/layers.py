@@ -44,7 +44,7 @@ LAYERS = [
     # through `report`).
     ("calibration", ["fit", "report", "sweep"]),
     # Analysis commands on calibrated models.
-    ("analysis", ["predict", "simulate", "diagnose", "uncertainty", "holdout"]),
+    ("analysis", ["predict", "simulate", "diagnose", "uncertainty", "holdout", "scores"]),
     # Experiments over many synthetic worlds.
     ("experiments", ["battery"]),
     # Exporters: each command's result written to its files and the console.

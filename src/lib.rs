@@ -112,7 +112,7 @@ pub mod numerics;
 pub mod settings;
 pub mod statistics;
 
-pub use analysis::{diagnose, holdout, predict, simulate, uncertainty};
+pub use analysis::{diagnose, holdout, predict, scores, simulate, uncertainty};
 pub use app::{cli, commands};
 pub use calibration::{fit, report, sweep};
 pub use data::specimen;

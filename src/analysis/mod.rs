@@ -4,5 +4,6 @@
 pub mod diagnose;
 pub mod holdout;
 pub mod predict;
+pub mod scores;
 pub mod simulate;
 pub mod uncertainty;

@@ -1412,7 +1412,7 @@ fn nested(y: &[f64], base: &[Vec<f64>], extra: &[Vec<f64>], detect: bool) -> Nes
 /// The sd of a new observation from a new group, √(σ_w² + σ_g²), and its two-sided interval at
 /// `level`, from the mean squares of a [`NestedTest`] whose extra columns are group
 /// indicators (a one-way random-effects covariance analysis): σ_w² + σ_g² = θ₁/q + (1 − 1/q)θ₂
-/// with θ₁ = E[MS_extra], θ₂ = E[MS_resid]. The estimate puts max(0, (MS₁ − MS₂)/q) for σ_g²;
+/// with θ₁ = E(MS_extra), θ₂ = E(MS_resid). The estimate puts max(0, (MS₁ − MS₂)/q) for σ_g²;
 /// the interval is Graybill and Wang's modified large-sample interval for a sum of expected
 /// mean squares with positive coefficients (Burdick & Graybill, *Confidence Intervals on
 /// Variance Components*, 1992, §3.2), exact when either coefficient is zero. `None` where the

@@ -490,8 +490,8 @@ pub struct CauseTest {
 /// caution says that another seed may well decide otherwise. Measured (session 77):
 /// loading_strain on generated set 182005 has its own common-shape p 0.025 (3 of 159
 /// replicates above, Holm 0.05 → `unexplained`) with seed 12 and 0.062 with seed 11
-/// (`extension`). `cause`: the best extension's name; `first`: [diagnose] bootstrap;
-/// `extended`: whether [diagnose] bootstrap_extended adds replicates beyond it.
+/// (`extension`). `cause`: the best extension's name; `first`: `[diagnose] bootstrap`;
+/// `extended`: whether `[diagnose] bootstrap_extended` adds replicates beyond it.
 pub fn one_draw_cause_caution(
     cause: &str,
     tests: &[CauseTest],

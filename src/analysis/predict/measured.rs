@@ -1,6 +1,6 @@
 //! `predict --tests FILE`: the predictions against the measured lives of tests the calibration
 //! has not seen — another campaign, heat or laboratory, given as a rupture-times file —
-//! scored as `holdout` scores its held-out tests ([`crate::holdout::LifeScores`]): creepfit's
+//! scored as `holdout` scores its held-out tests ([`crate::scores::LifeScores`]): creepfit's
 //! and every classical baseline's mean |log10 error|, the one to beat, and creepfit against
 //! each with a 95 % interval over the tests' conditions.
 
@@ -12,8 +12,8 @@ use super::PredictRun;
 use crate::baseline::{BaselineKind, Extrapolation};
 use crate::data::{Condition, RuptureRecord};
 use crate::error::{Error, Result};
-use crate::holdout::LifeScores;
 use crate::report::tables::{jnum, num};
+use crate::scores::LifeScores;
 
 /// One measured test and its predictions.
 #[derive(Debug, Clone, PartialEq)]
@@ -192,7 +192,7 @@ impl MeasuredTests {
     /// The printed comparison with the classical baselines (and, under `--intervals`, the
     /// lives inside the intervals of a new test).
     pub fn table(&self, run: &PredictRun) -> String {
-        let mut s = crate::holdout::scores_table(
+        let mut s = crate::scores::scores_table(
             &self.scores(),
             &run.baselines,
             &format!(
@@ -214,12 +214,12 @@ impl MeasuredTests {
     /// `tests.csv`: per test its condition, measured and predicted lives, log10 errors, the
     /// file's line and (under `--intervals`) the interval of a new test.
     pub fn csv(&self) -> (Vec<String>, Vec<Vec<String>>) {
-        let mut header: Vec<String> = crate::holdout::LIFE_COLUMNS
+        let mut header: Vec<String> = crate::scores::LIFE_COLUMNS
             .iter()
             .chain(&["specimen", "line", "extrapolation"])
             .map(|s| s.to_string())
             .collect();
-        header.extend(crate::holdout::baseline_columns());
+        header.extend(crate::scores::baseline_columns());
         let intervals = self.tests.iter().any(|t| t.pred95.is_some());
         if intervals {
             header.extend(
@@ -267,7 +267,7 @@ impl MeasuredTests {
     /// `summary.json`'s `tests`.
     pub fn json(&self, run: &PredictRun) -> Value {
         let scores = self.scores();
-        let (baselines, one_to_beat) = crate::holdout::scores_json(&scores, &run.baselines);
+        let (baselines, one_to_beat) = crate::scores::scores_json(&scores, &run.baselines);
         let (m, m_n) = scores.model_score();
         let (inside, with) = self.inside_pred95();
         let mut conditions = scores.conditions.clone();
