@@ -529,6 +529,16 @@ fn predict_tests_scores_a_file_of_measured_lives() {
     assert_eq!(j["conditions"], 2);
     let m = j["model_mean_abs_log10_err"].as_f64().unwrap();
     assert!((m - mean("model_log10_err")).abs() < 1e-9, "{j}");
+    // The level the lives share: the signed mean.
+    let level = t[1..].iter().map(|r| f(r, "model_log10_err")).sum::<f64>() / 3.0;
+    assert!(
+        (j["model_mean_log10_err"].as_f64().unwrap() - level).abs() < 1e-9,
+        "{j}"
+    );
+    assert!(
+        stdout.contains(&format!("creepfit {level:+.3}")),
+        "{stdout}"
+    );
     let mut best: Option<(String, f64)> = None;
     for b in j["baselines"].as_array().unwrap() {
         let Some(v) = b["mean_abs_log10_err"].as_f64() else {

@@ -187,6 +187,15 @@ impl LifeScores {
     pub fn model_score(&self) -> (f64, usize) {
         score(&self.model)
     }
+    /// creepfit's mean signed log10 error over the tests it predicted: the level its lives
+    /// share on these tests (+: too long), e.g. a campaign's offset (NaN: none predicted).
+    pub fn model_bias(&self) -> f64 {
+        bias(&self.model)
+    }
+    /// Baseline `k`'s mean signed log10 error.
+    pub fn baseline_bias(&self, k: usize) -> f64 {
+        bias(&self.baselines[k])
+    }
     /// Baseline `k`'s (mean |log10 error|, tests it predicted).
     pub fn baseline_score(&self, k: usize) -> (f64, usize) {
         score(&self.baselines[k])
@@ -217,8 +226,19 @@ fn score(e: &[f64]) -> (f64, usize) {
     (mean_abs(e), e.iter().filter(|v| v.is_finite()).count())
 }
 
+/// Mean of the finite entries of `e` (NaN: none).
+fn bias(e: &[f64]) -> f64 {
+    let f: Vec<f64> = e.iter().copied().filter(|v| v.is_finite()).collect();
+    if f.is_empty() {
+        f64::NAN
+    } else {
+        f.iter().sum::<f64>() / f.len() as f64
+    }
+}
+
 /// `summary.json`'s `baselines` (each baseline's own entry with, where fitted, its
-/// `mean_abs_log10_err`, `tests_predicted` and `creepfit_difference`) and `one_to_beat` of
+/// `mean_abs_log10_err`, `mean_log10_err` (signed), `tests_predicted` and
+/// `creepfit_difference`) and `one_to_beat` of
 /// `scores` (`holdout`'s held-out tests, `predict --tests`'s measured ones).
 pub fn scores_json(
     scores: &LifeScores,
@@ -232,6 +252,7 @@ pub fn scores_json(
             let mut j = b.to_json();
             if b.fit.is_ok() {
                 j["mean_abs_log10_err"] = jnum(v);
+                j["mean_log10_err"] = jnum(scores.baseline_bias(k));
                 j["tests_predicted"] = json!(c);
                 j["creepfit_difference"] = difference_json(scores.versus(k));
             }
@@ -297,6 +318,17 @@ pub fn scores_table(
             Err(e) => s.push_str(&format!("  {:<16} absent: {e}\n", b.kind.name())),
         }
     }
+    // The level each method's lives share on these tests: what a campaign's offset looks like.
+    let mut levels = vec![format!("creepfit {:+.3}", scores.model_bias())];
+    for (k, b) in baselines.iter().enumerate() {
+        if b.fit.is_ok() {
+            levels.push(format!("{} {:+.3}", b.kind.name(), scores.baseline_bias(k)));
+        }
+    }
+    s.push_str(&format!(
+        "mean log10(predicted/measured), the level the lives share (+: predicted too long): {}\n",
+        levels.join(", ")
+    ));
     match scores.one_to_beat() {
         Some(k) => {
             let v = scores.baseline_score(k).0;
@@ -465,6 +497,24 @@ mod tests {
         assert!(paired_difference(&cond[3..], &m[3..], &b[3..]).is_none());
         let one = paired_difference(&cond[..2], &m[..2], &b[..2]).unwrap();
         assert!(one.lo95.is_nan() && one.comparison == Comparison::NotToldApart);
+    }
+
+    #[test]
+    fn the_level_the_lives_share_by_hand() {
+        let s = LifeScores::of(
+            [
+                ((850.0, 50.0), 100.0, 200.0, &[50.0, f64::NAN][..]),
+                ((850.0, 60.0), 100.0, 50.0, &[25.0, f64::NAN][..]),
+                ((900.0, 30.0), 100.0, f64::NAN, &[100.0, f64::NAN][..]),
+            ]
+            .into_iter(),
+        );
+        // log10 2 and log10 0.5 cancel; the third test has no creepfit life.
+        assert!(s.model_bias().abs() < 1e-15);
+        assert!((s.model_score().0 - 2f64.log10()).abs() < 1e-15);
+        let want = (0.5f64.log10() + 0.25f64.log10()) / 3.0;
+        assert!((s.baseline_bias(0) - want).abs() < 1e-15);
+        assert!(s.baseline_bias(1).is_nan());
     }
 
     #[test]

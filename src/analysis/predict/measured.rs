@@ -279,6 +279,7 @@ impl MeasuredTests {
             "tests": self.tests.len(),
             "conditions": conditions.len(),
             "model_mean_abs_log10_err": jnum(m),
+            "model_mean_log10_err": jnum(scores.model_bias()),
             "model_tests_predicted": m_n,
             "baselines": baselines,
             "one_to_beat": one_to_beat,

@@ -128,6 +128,7 @@ pub fn write(cfg: &RunConfig, data: &Dataset, h: &Holdout, out: &Path) -> Result
             Err(e) => json!({"error": e}),
         },
         "model_tests_predicted": h.model_score().1,
+        "model_mean_log10_err": jnum(scores.model_bias()),
         "baselines": baselines,
         "one_to_beat": one_to_beat,
         "creepfit_vs_one_to_beat": h.verdict(),
