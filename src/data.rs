@@ -422,15 +422,6 @@ impl RuptureRecord {
     pub fn campaign(&self) -> Option<&str> {
         self.specimen.as_deref().map(campaign_of)
     }
-
-    /// A short human label, e.g. `560 °C, 85 MPa` or `560 °C, 85 MPa, specimen S3`.
-    pub fn label(&self) -> String {
-        let mut s = format!("{} °C, {} MPa", self.temperature_c, self.stress_mpa);
-        if let Some(sp) = &self.specimen {
-            s.push_str(&format!(", specimen {sp}"));
-        }
-        s
-    }
 }
 
 /// A test declared interrupted (it did not rupture: no rupture time, no lifetime term): a
