@@ -519,6 +519,10 @@ fn predict_tests_scores_a_file_of_measured_lives() {
         assert!((f(r, "lmp_log10_err") - e).abs() < 1e-9, "{r:?}");
     }
     assert_eq!(t[1][col("extrapolation")], "none");
+    // Which simulation and which constants each of creepfit's lives comes from.
+    assert!(t[1..]
+        .iter()
+        .all(|r| r[col("outcome")] == "ruptured" && r[col("constants")] == "given"));
     // The summary's means are those of the file's errors; the one to beat is the baseline
     // with the smallest among those that predicted every test.
     let s: serde_json::Value =

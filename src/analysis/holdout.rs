@@ -626,13 +626,22 @@ pub fn holdout_observed(
             crate::predict::horizon(&train_data, lmp_life),
         );
         let model = if sim.ruptured() { sim.t_end } else { f64::NAN };
+        // No curve to compare; a prediction without a life says why.
+        let outcome = match sim.outcome {
+            Outcome::Ruptured => CurveOutcome::NoCurve,
+            Outcome::Horizon => CurveOutcome::NoRupture,
+            _ => CurveOutcome::Failed,
+        };
         tests.push(held(
             r.temperature_c,
             r.stress_mpa,
             &r.specimen,
             r.rupture_time_h,
             model,
-            no_curve,
+            CurveError {
+                outcome,
+                ..no_curve
+            },
         ));
     }
     tests.sort_by(|a, b| {

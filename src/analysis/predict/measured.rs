@@ -8,10 +8,11 @@ use std::path::{Path, PathBuf};
 
 use serde_json::{json, Value};
 
-use super::PredictRun;
+use super::{ConstantsSource, PredictRun};
 use crate::baseline::{BaselineKind, Extrapolation};
 use crate::data::{Condition, RuptureRecord};
 use crate::error::{Error, Result};
+use crate::ode::Outcome;
 use crate::report::tables::{jnum, num};
 use crate::scores::LifeScores;
 
@@ -35,6 +36,9 @@ pub struct MeasuredTest {
     pub baseline_rupture_time_h: Vec<f64>,
     /// Where the condition lies against the calibration's tested conditions.
     pub extrapolation: Extrapolation,
+    /// How creepfit's simulation at the condition ended (`model_rupture_time_h` is NaN unless
+    /// it ruptured).
+    pub outcome: Outcome,
     /// Under `--intervals`: the 95 % prediction interval of a new test's rupture time, h.
     pub pred95: Option<(f64, f64)>,
 }
@@ -62,6 +66,9 @@ pub struct MeasuredTests {
     pub file: PathBuf,
     /// Its tests, in file order.
     pub tests: Vec<MeasuredTest>,
+    /// Which constants creepfit's lives come from: the given ones, or under `--intervals`
+    /// their maximum-likelihood refit (`predictions.csv`'s `constants`).
+    pub constants: ConstantsSource,
 }
 
 /// The tests of `file` (the ruptures format: `temperature_C,stress_MPa,rupture_time_h`, with
@@ -153,6 +160,7 @@ impl MeasuredTests {
                     extrapolation: k
                         .and_then(|k| run.extrapolation.get(k).copied())
                         .unwrap_or(Extrapolation::Both),
+                    outcome: p.map_or(Outcome::InvalidStart, |p| p.outcome),
                     pred95: k.and_then(|k| {
                         let iv = run.intervals.as_ref()?.get(k)?;
                         iv.get("rupture_time_h").map(|q| (q.pred_lo95, q.pred_hi95))
@@ -163,6 +171,7 @@ impl MeasuredTests {
         MeasuredTests {
             file: file.to_path_buf(),
             tests,
+            constants: run.source,
         }
     }
 
@@ -216,7 +225,7 @@ impl MeasuredTests {
     pub fn csv(&self) -> (Vec<String>, Vec<Vec<String>>) {
         let mut header: Vec<String> = crate::scores::LIFE_COLUMNS
             .iter()
-            .chain(&["specimen", "line", "extrapolation"])
+            .chain(&["specimen", "line", "extrapolation", "outcome", "constants"])
             .map(|s| s.to_string())
             .collect();
         header.extend(crate::scores::baseline_columns());
@@ -247,6 +256,8 @@ impl MeasuredTests {
                     t.specimen.clone().unwrap_or_default(),
                     t.line.to_string(),
                     t.extrapolation.as_str().to_string(),
+                    t.outcome.as_str().to_string(),
+                    self.constants.as_str().to_string(),
                 ];
                 for k in 1..BaselineKind::ALL.len() {
                     row.push(num(t.baseline_rupture_time_h[k]));
@@ -329,6 +340,7 @@ mod tests {
             model_rupture_time_h: 1000.0,
             baseline_rupture_time_h: vec![10.0, f64::NAN, 100.0, f64::NAN],
             extrapolation: Extrapolation::None,
+            outcome: Outcome::Ruptured,
             pred95: Some((50.0, 99.0)),
         };
         assert!((t.model_log10_err() - 1.0).abs() < 1e-12);
