@@ -89,6 +89,7 @@ fn every_extension_switched_off_is_the_base_model() {
             ("strain_softening", vec![0.0, 0.6]),
             ("strain_softening", vec![0.0, 7.5]),
             ("rupture_damage", vec![OMEGA_F]),
+            ("garofalo", vec![1.0]),
         ] {
             let mut x1 = BASE.to_vec();
             x1.extend(&v);
@@ -103,6 +104,7 @@ fn every_extension_switched_off_is_the_base_model() {
         assert_eq!(off_value("phi0", 0.0, 200.0), Some(0.0));
         assert_eq!(off_value("phi1", 0.5, 8.0), None);
         assert_eq!(off_value("omegaf", 0.05, 0.9), Some(OMEGA_F));
+        assert_eq!(off_value("nG", 0.5, 12.0), Some(1.0));
     }
     // constant_load has no constant: it changes the prediction, and only in the direction
     // physics says (the true stress rises, so the life shortens).
@@ -115,11 +117,13 @@ fn every_extension_switched_off_is_the_base_model() {
 /// integrated as written: state [ε, H, Φ, ω, D] with σ = σ0(1+ε) in the rate and in dH/dt,
 /// and the rate multiplied by 1/(1−D), dD/dt = C_d (1−D)² dε/dt, and by 1 + k ε^φ1 with
 /// k = φ0/0.2^φ1 (Walker's prefactor form and a power, not the extension's
-/// exp(φ1 ln(ε/0.2))).
+/// exp(φ1 ln(ε/0.2))), and Garofalo's sinh(x)^n_G as a power (not the extension's factor
+/// exp((n_G − 1) ln sinh x) on the rate).
 struct Defining {
     constant_load: bool,
     c_d: f64,
     soft: (f64, f64),
+    n_g: f64,
 }
 
 impl Defining {
@@ -128,6 +132,7 @@ impl Defining {
             constant_load: false,
             c_d: 0.0,
             soft: (0.0, 1.0),
+            n_g: 1.0,
         }
     }
 }
@@ -177,7 +182,12 @@ impl CreepModel<5> for Defining {
         } else {
             S::cst(1.0)
         };
-        let rate = a * arg.sinh() / (S::cst(1.0) - d) * soft;
+        let sinh = if self.n_g == 1.0 {
+            arg.sinh()
+        } else {
+            arg.sinh().powf(self.n_g)
+        };
+        let rate = a * sinh / (S::cst(1.0) - d) * soft;
         dy[0] = rate;
         dy[1] = h / sig * rate * (S::cst(1.0) - hard / hs);
         let q = S::cst(1.0) - phi;
@@ -330,6 +340,44 @@ fn strain_softening_matches_its_defining_equations() {
     }
 }
 
+/// Garofalo's A·sinh(x)^n_G integrated as written, with and without constant load; a larger
+/// n_G at x > 1 shortens the life (the rate grows by sinh(x)^(n_G − 1) > 1).
+#[test]
+fn garofalo_matches_its_defining_equations() {
+    for constant_load in [false, true] {
+        let names: &[&str] = if constant_load {
+            &["constant_load", "garofalo"]
+        } else {
+            &["garofalo"]
+        };
+        let m = ext(names);
+        let mut last = f64::INFINITY;
+        for n_g in [0.8, 1.3, 2.0] {
+            let def = Defining {
+                constant_load,
+                n_g,
+                ..Defining::plain()
+            };
+            let mut x = BASE.to_vec();
+            x.push(n_g);
+            let sigma = 100.0;
+            let (t_ref, _) = defining(&def, sigma, &[]);
+            let ts = times(t_ref);
+            let (_, s_ref) = defining(&def, sigma, &ts);
+            let (t, e_r, s) = run(m.as_ref(), &x, sigma, &ts);
+            assert!(rel(t, t_ref) < 1e-8, "n_G {n_g}: {t} vs {t_ref}");
+            for k in 1..ts.len() {
+                assert!(rel(s[k], s_ref[k]) < 1e-8, "{} vs {}", s[k], s_ref[k]);
+            }
+            assert!(t < last, "n_G {n_g}: {t} vs {last}");
+            last = t;
+            if !constant_load {
+                assert!(rel(e_r, OMEGA_F / BASE[5]) < 1e-9);
+            }
+        }
+    }
+}
+
 /// A free ω_f is the base model with the load's ω_f set to it: the same curves and rupture,
 /// and the rupture strain ω_f/C exactly (ω_f/(C k_σ) with `stress_ductility`).
 #[test]
@@ -458,7 +506,8 @@ fn sensitivity_jacobian_of_new_extensions_matches_central_differences() {
     ];
     // (extensions, their constants' truth, lb, ub)
     type Case<'a> = (&'a [&'a str], Vec<f64>, Vec<f64>, Vec<f64>);
-    let cases: [Case; 3] = [
+    let cases: [Case; 4] = [
+        (&["garofalo"], vec![1.5], vec![0.5], vec![12.0]),
         (
             &["strain_softening"],
             vec![30.0, 2.0],

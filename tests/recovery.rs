@@ -254,6 +254,8 @@ fn recovers_extension_constants_without_noise() {
             vec![(8.0, 0.0, 40.0, lin), (2.0, 0.5, 8.0, lin)],
         ),
         ("rupture_damage", vec![(0.45, 0.05, 0.9, lin)]),
+        // sinh(x)^1.5: the rate's stress exponent half as large again.
+        ("garofalo", vec![(1.5, 0.5, 12.0, lin)]),
     ] {
         let model = creepfit::model::build("khd", &[ext.to_string()]).unwrap();
         let mut space = space_560();

@@ -814,6 +814,41 @@ pub fn nested_space(model: &dyn Model, space: &ParamSpace) -> Option<ParamSpace>
     any.then_some(nested)
 }
 
+/// Starts at the nested optimum `from` with an extension switched slightly on
+/// ([`crate::model::ext::probe_starts`]), labelled `nested+probe:<extension>:<k>`: around the
+/// switched-off start the likelihood can be flat in the extension's constants (φ1 of
+/// `strain_softening` does nothing at φ0 = 0), so a fit from the nested optimum alone can stop
+/// there (measured: Alloy 617, `constant_load`, `strain_softening`, `garofalo`, the nested start
+/// ended after 3 iterations at φ0 = 0, −2 ln L −15923.8, where a sweep reaches −16370.4).
+/// A probe whose constants are all held is skipped.
+pub fn probe_starts_from(
+    model: &dyn Model,
+    space: &ParamSpace,
+    from: &[f64],
+) -> Vec<(String, Vec<f64>)> {
+    let names: Vec<&str> = model.constants().iter().map(|c| c.name).collect();
+    let mut count: std::collections::BTreeMap<&str, usize> = Default::default();
+    let mut out = Vec::new();
+    for (ext, probe) in crate::model::ext::probes_of(&names) {
+        let k = count.entry(ext).or_default();
+        *k += 1;
+        let mut x = from.to_vec();
+        let mut moved = false;
+        for (c, v) in probe {
+            if let Some(j) = names.iter().position(|n| *n == c) {
+                if j < space.len() && space.free[j] {
+                    x[j] = v.clamp(space.lb[j], space.ub[j]);
+                    moved = true;
+                }
+            }
+        }
+        if moved {
+            out.push((format!("{NESTED_START}+probe:{ext}:{}", *k - 1), x));
+        }
+    }
+    out
+}
+
 /// [`run_fit_multistart`] telling `hooks.observer` of every finished local fit (phase `local
 /// fits`), each journaled in `hooks.journal` as it finishes and read back from it when a
 /// rerun finds it there (keyed by its index, start and weights). When the observer asks to
@@ -879,6 +914,7 @@ pub fn run_fit_observed(
             );
             if f.ok() {
                 starts.push((NESTED_START.to_string(), f.params.clone()));
+                starts.extend(probe_starts_from(model.as_ref(), &space, &f.params));
                 nested_optimum = Some(f.params);
             }
         }
@@ -1357,6 +1393,67 @@ mod tests {
         assert!(text.contains("on 2 of 3 curves"), "{text}");
         // The largest sd among the absorbing curves, not the white one's.
         assert!(text.contains("up to 0.400 %"), "{text}");
+    }
+
+    /// The probes from a nested optimum: one start per probe of each extension whose constants
+    /// are free, labelled and clamped to the box, the other constants as given; none for an
+    /// extension without probes or whose constants are all held.
+    #[test]
+    fn probe_starts_switch_the_flat_extensions_slightly_on() {
+        let names = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        let m = crate::model::build(
+            "khd",
+            &names(&["constant_load", "strain_softening", "garofalo"]),
+        )
+        .unwrap();
+        let c = m.constants();
+        let space = ParamSpace::new(
+            c.iter().map(|c| c.lb).collect(),
+            c.iter().map(|c| c.ub).collect(),
+            c.iter().map(|c| c.scale).collect(),
+        );
+        let from: Vec<f64> = c.iter().map(|c| c.default).collect();
+        let starts = probe_starts_from(m.as_ref(), &space, &from);
+        let labels: Vec<&str> = starts.iter().map(|s| s.0.as_str()).collect();
+        assert_eq!(
+            labels,
+            [
+                "nested+probe:strain_softening:0",
+                "nested+probe:strain_softening:1",
+                "nested+probe:strain_softening:2"
+            ]
+        );
+        let j0 = c.iter().position(|c| c.name == "phi0").unwrap();
+        for ((_, x), phi1) in starts.iter().zip([1.0, 2.0, 4.0]) {
+            assert_eq!((x[j0], x[j0 + 1]), (0.05, phi1));
+            for j in (0..x.len()).filter(|&j| j != j0 && j != j0 + 1) {
+                assert_eq!(x[j], from[j], "{}", c[j].name);
+            }
+        }
+        // A box that excludes the probe's value clamps it.
+        let mut narrow = space.clone();
+        narrow.lb[j0 + 1] = 1.5;
+        let s = probe_starts_from(m.as_ref(), &narrow, &from);
+        assert_eq!(s[0].1[j0 + 1], 1.5);
+        // Held softening constants: nothing to probe.
+        let mut held = space.clone();
+        held.hold(j0, 0.0);
+        held.hold(j0 + 1, 2.0);
+        assert!(probe_starts_from(m.as_ref(), &held, &from).is_empty());
+        // loading_strain has probes too; rupture_damage has none.
+        let m = crate::model::build("khd", &names(&["loading_strain", "rupture_damage"])).unwrap();
+        let c = m.constants();
+        let space = ParamSpace::new(
+            c.iter().map(|c| c.lb).collect(),
+            c.iter().map(|c| c.ub).collect(),
+            c.iter().map(|c| c.scale).collect(),
+        );
+        let from: Vec<f64> = c.iter().map(|c| c.default).collect();
+        let s = probe_starts_from(m.as_ref(), &space, &from);
+        assert!(!s.is_empty());
+        assert!(s
+            .iter()
+            .all(|(l, _)| l.starts_with("nested+probe:loading_strain:")));
     }
 
     #[test]

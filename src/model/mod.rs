@@ -629,9 +629,8 @@ fn build_khd(e: &ModelEntry, extensions: &[String]) -> Result<Box<dyn Model>> {
             _ => Box::new(khd1()),
         });
     }
-    let (m, constants) = KhdExtended::new(extensions).map_err(|bad| {
-        Error::UnknownModel(format!("extension {bad}"), ext::CATALOGUE.join(", "))
-    })?;
+    let (m, constants) = KhdExtended::new(extensions)
+        .map_err(|bad| Error::UnknownModel(format!("extension {bad}"), ext::ALL.join(", ")))?;
     let full = format!("khd+{}", extensions.join("+"));
     Ok(Box::new(
         Integrated::new(full, m, constants).with_guess(e.guess),

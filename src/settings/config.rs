@@ -27,7 +27,8 @@ pub use crate::model::objective::{LifetimeTerm, ObjectiveKind};
 use crate::model::{self, Model, Scale};
 use crate::ode::OdeOptions;
 
-/// Names of the extension catalogue (DESIGN.md §6).
+/// Names of the extension catalogue (DESIGN.md §6): what `diagnose` tests. A model may also
+/// take [`model::ext::FORMS`].
 pub const EXTENSION_NAMES: &[&str] = model::ext::CATALOGUE;
 
 /// Top-level fields of [`RunConfig`]'s serialisation that do not change any result and are
@@ -1829,12 +1830,12 @@ fn validate_name(name: &str) -> std::result::Result<(), Invalid> {
 
 fn validate_extensions(exts: &[String]) -> std::result::Result<(), Invalid> {
     for (i, ext) in exts.iter().enumerate() {
-        if !EXTENSION_NAMES.contains(&ext.as_str()) {
+        if !model::ext::ALL.contains(&ext.as_str()) {
             return Err(invalid(
                 "extensions",
                 format!(
                     "unknown extension '{ext}' (known: {})",
-                    EXTENSION_NAMES.join(", ")
+                    model::ext::ALL.join(", ")
                 ),
             ));
         }

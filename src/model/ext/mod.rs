@@ -8,14 +8,16 @@
 //!   rupture when ω(ε) = ω_f
 //!
 //! with s = 1 + ε, g = ln(1+ε) for `constant_load` (else s = 1, g = ε); m = (1 + C_d ε) for
-//! `dislocation_damage` times (1 + φ0 ε^φ1) for `strain_softening`; k_σ = (σ/σ_ref)^ν for
+//! `dislocation_damage` times (1 + φ0 ε^φ1) for `strain_softening` times sinh(·)^(n_G − 1)
+//! for `garofalo`; k_σ = (σ/σ_ref)^ν for
 //! `stress_ductility`; ε0 = σ/E_L for `loading_strain`; ω_f the constant of `rupture_damage`
 //! (else the load's).
 //! Each file holds its constants and its terms; adding one is a file, a line in
-//! [`CATALOGUE`] and its term in [`KhdExtended::rhs`].
+//! [`CATALOGUE`] (or [`FORMS`]) and its term in [`KhdExtended::rhs`].
 
 pub mod constant_load;
 pub mod dislocation_damage;
+pub mod garofalo;
 pub mod loading_strain;
 pub mod rupture_damage;
 pub mod strain_softening;
@@ -36,6 +38,23 @@ pub const CATALOGUE: &[&str] = &[
     rupture_damage::NAME,
 ];
 
+/// Other forms of the base model's own laws, fitted where a configuration names them but not
+/// tested by `diagnose` (they are not missing mechanisms, and the diagnosis's calibration is
+/// measured on [`CATALOGUE`]): `garofalo`.
+pub const FORMS: &[&str] = &[garofalo::NAME];
+
+/// Every extension a configuration may name: [`CATALOGUE`], then [`FORMS`] (the order their
+/// constants follow the base constants).
+pub const ALL: &[&str] = &[
+    constant_load::NAME,
+    loading_strain::NAME,
+    dislocation_damage::NAME,
+    stress_ductility::NAME,
+    strain_softening::NAME,
+    rupture_damage::NAME,
+    garofalo::NAME,
+];
+
 /// Extra constants of one extension; `None` for an unknown name.
 pub fn extension_constants(name: &str) -> Option<Vec<ConstantSpec>> {
     match name {
@@ -45,6 +64,7 @@ pub fn extension_constants(name: &str) -> Option<Vec<ConstantSpec>> {
         stress_ductility::NAME => Some(stress_ductility::constants()),
         strain_softening::NAME => Some(strain_softening::constants()),
         rupture_damage::NAME => Some(rupture_damage::constants()),
+        garofalo::NAME => Some(garofalo::constants()),
         _ => None,
     }
 }
@@ -64,6 +84,8 @@ pub fn off_value(constant: &str, lb: f64, ub: f64) -> Option<f64> {
         strain_softening::off_value(constant, lb, ub)
     } else if has(rupture_damage::constants()) {
         Some(rupture_damage::off_value(lb, ub))
+    } else if has(garofalo::constants()) {
+        Some(garofalo::off_value(lb, ub))
     } else {
         None
     }
@@ -87,6 +109,18 @@ pub fn probe_starts(name: &str) -> Vec<Vec<(&'static str, f64)>> {
     }
 }
 
+/// The [`probe_starts`] of every extension whose constants are all among `constants` (a
+/// model's constant names), each with its extension's name, in catalogue order.
+pub fn probes_of(constants: &[&str]) -> Vec<(&'static str, Vec<(&'static str, f64)>)> {
+    ALL.iter()
+        .filter(|name| {
+            extension_constants(name)
+                .is_some_and(|c| !c.is_empty() && c.iter().all(|s| constants.contains(&s.name)))
+        })
+        .flat_map(|&name| probe_starts(name).into_iter().map(move |p| (name, p)))
+        .collect()
+}
+
 /// Which extensions are switched on, and where their constants sit in the parameter vector.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct KhdExtended {
@@ -102,6 +136,8 @@ pub struct KhdExtended {
     pub strain_softening: Option<usize>,
     /// Index of ω_f.
     pub rupture_damage: Option<usize>,
+    /// Index of n_G.
+    pub garofalo: Option<usize>,
 }
 
 impl KhdExtended {
@@ -109,13 +145,13 @@ impl KhdExtended {
     /// its constants: the base model's six, then each extension's in catalogue order.
     pub fn new(names: &[String]) -> Result<(Self, Vec<ConstantSpec>), String> {
         for n in names {
-            if !CATALOGUE.contains(&n.as_str()) {
+            if !ALL.contains(&n.as_str()) {
                 return Err(n.clone());
             }
         }
         let mut m = KhdExtended::default();
         let mut constants = khd::constants();
-        for &name in CATALOGUE {
+        for &name in ALL {
             if !names.iter().any(|n| n == name) {
                 continue;
             }
@@ -127,6 +163,7 @@ impl KhdExtended {
                 stress_ductility::NAME => m.stress_ductility = Some(idx),
                 strain_softening::NAME => m.strain_softening = Some(idx),
                 rupture_damage::NAME => m.rupture_damage = Some(idx),
+                garofalo::NAME => m.garofalo = Some(idx),
                 _ => unreachable!("catalogue entry without a term"),
             }
             constants.extend(extension_constants(name).expect("catalogued"));
@@ -151,6 +188,8 @@ pub struct ExtPrepared<S> {
     pub phi1: S,
     /// Damage at rupture: the constant of `rupture_damage`, else the load's ω_f.
     pub omega_f: S,
+    /// n_G − 1 of `garofalo` (0 when off).
+    pub n_g_minus_1: S,
 }
 
 impl CreepModel<1> for KhdExtended {
@@ -177,6 +216,10 @@ impl CreepModel<1> for KhdExtended {
             Some(i) => params[i],
             None => S::cst(load.omega_f),
         };
+        let n_g_minus_1 = match self.garofalo {
+            Some(i) => params[i] - 1.0,
+            None => S::cst(0.0),
+        };
         ExtPrepared {
             base,
             eps0,
@@ -185,6 +228,7 @@ impl CreepModel<1> for KhdExtended {
             phi0,
             phi1,
             omega_f,
+            n_g_minus_1,
         }
     }
     fn init<S: Scalar>(&self, _p: &ExtPrepared<S>) -> [S; 1] {
@@ -227,6 +271,13 @@ impl CreepModel<1> for KhdExtended {
         };
         match khd_rate_coarsened(&scaled, hard, tp, S::cst(1.0) - p.c_eff * eps) {
             Some(rate) => {
+                let rate = match self.garofalo {
+                    Some(_) => match garofalo::rate_factor(p.n_g_minus_1, rate / b.a) {
+                        Some(f) => rate * f,
+                        None => return false,
+                    },
+                    None => rate,
+                };
                 let rate = if self.dislocation_damage.is_some() {
                     rate * dislocation_damage::rate_factor(p.c_d, eps)
                 } else {
