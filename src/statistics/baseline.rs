@@ -836,6 +836,14 @@ pub struct Tested {
     pub laws: bool,
 }
 
+/// Where a temperature lies among the tested ones: (temperature °C, lowest, highest stress
+/// MPa) of the one that applies, or of the two around it.
+enum Neighbours {
+    None,
+    One((f64, f64, f64)),
+    Between((f64, f64, f64), (f64, f64, f64)),
+}
+
 /// Relative closeness of two temperatures or stresses typed by people.
 fn same(a: f64, b: f64) -> bool {
     (a - b).abs() <= 1e-9 * a.abs().max(b.abs()).max(1.0)
@@ -867,26 +875,56 @@ impl Tested {
     }
 
     /// The stresses (MPa) that count as tested at `t` °C: at a tested temperature its own
-    /// range; between two tested temperatures the union of theirs; outside the tested
-    /// temperatures the nearest one's.
+    /// range; between two tested temperatures each end interpolated linearly in temperature on
+    /// log σ between theirs; outside the tested temperatures the nearest one's. Creep campaigns
+    /// test lower stresses at higher temperatures, so the tested conditions are a band falling
+    /// with temperature, and the corners of the union of two temperatures' ranges (the high
+    /// stress of the lower temperature at the higher one) were never tested: Alloy 617 at
+    /// 800 °C, between 750 °C's 95–137 MPa and 850 °C's 30–70 MPa, counts 53.4–97.9 MPa as
+    /// tested, not 30–137.
     pub fn stress_range(&self, t: f64) -> (f64, f64) {
+        match self.neighbours(t) {
+            Neighbours::None => (f64::NAN, f64::NAN),
+            Neighbours::One(x) => (x.1, x.2),
+            Neighbours::Between(a, b) => {
+                let f = (t - a.0) / (b.0 - a.0);
+                let log_mix = |u: f64, v: f64| (u.ln() + f * (v.ln() - u.ln())).exp();
+                (log_mix(a.1, b.1), log_mix(a.2, b.2))
+            }
+        }
+    }
+
+    /// The widest stresses (MPa) at `t` °C that the margin [`STRESS_MARGIN_FACTOR`] is taken
+    /// from: as [`Tested::stress_range`], but between two tested temperatures the union of
+    /// their ranges (a prediction there is marked as a stress extrapolation outside the
+    /// interpolated range, and refused only beyond the margin around the union).
+    pub fn stress_limits(&self, t: f64) -> (f64, f64) {
+        match self.neighbours(t) {
+            Neighbours::None => (f64::NAN, f64::NAN),
+            Neighbours::One(x) => (x.1, x.2),
+            Neighbours::Between(a, b) => (a.1.min(b.1), a.2.max(b.2)),
+        }
+    }
+
+    /// The tested temperature at `t` (or the nearest outside the tested range), or the two
+    /// tested temperatures around it.
+    fn neighbours(&self, t: f64) -> Neighbours {
         let ts = &self.temperatures;
-        if ts.is_empty() {
-            return (f64::NAN, f64::NAN);
+        if ts.is_empty() || t.is_nan() {
+            return Neighbours::None;
         }
         if let Some(x) = ts.iter().find(|x| same(x.0, t)) {
-            return (x.1, x.2);
+            return Neighbours::One(*x);
         }
         if t < ts[0].0 {
-            return (ts[0].1, ts[0].2);
+            return Neighbours::One(ts[0]);
         }
         let last = ts[ts.len() - 1];
         if t > last.0 {
-            return (last.1, last.2);
+            return Neighbours::One(last);
         }
         let k = ts.iter().position(|x| x.0 > t).unwrap_or(ts.len() - 1);
-        let (a, b) = (ts[k - 1], ts[k]);
-        (a.1.min(b.1), a.2.max(b.2))
+        Neighbours::Between(ts[k - 1], ts[k])
     }
 
     /// Where `c` lies: `Ok` with its extrapolation inside the margins
@@ -922,14 +960,16 @@ impl Tested {
                 "{t} °C is more than {TEMPERATURE_MARGIN_C} °C outside the tested temperatures ({t0}–{t1} °C): beyond what the configuration can predict (docs/FORMATS.md, \"Limits of a prediction\")"
             ));
         }
-        let (s0, s1) = self.stress_range(t);
-        if s < s0 / STRESS_MARGIN_FACTOR || s > s1 * STRESS_MARGIN_FACTOR {
+        let (l0, l1) = self.stress_limits(t);
+        if s < l0 / STRESS_MARGIN_FACTOR || s > l1 * STRESS_MARGIN_FACTOR {
             return Err(format!(
-                "{s} MPa is more than a factor {STRESS_MARGIN_FACTOR} outside the stresses tested at {t} °C ({s0}–{s1} MPa): beyond what the configuration can predict (docs/FORMATS.md, \"Limits of a prediction\")"
+                "{s} MPa is more than a factor {STRESS_MARGIN_FACTOR} outside the stresses tested at {t} °C ({l0}–{l1} MPa): beyond what the configuration can predict (docs/FORMATS.md, \"Limits of a prediction\")"
             ));
         }
+        let (s0, s1) = self.stress_range(t);
         let in_t = t >= t0 && t <= t1;
-        let in_s = s >= s0 && s <= s1;
+        // Relative tolerance: the interpolated ends are computed through logarithms.
+        let in_s = s >= s0 * (1.0 - 1e-12) && s <= s1 * (1.0 + 1e-12);
         Ok(match (in_t, in_s) {
             (true, true) => Extrapolation::None,
             (true, false) => Extrapolation::Stress,

@@ -557,6 +557,11 @@ pub fn baseline_columns() -> Vec<String> {
     v
 }
 
+/// A stress (MPa) to 0.1 MPa, as printed in a note.
+fn round_mpa(x: f64) -> f64 {
+    (x * 10.0).round() / 10.0
+}
+
 /// Warnings about conditions outside the tested ranges (extrapolations within the margins).
 pub fn extrapolation_notes(tested: &Tested, conditions: &[Condition]) -> Vec<String> {
     let (t0, t1) = tested.temperature_range();
@@ -570,10 +575,24 @@ pub fn extrapolation_notes(tested: &Tested, conditions: &[Condition]) -> Vec<Str
                 what.push(format!("temperature outside the tested {t0}–{t1} °C"));
             }
             if matches!(x, Extrapolation::Stress | Extrapolation::Both) {
-                what.push(format!(
-                    "stress outside the {s0}–{s1} MPa tested at {} °C",
-                    c.temperature_c
-                ));
+                let between = tested
+                    .temperatures
+                    .windows(2)
+                    .find(|w| w[0].0 < c.temperature_c && c.temperature_c < w[1].0);
+                what.push(match between {
+                    Some(w) => format!(
+                        "stress outside the {}–{} MPa tested around {} °C (the ranges of {} and {} °C, interpolated)",
+                        round_mpa(s0),
+                        round_mpa(s1),
+                        c.temperature_c,
+                        w[0].0,
+                        w[1].0
+                    ),
+                    None => format!(
+                        "stress outside the {s0}–{s1} MPa tested at {} °C",
+                        c.temperature_c
+                    ),
+                });
             }
             (!what.is_empty()).then(|| format!("{}: extrapolation: {}", c.label(), what.join(", ")))
         })
@@ -1151,9 +1170,24 @@ mod tests {
         // (temperature, stress, Some(class) or None = refused)
         let table = [
             (560.0, 100.0, Some(X::None)),
-            (575.0, 85.0, Some(X::None)), // between 560 and 590: the union 85–120 MPa
-            (575.0, 120.0, Some(X::None)),
+            // Between 560 and 590 °C the ends interpolated on log σ: at 575 °C
+            // √(85·100) = 92.20 to √(110·120) = 114.89 MPa; at 567.5 °C from
+            // 85^0.75·100^0.25 = 88.53 MPa. Outside: marked; refused only beyond 1.5 times
+            // the union 85–120 MPa.
+            (575.0, 100.0, Some(X::None)),
+            (575.0, 92.3, Some(X::None)),
+            (575.0, 92.1, Some(X::Stress)),
+            (575.0, 114.8, Some(X::None)),
+            (575.0, 115.0, Some(X::Stress)),
+            (567.5, 88.6, Some(X::None)),
+            (567.5, 88.4, Some(X::Stress)),
+            (575.0, 85.0, Some(X::Stress)),
+            (575.0, 120.0, Some(X::Stress)),
             (575.0, 84.0, Some(X::Stress)),
+            (575.0, 57.0, Some(X::Stress)),
+            (575.0, 56.0, Option::None),
+            (575.0, 179.9, Some(X::Stress)),
+            (575.0, 180.1, Option::None),
             (560.0, 120.0, Some(X::Stress)), // above 560 °C's own 110 MPa
             (560.0, 85.0 / 1.5, Some(X::Stress)),
             (560.0, 85.0 / 1.5 * 0.999, Option::None),
