@@ -681,6 +681,64 @@ tensile_strength = ["560:420", "575:400", "590:380"]
     cfg
 }
 
+/// Without a configured `T_ref` the hold-out's training fit resolves it from the training
+/// curves alone, as a run on them would: the tests left out do not set the laws' reference
+/// temperature (nor, through it, the box and the starts). Leaving 590 °C out of 3 + 2 + 3
+/// curves at 560, 575, 590 °C: (3·560 + 2·575)/5 = 566 °C, where the full data's mean is 575.
+#[test]
+fn holdout_resolves_the_reference_temperature_from_its_training_data() {
+    let tmp = TempDir::new().unwrap();
+    let cfg = law_data(
+        tmp.path(),
+        &[
+            (560.0, 85.0, ""),
+            (560.0, 100.0, ""),
+            (560.0, 110.0, ""),
+            (575.0, 80.0, ""),
+            (575.0, 95.0, ""),
+            (590.0, 75.0, ""),
+            (590.0, 90.0, ""),
+            (590.0, 100.0, ""),
+        ],
+    );
+    let text = std::fs::read_to_string(&cfg).unwrap();
+    std::fs::write(&cfg, text.replace("T_ref = 575\n", "")).unwrap();
+    let out = tmp.path().join("ho");
+    ok(&[
+        "holdout",
+        cfg.to_str().unwrap(),
+        "--temperature",
+        "590",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let t_ref = s["T_ref_C"].as_f64().unwrap();
+    assert!((t_ref - 566.0).abs() < 1e-9, "{t_ref}");
+    // constants.csv states the same reference temperature.
+    let c = csv(&out.join("constants.csv"));
+    let row = c.iter().find(|r| r[0] == "T_ref").unwrap();
+    assert!(
+        (row[1].parse::<f64>().unwrap() - 566.0).abs() < 1e-9,
+        "{row:?}"
+    );
+    // A fit of all the data resolves the mean of all of them (575 °C).
+    let fit_out = tmp.path().join("fit");
+    ok(&[
+        "fit",
+        cfg.to_str().unwrap(),
+        "--out",
+        fit_out.to_str().unwrap(),
+    ]);
+    let c = csv(&fit_out.join("constants.csv"));
+    let row = c.iter().find(|r| r[0] == "T_ref").unwrap();
+    assert!(
+        (row[1].parse::<f64>().unwrap() - 575.0).abs() < 1e-9,
+        "{row:?}"
+    );
+}
+
 /// Curves at three temperatures made by the model with Arrhenius A and Kc: leaving 575 °C
 /// out, the fit on 560 and 590 °C predicts its rupture times (to the integration accuracy;
 /// the constants are recovered) and the files say so.
@@ -787,6 +845,8 @@ fn holdout_predicts_a_temperature_left_out() {
         assert!(r[16].parse::<usize>().unwrap() >= 2);
     }
     assert_eq!(s["tests"], 2);
+    // The configuration's T_ref (given) is the training fit's.
+    assert_eq!(s["T_ref_C"], 575.0);
     assert!(s["model_mean_abs_log10_err"].as_f64().unwrap() < 1e-3);
     assert!(s["lmp_mean_abs_log10_err"].as_f64().is_some());
     // Every baseline's mean beside creepfit's, the best named, the verdict consistent.

@@ -286,6 +286,9 @@ pub struct Holdout {
     /// ([`crate::config::ObjectiveConfig::effects_left_out`]: all of them under eq. 8).
     pub objective_kind: crate::model::objective::ObjectiveKind,
     pub effects_left_out: Vec<crate::likelihood::EffectKind>,
+    /// The training fit's reference temperature of the laws, °C (`None` without laws): the
+    /// configuration's, else the training curves' mean ([`RunConfig::for_data`]).
+    pub t_ref: Option<f64>,
 }
 
 impl Holdout {
@@ -499,6 +502,9 @@ pub fn holdout_observed(
         )));
     }
     let train_data = Dataset::of_curves(train);
+    // Resolved as a run on the training data alone would be: the tests left out do not set
+    // the reference temperature of the laws.
+    let cfg = &cfg.for_data(&train_data);
     let fit = run_fit_observed(
         cfg.calibration(&train_data)?,
         &train_data,
@@ -662,6 +668,7 @@ pub fn holdout_observed(
             .effects_left_out(&train_data.curves, crate::config::LocalFits::Fit),
         training: train_data,
         intervals_refit,
+        t_ref: cfg.t_ref,
     })
 }
 

@@ -82,7 +82,7 @@ pub fn write(cfg: &RunConfig, data: &Dataset, h: &Holdout, out: &Path) -> Result
         h.fit.model.as_ref(),
         &h.fit.space,
         &best.params,
-        cfg.t_ref,
+        h.t_ref,
     )?;
     let inside_pred95 = {
         let (inside, with) = h.inside_pred95();
@@ -99,7 +99,7 @@ pub fn write(cfg: &RunConfig, data: &Dataset, h: &Holdout, out: &Path) -> Result
         },
         "model": h.fit.model.name(),
         "objective_kind": cfg.objective.kind,
-        "T_ref_C": cfg.t_ref,
+        "T_ref_C": h.t_ref,
         "training_objective": jnum(best.eval.objective),
         "training_w": best.w,
         "training_termination": best.lm.termination,
