@@ -1401,18 +1401,23 @@ mod tests {
     #[test]
     fn probe_starts_switch_the_flat_extensions_slightly_on() {
         let names = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        // The model's constants, its default box and its default values.
+        let box_of = |m: &dyn Model| {
+            let c = m.constants().to_vec();
+            let space = ParamSpace::new(
+                c.iter().map(|c| c.lb).collect(),
+                c.iter().map(|c| c.ub).collect(),
+                c.iter().map(|c| c.scale).collect(),
+            );
+            let from: Vec<f64> = c.iter().map(|c| c.default).collect();
+            (c, space, from)
+        };
         let m = crate::model::build(
             "khd",
             &names(&["constant_load", "strain_softening", "garofalo"]),
         )
         .unwrap();
-        let c = m.constants();
-        let space = ParamSpace::new(
-            c.iter().map(|c| c.lb).collect(),
-            c.iter().map(|c| c.ub).collect(),
-            c.iter().map(|c| c.scale).collect(),
-        );
-        let from: Vec<f64> = c.iter().map(|c| c.default).collect();
+        let (c, space, from) = box_of(m.as_ref());
         let starts = probe_starts_from(m.as_ref(), &space, &from);
         let labels: Vec<&str> = starts.iter().map(|s| s.0.as_str()).collect();
         assert_eq!(
@@ -1442,13 +1447,7 @@ mod tests {
         assert!(probe_starts_from(m.as_ref(), &held, &from).is_empty());
         // loading_strain has probes too; rupture_damage has none.
         let m = crate::model::build("khd", &names(&["loading_strain", "rupture_damage"])).unwrap();
-        let c = m.constants();
-        let space = ParamSpace::new(
-            c.iter().map(|c| c.lb).collect(),
-            c.iter().map(|c| c.ub).collect(),
-            c.iter().map(|c| c.scale).collect(),
-        );
-        let from: Vec<f64> = c.iter().map(|c| c.default).collect();
+        let (_, space, from) = box_of(m.as_ref());
         let s = probe_starts_from(m.as_ref(), &space, &from);
         assert!(!s.is_empty());
         assert!(s
