@@ -568,22 +568,48 @@ fn predict_tests_scores_a_file_of_measured_lives() {
             && stdout.contains(&format!("the one to beat: {name}")),
         "{stdout}"
     );
-    // A test the configuration cannot predict, and a bad cell: one line naming file and line.
-    for (row, want) in [
-        ("100,900,1000,X-9", ":3: test at 900 °C, 100 MPa"),
-        ("100,575,abc,X-9", ":3:"),
-    ] {
-        std::fs::write(
-            &tests,
-            format!("stress_MPa,temperature_C,rupture_time_h,specimen\n100,575,20000,X-1\n{row}\n"),
-        )
-        .unwrap();
-        let o = predict_tests(&tmp.path().join("bad"));
-        let e = String::from_utf8_lossy(&o.stderr);
-        assert!(!o.status.success(), "{row}");
-        assert!(e.contains("campaign.csv") && e.contains(want), "{row}: {e}");
-        assert_eq!(e.trim().lines().count(), 1, "{e}");
-    }
+    // A test beyond the limits of a prediction (640 °C: 50 °C above the tested 590 °C, the
+    // margin 25 °C) is predicted, marked and counted, not refused: the others are scored.
+    std::fs::write(
+        &tests,
+        "stress_MPa,temperature_C,rupture_time_h,specimen\n100,575,20000,X-1\n100,640,50,X-9\n",
+    )
+    .unwrap();
+    let beyond = tmp.path().join("beyond");
+    let o = predict_tests(&beyond);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{e}");
+    assert!(
+        e.contains("640 °C, 100 MPa: beyond the limits of a prediction")
+            && e.contains("more than 25 °C outside"),
+        "{e}"
+    );
+    let t = csv(&beyond.join("tests.csv"));
+    let col = |name: &str| t[0].iter().position(|h| h == name).unwrap();
+    assert_eq!(t[1][col("extrapolation")], "none");
+    assert_eq!(t[2][col("extrapolation")], "beyond_limits");
+    assert!(!t[2][col("model_rupture_time_h")].is_empty(), "{:?}", t[2]);
+    let j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(beyond.join("summary.json")).unwrap())
+            .unwrap();
+    assert_eq!(j["tests"]["beyond_limits"], 1, "{}", j["tests"]);
+    assert_eq!(j["tests"]["tests"], 2);
+    assert!(
+        String::from_utf8_lossy(&o.stdout).contains("1 of the 2 tests lie beyond the limits"),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+    // A bad cell: one line naming file and line.
+    std::fs::write(
+        &tests,
+        "stress_MPa,temperature_C,rupture_time_h,specimen\n100,575,20000,X-1\n100,575,abc,X-9\n",
+    )
+    .unwrap();
+    let o = predict_tests(&tmp.path().join("bad"));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(e.contains("campaign.csv") && e.contains(":3:"), "{e}");
+    assert_eq!(e.trim().lines().count(), 1, "{e}");
     // --tests replaces --at: both at once is refused.
     let o = creepfit(&[
         "predict",
@@ -681,6 +707,18 @@ tensile_strength = ["560:420", "575:400", "590:380"]
     cfg
 }
 
+/// Tests at 560, 575 and 590 °C (3 + 2 + 3) for [`law_data`].
+const THREE_TEMPERATURES: [(f64, f64, &str); 8] = [
+    (560.0, 85.0, ""),
+    (560.0, 100.0, ""),
+    (560.0, 110.0, ""),
+    (575.0, 80.0, ""),
+    (575.0, 95.0, ""),
+    (590.0, 75.0, ""),
+    (590.0, 90.0, ""),
+    (590.0, 100.0, ""),
+];
+
 /// Without a configured `T_ref` the hold-out's training fit resolves it from the training
 /// curves alone, as a run on them would: the tests left out do not set the laws' reference
 /// temperature (nor, through it, the box and the starts). Leaving 590 °C out of 3 + 2 + 3
@@ -688,19 +726,7 @@ tensile_strength = ["560:420", "575:400", "590:380"]
 #[test]
 fn holdout_resolves_the_reference_temperature_from_its_training_data() {
     let tmp = TempDir::new().unwrap();
-    let cfg = law_data(
-        tmp.path(),
-        &[
-            (560.0, 85.0, ""),
-            (560.0, 100.0, ""),
-            (560.0, 110.0, ""),
-            (575.0, 80.0, ""),
-            (575.0, 95.0, ""),
-            (590.0, 75.0, ""),
-            (590.0, 90.0, ""),
-            (590.0, 100.0, ""),
-        ],
-    );
+    let cfg = law_data(tmp.path(), &THREE_TEMPERATURES);
     let text = std::fs::read_to_string(&cfg).unwrap();
     std::fs::write(&cfg, text.replace("T_ref = 575\n", "")).unwrap();
     let out = tmp.path().join("ho");
@@ -745,19 +771,7 @@ fn holdout_resolves_the_reference_temperature_from_its_training_data() {
 #[test]
 fn holdout_predicts_a_temperature_left_out() {
     let tmp = TempDir::new().unwrap();
-    let cfg = law_data(
-        tmp.path(),
-        &[
-            (560.0, 85.0, ""),
-            (560.0, 100.0, ""),
-            (560.0, 110.0, ""),
-            (575.0, 80.0, ""),
-            (575.0, 95.0, ""),
-            (590.0, 75.0, ""),
-            (590.0, 90.0, ""),
-            (590.0, 100.0, ""),
-        ],
-    );
+    let cfg = law_data(tmp.path(), &THREE_TEMPERATURES);
     // Leave 575 °C out into `out` (with `extra` options): stdout and summary.json.
     let holdout_575 = |out: &std::path::Path, extra: &[&str]| {
         let mut args = vec!["holdout", cfg.to_str().unwrap(), "--temperature", "575"];

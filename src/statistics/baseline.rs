@@ -173,6 +173,11 @@ pub enum Extrapolation {
     Stress,
     /// Both outside.
     Both,
+    /// Beyond the margins of a prediction ([`TEMPERATURE_MARGIN_C`],
+    /// [`STRESS_MARGIN_FACTOR`]): only a measured test of `predict --tests` is predicted
+    /// there (`--at` and `[predict] at` refuse it), so that one test far from the data does
+    /// not stop the scoring of a campaign's file.
+    BeyondLimits,
 }
 
 impl Extrapolation {
@@ -202,6 +207,7 @@ impl Extrapolation {
             Extrapolation::Temperature => "temperature",
             Extrapolation::Stress => "stress",
             Extrapolation::Both => "both",
+            Extrapolation::BeyondLimits => "beyond_limits",
         }
     }
 }
@@ -836,6 +842,16 @@ pub struct Tested {
     pub laws: bool,
 }
 
+/// Where a condition lies against the tested conditions ([`Tested::classify`]).
+enum Place {
+    /// Within the margins, with its extrapolation.
+    Inside(Extrapolation),
+    /// Beyond a margin: why.
+    Beyond(String),
+    /// Not predictable by the configuration at all: why.
+    Impossible(String),
+}
+
 /// Where a temperature lies among the tested ones: (temperature °C, lowest, highest stress
 /// MPa) of the one that applies, or of the two around it.
 enum Neighbours {
@@ -935,13 +951,35 @@ impl Tested {
         &self,
         c: crate::data::Condition,
     ) -> std::result::Result<Extrapolation, String> {
+        match self.place(c) {
+            Place::Inside(x) => Ok(x),
+            Place::Beyond(why) | Place::Impossible(why) => Err(why),
+        }
+    }
+
+    /// Where a measured test `c` lies (`predict --tests`): as [`Tested::classify`], but a test
+    /// beyond the margins is [`Extrapolation::BeyondLimits`], not an error; `Err` only where
+    /// the configuration cannot predict at all (another temperature without a temperature law,
+    /// no tested condition).
+    pub fn classify_measured(
+        &self,
+        c: crate::data::Condition,
+    ) -> std::result::Result<Extrapolation, String> {
+        match self.place(c) {
+            Place::Inside(x) => Ok(x),
+            Place::Beyond(_) => Ok(Extrapolation::BeyondLimits),
+            Place::Impossible(why) => Err(why),
+        }
+    }
+
+    fn place(&self, c: crate::data::Condition) -> Place {
         let (t0, t1) = self.temperature_range();
         let (t, s) = (c.temperature_c, c.stress_mpa);
         if !(t0.is_finite() && t1.is_finite()) {
-            return Err("the data hold no tested condition".into());
+            return Place::Impossible("the data hold no tested condition".into());
         }
         if !self.laws && !self.temperatures.iter().any(|x| same(x.0, t)) {
-            return Err(format!(
+            return Place::Impossible(format!(
                 "{t} °C is not a tested temperature and the configuration has no temperature law: its constants describe {} °C only; predict at {}, or give constants a temperature law (e.g. law = \"arrhenius\" on A, docs/FORMATS.md) and fit curves at several temperatures",
                 self.temperatures
                     .iter()
@@ -956,13 +994,13 @@ impl Tested {
             ));
         }
         if t < t0 - TEMPERATURE_MARGIN_C || t > t1 + TEMPERATURE_MARGIN_C {
-            return Err(format!(
+            return Place::Beyond(format!(
                 "{t} °C is more than {TEMPERATURE_MARGIN_C} °C outside the tested temperatures ({t0}–{t1} °C): beyond what the configuration can predict (docs/FORMATS.md, \"Limits of a prediction\")"
             ));
         }
         let (l0, l1) = self.stress_limits(t);
         if s < l0 / STRESS_MARGIN_FACTOR || s > l1 * STRESS_MARGIN_FACTOR {
-            return Err(format!(
+            return Place::Beyond(format!(
                 "{s} MPa is more than a factor {STRESS_MARGIN_FACTOR} outside the stresses tested at {t} °C ({l0}–{l1} MPa): beyond what the configuration can predict (docs/FORMATS.md, \"Limits of a prediction\")"
             ));
         }
@@ -970,7 +1008,7 @@ impl Tested {
         let in_t = t >= t0 && t <= t1;
         // Relative tolerance: the interpolated ends are computed through logarithms.
         let in_s = s >= s0 * (1.0 - 1e-12) && s <= s1 * (1.0 + 1e-12);
-        Ok(match (in_t, in_s) {
+        Place::Inside(match (in_t, in_s) {
             (true, true) => Extrapolation::None,
             (true, false) => Extrapolation::Stress,
             (false, true) => Extrapolation::Temperature,

@@ -90,8 +90,11 @@ fn non_empty(file: &Path, records: Vec<RuptureRecord>) -> Result<Vec<RuptureReco
     Ok(records)
 }
 
-/// Every test of `records` (read from `file`) within what `cfg` on `data` can predict
-/// ([`crate::baseline::Tested::classify`]): else an error naming the first one's line.
+/// Every test of `records` (read from `file`) one that `cfg` on `data` can predict at all
+/// ([`crate::baseline::Tested::classify_measured`]): else an error naming the first one's
+/// line. A test beyond the margins of a prediction is predicted and marked
+/// (`beyond_limits`), not refused: one test far from the data does not stop the scoring of
+/// the others (as `holdout` predicts every test it leaves out).
 pub fn check(
     file: &Path,
     records: &[RuptureRecord],
@@ -104,7 +107,7 @@ pub fn check(
             temperature_c: r.temperature_c,
             stress_mpa: r.stress_mpa,
         };
-        if let Err(why) = tested.classify(c) {
+        if let Err(why) = tested.classify_measured(c) {
             return Err(Error::data(
                 file,
                 r.line,
@@ -211,6 +214,17 @@ impl MeasuredTests {
             ),
             "test of the file",
         );
+        let beyond = self
+            .tests
+            .iter()
+            .filter(|t| t.extrapolation == Extrapolation::BeyondLimits)
+            .count();
+        if beyond > 0 {
+            s.push_str(&format!(
+                "{beyond} of the {} tests lie beyond the limits of a prediction (extrapolation = beyond_limits in tests.csv): scored with the others, their lives extrapolated beyond the margins\n",
+                self.tests.len()
+            ));
+        }
         let (inside, with) = self.inside_pred95();
         if with > 0 {
             s.push_str(&format!(
@@ -292,6 +306,7 @@ impl MeasuredTests {
             "model_mean_abs_log10_err": jnum(m),
             "model_mean_log10_err": jnum(scores.model_bias()),
             "model_tests_predicted": m_n,
+            "beyond_limits": self.tests.iter().filter(|t| t.extrapolation == Extrapolation::BeyondLimits).count(),
             "baselines": baselines,
             "one_to_beat": one_to_beat,
             "creepfit_vs_one_to_beat": scores.verdict(),

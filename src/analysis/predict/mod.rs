@@ -268,7 +268,11 @@ pub fn predict(
         source: ConstantsSource::Given,
         extrapolation: conditions
             .iter()
-            .map(|c| tested.classify(*c).unwrap_or(Extrapolation::Both))
+            .map(|c| {
+                tested
+                    .classify_measured(*c)
+                    .unwrap_or(Extrapolation::BeyondLimits)
+            })
             .collect(),
         predictions,
         given: None,
@@ -568,7 +572,14 @@ pub fn extrapolation_notes(tested: &Tested, conditions: &[Condition]) -> Vec<Str
     conditions
         .iter()
         .filter_map(|c| {
-            let x = tested.classify(*c).ok()?;
+            let x = tested.classify_measured(*c).ok()?;
+            if x == Extrapolation::BeyondLimits {
+                let why = tested.classify(*c).err().unwrap_or_default();
+                return Some(format!(
+                    "{}: beyond the limits of a prediction ({why}); predicted because it is a measured test of --tests, marked extrapolation = beyond_limits",
+                    c.label()
+                ));
+            }
             let (s0, s1) = tested.stress_range(c.temperature_c);
             let mut what = Vec::new();
             if matches!(x, Extrapolation::Temperature | Extrapolation::Both) {
@@ -1205,13 +1216,23 @@ mod tests {
         ];
         for (temp, s, want) in table {
             let got = t.classify(at(temp, s));
+            // A measured test (`predict --tests`) beyond the margins is marked, not refused.
+            let measured = t.classify_measured(at(temp, s));
             match want {
-                Some(x) => assert_eq!(got, Ok(x), "{temp} °C {s} MPa"),
-                Option::None => assert!(got.is_err(), "{temp} °C {s} MPa: {got:?}"),
+                Some(x) => {
+                    assert_eq!(got, Ok(x), "{temp} °C {s} MPa");
+                    assert_eq!(measured, Ok(x), "{temp} °C {s} MPa");
+                }
+                Option::None => {
+                    assert!(got.is_err(), "{temp} °C {s} MPa: {got:?}");
+                    assert_eq!(measured, Ok(X::BeyondLimits), "{temp} °C {s} MPa");
+                }
             }
         }
-        // Without a temperature law only the tested temperatures.
+        // Without a temperature law only the tested temperatures, for a measured test too.
         let t = tested(false);
+        assert!(t.classify_measured(at(575.0, 100.0)).is_err());
+        assert_eq!(X::BeyondLimits.as_str(), "beyond_limits");
         assert_eq!(t.classify(at(560.0, 100.0)), Ok(X::None));
         let e = t.classify(at(575.0, 100.0)).unwrap_err();
         assert!(e.contains("no temperature law") && e.contains("575"), "{e}");
