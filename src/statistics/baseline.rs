@@ -922,6 +922,15 @@ impl Tested {
         }
     }
 
+    /// The two tested temperatures around `t` (°C) when it lies strictly between two, the
+    /// ones [`Tested::stress_range`] interpolates between.
+    pub fn around(&self, t: f64) -> Option<(f64, f64)> {
+        match self.neighbours(t) {
+            Neighbours::Between(a, b) => Some((a.0, b.0)),
+            _ => None,
+        }
+    }
+
     /// The tested temperature at `t` (or the nearest outside the tested range), or the two
     /// tested temperatures around it.
     fn neighbours(&self, t: f64) -> Neighbours {

@@ -214,11 +214,7 @@ impl MeasuredTests {
             ),
             "test of the file",
         );
-        let beyond = self
-            .tests
-            .iter()
-            .filter(|t| t.extrapolation == Extrapolation::BeyondLimits)
-            .count();
+        let beyond = self.beyond_limits();
         if beyond > 0 {
             s.push_str(&format!(
                 "{beyond} of the {} tests lie beyond the limits of a prediction (extrapolation = beyond_limits in tests.csv): scored with the others, their lives extrapolated beyond the margins\n",
@@ -232,6 +228,14 @@ impl MeasuredTests {
             ));
         }
         s
+    }
+
+    /// How many tests lie beyond the limits of a prediction (predicted and marked).
+    pub fn beyond_limits(&self) -> usize {
+        self.tests
+            .iter()
+            .filter(|t| t.extrapolation == Extrapolation::BeyondLimits)
+            .count()
     }
 
     /// `tests.csv`: per test its condition, measured and predicted lives, log10 errors, the
@@ -306,7 +310,7 @@ impl MeasuredTests {
             "model_mean_abs_log10_err": jnum(m),
             "model_mean_log10_err": jnum(scores.model_bias()),
             "model_tests_predicted": m_n,
-            "beyond_limits": self.tests.iter().filter(|t| t.extrapolation == Extrapolation::BeyondLimits).count(),
+            "beyond_limits": self.beyond_limits(),
             "baselines": baselines,
             "one_to_beat": one_to_beat,
             "creepfit_vs_one_to_beat": scores.verdict(),

@@ -586,18 +586,14 @@ pub fn extrapolation_notes(tested: &Tested, conditions: &[Condition]) -> Vec<Str
                 what.push(format!("temperature outside the tested {t0}–{t1} °C"));
             }
             if matches!(x, Extrapolation::Stress | Extrapolation::Both) {
-                let between = tested
-                    .temperatures
-                    .windows(2)
-                    .find(|w| w[0].0 < c.temperature_c && c.temperature_c < w[1].0);
-                what.push(match between {
-                    Some(w) => format!(
+                what.push(match tested.around(c.temperature_c) {
+                    Some((lo, hi)) => format!(
                         "stress outside the {}–{} MPa tested around {} °C (the ranges of {} and {} °C, interpolated)",
                         round_mpa(s0),
                         round_mpa(s1),
                         c.temperature_c,
-                        w[0].0,
-                        w[1].0
+                        lo,
+                        hi
                     ),
                     None => format!(
                         "stress outside the {s0}–{s1} MPa tested at {} °C",
