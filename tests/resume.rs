@@ -1,4 +1,4 @@
-//! `diagnose` and `profile` resume after an interruption: a run stopped part way (the hidden
+//! `diagnose`, `profile`, `holdout` and `predict --intervals` resume after an interruption: a run stopped part way (the hidden
 //! `--stop-after`, which stops once so many new records are journaled, as a kill would leave
 //! them) and rerun into the same folder computes only what is missing and writes result
 //! files byte-identical to an uninterrupted run's; a folder of another run is refused naming
@@ -369,6 +369,100 @@ fn an_interrupted_holdout_resumes_to_the_same_files() {
     }
     let summary = String::from_utf8(bytes(&plain.join("summary.json"))).unwrap();
     assert!(!summary.contains("wall_s"), "{summary}");
+}
+
+#[test]
+fn an_interrupted_prediction_with_intervals_resumes_to_the_same_files() {
+    let d = TempDir::new().unwrap();
+    let cfg = profile_config(d.path());
+    let fit = d.path().join("fit");
+    ok(&creepfit(&[
+        "fit",
+        cfg.to_str().unwrap(),
+        "--out",
+        fit.to_str().unwrap(),
+        "-q",
+    ]));
+    let constants = fit.join("constants.csv");
+    let run = |out: &Path, at: &str, extra: &[&str]| {
+        let mut args = vec![
+            "predict",
+            cfg.to_str().unwrap(),
+            "--constants",
+            constants.to_str().unwrap(),
+            "--at",
+            at,
+            "--intervals",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        creepfit(&args)
+    };
+    let at = "560:70,560:80";
+    let plain = d.path().join("plain");
+    ok(&run(&plain, at, &["--threads", "2"]));
+    // 10 calibration replicates and one record per condition.
+    let all = keys(&plain);
+    assert_eq!(all.len(), 12, "{all:?}");
+    assert_eq!(
+        all.iter().filter(|k| k.starts_with("intervals/")).count(),
+        2,
+        "{all:?}"
+    );
+    // Stopped after the replicates and the first condition.
+    let resumed = d.path().join("resumed");
+    let o = run(
+        &resumed,
+        at,
+        &["--threads", "1", "--stop-after", "11", "-q"],
+    );
+    interrupted(&o, &resumed.join("journal.jsonl"));
+    assert_eq!(records(&resumed), 11);
+    let o = run(&resumed, at, &["--threads", "2"]);
+    ok(&o);
+    let t = timings(&resumed);
+    assert_eq!(t["journal_records_resumed"], 11);
+    assert_eq!(t["journal_records_written"], 1);
+    // Where the time went, phase by phase (the resumed phases cost nothing).
+    let phases = &timings(&plain)["intervals_s"];
+    for p in ["refit", "calibration", "scatter", "intervals", "bands"] {
+        assert!(phases[p].as_f64().unwrap() >= 0.0, "{phases}");
+    }
+    assert!(phases["intervals"].as_f64().unwrap() > 0.0, "{phases}");
+    assert!(
+        t["intervals_s"]["calibration"].as_f64().unwrap() < phases["calibration"].as_f64().unwrap(),
+        "{t} against {phases}"
+    );
+    let (a, b) = (results(&plain), results(&resumed));
+    assert_eq!(
+        a.iter().map(|f| &f.0).collect::<Vec<_>>(),
+        b.iter().map(|f| &f.0).collect::<Vec<_>>()
+    );
+    assert!(a.iter().any(|f| f.0 == "predictions.csv"), "{a:?}");
+    for ((name, x), (_, y)) in a.iter().zip(&b) {
+        assert!(x == y, "{name} differs after resuming");
+    }
+    // Another condition into that folder is refused, naming the setting.
+    let o = run(&resumed, "560:90", &["-q"]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("predict"), "{err}");
+    // Without --intervals nothing is journaled and the journal of the run before is removed.
+    let o = creepfit(&[
+        "predict",
+        cfg.to_str().unwrap(),
+        "--constants",
+        constants.to_str().unwrap(),
+        "--at",
+        at,
+        "--out",
+        plain.to_str().unwrap(),
+        "-q",
+    ]);
+    ok(&o);
+    assert!(!plain.join("journal.jsonl").exists());
+    assert!(!plain.join("timings.json").exists());
 }
 
 /// Runs `creepfit args` with its stderr on a pseudo-terminal (`libc::openpty`, 30 × 100):

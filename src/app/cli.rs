@@ -243,15 +243,23 @@ pub enum Command {
         #[arg(long, value_name = "FILE", conflicts_with = "at")]
         tests: Option<PathBuf>,
         /// Add the 95 % prediction interval of a new test and the 95 % confidence interval
-        /// of the model's prediction (profile likelihood) to predictions.csv.
+        /// of the model's prediction (profile likelihood) to predictions.csv. The run is
+        /// journaled (journal.jsonl) and resumes in the same folder after an interruption.
         #[arg(long)]
         intervals: bool,
         /// Output folder (default results/<name>/predict/).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Worker threads (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
         /// No progress bars (drawn on stderr only when it is a terminal).
         #[arg(long, short)]
         quiet: bool,
+        /// Stop after this many new journal records, as if interrupted (for tests of
+        /// resumption; with --intervals).
+        #[arg(long, hide = true)]
+        stop_after: Option<usize>,
     },
     /// Leave one temperature (or one campaign) out: fit on the others, predict the held-out
     /// tests' rupture times and curves, and compare with the classical baselines (Larson–Miller,
@@ -361,7 +369,9 @@ pub fn run(cli: Cli) -> Result<()> {
             tests,
             intervals,
             out,
+            threads,
             quiet,
+            stop_after,
         } => {
             let mut at = at
                 .map(|s| {
@@ -377,11 +387,12 @@ pub fn run(cli: Cli) -> Result<()> {
                 }
                 None => None,
             };
-            let cli = Overrides {
+            let mut cli = Overrides {
                 predict_at: at,
                 predict_intervals: intervals.then_some(true),
-                ..long_run(out, quiet, None)
+                ..long_run(out, quiet, stop_after)
             };
+            cli.run.threads = threads;
             commands::predict(&config, &constants, tests.as_ref(), &cli)
         }
         Command::Holdout {

@@ -149,6 +149,41 @@ pub fn predict(
         None => crate::predict::check_conditions(&cfg, &data, cli.predict_at.is_some())?,
     }
     let out = cfg.out_dir("predict");
+    let work = |hooks: &Hooks, bars: &Bars, journal: Option<&Journal>| {
+        let t0 = std::time::Instant::now();
+        let setup = cfg.predict_setup(&data);
+        let run = with_threads(cfg.run.threads, || {
+            crate::predict::run_observed(&setup, &data, model.as_ref(), &params, hooks)
+        });
+        bars.clear();
+        let mut run = run?;
+        if let Some((file, records)) = tests {
+            run.measured = Some(crate::predict::measured::MeasuredTests::of(
+                file, records, &run,
+            ));
+        }
+        if let Some(t) = &run.interval_timings {
+            crate::report::tables::write_timings(
+                &out,
+                "predict",
+                journal,
+                serde_json::json!({
+                    "wall_s": t0.elapsed().as_secs_f64(),
+                    "intervals_s": t,
+                }),
+            )?;
+        }
+        export::predict::write(&cfg, &data, model.as_ref(), &run, &out)
+    };
+    // With intervals (minutes on dense curves) the run is journaled and resumes: the
+    // calibration replicates and each condition's intervals.
+    if cfg.predict.intervals {
+        let identity = crate::predict::identity(&cfg, &params);
+        return journaled(&cfg, &data, &out, "predict", &identity, |hooks, bars, j| {
+            export::predict::warn_extrapolation(&cfg, &data);
+            work(hooks, bars, Some(j))
+        });
+    }
     let mut folder = RunFolder::begin(&out, "predict")?;
     note_data(&mut folder, &data);
     export::predict::warn_extrapolation(&cfg, &data);
@@ -157,18 +192,7 @@ pub fn predict(
         observer: &bars,
         journal: None,
     };
-    let outcome = (|| {
-        let setup = cfg.predict_setup(&data);
-        let mut run = crate::predict::run_observed(&setup, &data, model.as_ref(), &params, &hooks)?;
-        bars.clear();
-        if let Some((file, records)) = tests {
-            run.measured = Some(crate::predict::measured::MeasuredTests::of(
-                file, records, &run,
-            ));
-        }
-        export::predict::write(&cfg, &data, model.as_ref(), &run, &out)
-    })();
-    folder.finish(outcome)
+    folder.finish(work(&hooks, &bars, None))
 }
 
 /// `creepfit holdout`: fit without the tests `left_out`, predict them, compare with the

@@ -109,6 +109,9 @@ pub struct PredictRun {
     pub intervals: Option<Vec<crate::uncertainty::predict::ConditionIntervals>>,
     /// Under `--tests FILE`: its measured lives against the predictions ([`measured`]).
     pub measured: Option<measured::MeasuredTests>,
+    /// Under `--intervals`: where the intervals' wall time went (`timings.json`, not a
+    /// result).
+    pub interval_timings: Option<crate::uncertainty::predict::IntervalsTimings>,
 }
 
 /// `predictions.csv`'s interval columns under `--intervals`, with the quantity and interval
@@ -283,6 +286,7 @@ pub fn predict(
         output_names: model.output_names(),
         intervals: None,
         measured: None,
+        interval_timings: None,
     }
 }
 
@@ -389,7 +393,24 @@ pub fn centre_on_intervals(
     run.refit = Some(iv.refit);
     run.calibration = iv.calibration;
     run.intervals = Some(iv.conditions);
+    run.interval_timings = Some(iv.timings);
     run
+}
+
+/// The run identity of `creepfit predict --intervals` on `cfg` (bound to its data) kept in its
+/// journal: the configuration's ([`crate::config::identity`]), the command, the `[predict]`
+/// and `[profile]` settings (the conditions, the calibration and the bands) and the given
+/// constants, exact.
+pub fn identity(cfg: &RunConfig, params: &[f64]) -> Value {
+    let mut id = crate::config::identity(cfg);
+    id["command"] = "predict".into();
+    id["predict"] = serde_json::to_value(&cfg.predict).expect("settings serialise");
+    id["profile"] = serde_json::to_value(&cfg.profile).expect("settings serialise");
+    id["given_constants"] = params
+        .iter()
+        .map(|v| crate::journal::exact::to_json(*v))
+        .collect();
+    id
 }
 
 /// The printed table: model and baseline side by side, which constants the numbers come

@@ -23,6 +23,8 @@
 //! ([`bootstrap_predictions`]) is the alternative measured against the profile in README
 //! ("How sure").
 
+use std::time::Instant;
+
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -30,6 +32,7 @@ use super::constrained::{Predicted, Quantity};
 use super::profile::{quantity_interval, QuantityInterval};
 use super::{normal_quantile, Context, Reference, Thresholds};
 use crate::diagnose::bootstrap::replicate_rng;
+use crate::journal::{debug_hash, Exact};
 use crate::likelihood::EffectKind;
 use crate::model::Load;
 
@@ -453,6 +456,55 @@ mod tests {
         assert_eq!(widen(1.0, 0.5, 2.0, 0.0), (0.5, 2.0));
     }
 
+    /// A condition's intervals come back from the journal bit for bit (NaN, infinities and
+    /// the open flags included); a record of another shape is recomputed, not misread.
+    #[test]
+    fn a_journaled_condition_comes_back_exactly() {
+        let q = |k: usize, v: f64| PredictedInterval {
+            quantity: QUANTITIES[k].0,
+            value: v,
+            conf_lo68: v * 0.9,
+            conf_hi68: 0.1 + v,
+            conf_lo95: f64::NEG_INFINITY,
+            conf_hi95: 1.0 / 3.0,
+            conf_lo_open: true,
+            conf_hi_open: false,
+            pred_lo95: f64::NAN,
+            pred_hi95: 2.0_f64.sqrt(),
+            scatter_sd: 0.123_456_789_012_345_67,
+            scatter_n: 7,
+            wald_se_ln: f64::INFINITY,
+            fits: 13,
+            profile: vec![(1e-300, 0.5), (-2.5, f64::NAN)],
+        };
+        let c = ConditionIntervals {
+            quantities: vec![q(2, 17.25), q(0, 1234.5678)],
+            band: vec![BandPoint {
+                time_h: 0.1 + 0.2,
+                strain_pct: 5e-324,
+                lo95_pct: -0.0,
+                hi95_pct: f64::MAX,
+            }],
+        };
+        let text = serde_json::to_string(&ConditionRecord::of(&c)).unwrap();
+        let back = serde_json::from_str::<ConditionRecord>(&text)
+            .unwrap()
+            .intervals()
+            .unwrap();
+        assert_eq!(format!("{back:?}"), format!("{c:?}"));
+        let bits = |c: &ConditionIntervals| -> Vec<u64> {
+            c.band
+                .iter()
+                .flat_map(|b| [b.time_h, b.strain_pct, b.lo95_pct, b.hi95_pct])
+                .map(f64::to_bits)
+                .collect()
+        };
+        assert_eq!(bits(&back), bits(&c));
+        let short = text.replacen("[1234.5678,", "[", 1);
+        let r: ConditionRecord = serde_json::from_str(&short).unwrap();
+        assert!(r.intervals().is_none(), "{short}");
+    }
+
     #[test]
     fn percentiles_interpolate() {
         let v: Vec<f64> = (0..=100).map(|k| k as f64).collect();
@@ -523,6 +575,135 @@ pub struct IntervalsRun {
     /// The bootstrap calibration of the intervals' thresholds (`None` with `[profile]
     /// calibrate = 0`: plain χ² thresholds).
     pub calibration: Option<super::calibrate::Calibration>,
+    /// Where the wall time went (not a result: `timings.json`).
+    #[serde(skip)]
+    pub timings: IntervalsTimings,
+}
+
+/// Wall time of each phase of [`intervals_at_observed`], s (a resumed phase counts only what
+/// it computed again).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct IntervalsTimings {
+    /// The maximum-likelihood refit the intervals are centred on (and its refit without
+    /// specimen factors, where they settle at zero).
+    pub refit: f64,
+    /// The bootstrap calibration of the thresholds (`[profile] calibrate` replicates).
+    pub calibration: f64,
+    /// The specimen scatter of a new test (a hierarchical fit where the error model has
+    /// specimen effects).
+    pub scatter: f64,
+    /// The profile searches of rupture time, minimum rate and rupture strain, all conditions.
+    pub intervals: f64,
+    /// The confidence bands of the curves, all conditions.
+    pub bands: f64,
+    /// The whole computation.
+    pub total: f64,
+}
+
+/// A condition's intervals as journaled: every number exact (non-finite ones by name), so
+/// that a resumed run writes what an uninterrupted one writes.
+#[derive(Debug, Serialize, serde::Deserialize)]
+struct ConditionRecord {
+    quantities: Vec<QuantityRecord>,
+    /// Per band point: time (h), strain, lo95, hi95 (%).
+    band: Vec<Exact>,
+}
+
+/// One [`PredictedInterval`] as journaled.
+#[derive(Debug, Serialize, serde::Deserialize)]
+struct QuantityRecord {
+    /// Index in [`QUANTITIES`].
+    quantity: usize,
+    /// value, conf_lo68, conf_hi68, conf_lo95, conf_hi95, pred_lo95, pred_hi95, scatter_sd,
+    /// wald_se_ln.
+    numbers: Exact,
+    open: (bool, bool),
+    scatter_n: usize,
+    fits: usize,
+    /// The profile's points, (coordinate, Δ) flattened.
+    profile: Exact,
+}
+
+impl ConditionRecord {
+    fn of(c: &ConditionIntervals) -> ConditionRecord {
+        ConditionRecord {
+            quantities: c
+                .quantities
+                .iter()
+                .map(|q| QuantityRecord {
+                    quantity: QUANTITIES
+                        .iter()
+                        .position(|(n, _, _)| *n == q.quantity)
+                        .expect("a quantity of QUANTITIES"),
+                    numbers: Exact(vec![
+                        q.value,
+                        q.conf_lo68,
+                        q.conf_hi68,
+                        q.conf_lo95,
+                        q.conf_hi95,
+                        q.pred_lo95,
+                        q.pred_hi95,
+                        q.scatter_sd,
+                        q.wald_se_ln,
+                    ]),
+                    open: (q.conf_lo_open, q.conf_hi_open),
+                    scatter_n: q.scatter_n,
+                    fits: q.fits,
+                    profile: Exact(q.profile.iter().flat_map(|&(x, d)| [x, d]).collect()),
+                })
+                .collect(),
+            band: c
+                .band
+                .iter()
+                .map(|b| Exact(vec![b.time_h, b.strain_pct, b.lo95_pct, b.hi95_pct]))
+                .collect(),
+        }
+    }
+
+    /// The intervals again; `None` for a record of another shape (recomputed).
+    fn intervals(&self) -> Option<ConditionIntervals> {
+        let quantities = self
+            .quantities
+            .iter()
+            .map(|q| {
+                let n = &q.numbers.0;
+                if n.len() != 9 || q.profile.0.len() % 2 != 0 {
+                    return None;
+                }
+                Some(PredictedInterval {
+                    quantity: QUANTITIES.get(q.quantity)?.0,
+                    value: n[0],
+                    conf_lo68: n[1],
+                    conf_hi68: n[2],
+                    conf_lo95: n[3],
+                    conf_hi95: n[4],
+                    conf_lo_open: q.open.0,
+                    conf_hi_open: q.open.1,
+                    pred_lo95: n[5],
+                    pred_hi95: n[6],
+                    scatter_sd: n[7],
+                    scatter_n: q.scatter_n,
+                    wald_se_ln: n[8],
+                    fits: q.fits,
+                    profile: q.profile.0.chunks(2).map(|p| (p[0], p[1])).collect(),
+                })
+            })
+            .collect::<Option<Vec<_>>>()?;
+        let band = self
+            .band
+            .iter()
+            .map(|b| match b.0[..] {
+                [time_h, strain_pct, lo95_pct, hi95_pct] => Some(BandPoint {
+                    time_h,
+                    strain_pct,
+                    lo95_pct,
+                    hi95_pct,
+                }),
+                _ => None,
+            })
+            .collect::<Option<Vec<_>>>()?;
+        Some(ConditionIntervals { quantities, band })
+    }
 }
 
 /// The fractions of the predicted rupture time at which a band is computed: k/n for
@@ -565,6 +746,8 @@ pub fn intervals_at_observed(
     loads: &[Load],
     hooks: &crate::progress::Hooks,
 ) -> crate::error::Result<IntervalsRun> {
+    let t0 = Instant::now();
+    let mut timings = IntervalsTimings::default();
     hooks.observer.phase("maximum-likelihood refit", None);
     let ctx = super::report::context(setup, model, data);
     let f = ctx.fit(&ctx.space, params, false);
@@ -597,6 +780,8 @@ pub fn intervals_at_observed(
             .map(|s| s.campaign_levels(ctx.curves))
             .unwrap_or_default(),
     };
+    timings.refit = t0.elapsed().as_secs_f64();
+    let t1 = Instant::now();
     let pc = &setup.profile;
     let (th, calibration) = if pc.calibrate > 0 {
         let cons = super::report::calibration_constants(&ctx, &reference);
@@ -618,24 +803,56 @@ pub fn intervals_at_observed(
     } else {
         (Thresholds::chi2(1.0), None)
     };
+    timings.calibration = t1.elapsed().as_secs_f64();
     let fractions = band_fractions(pc.band_points);
-    hooks.phase("intervals at the conditions", loads.len());
+    let t2 = Instant::now();
     let scatter = specimen_scatter_for(&ctx, &reference, loads.len());
+    timings.scatter = t2.elapsed().as_secs_f64();
+    const PHASE: &str = "intervals at the conditions";
+    hooks.phase(PHASE, loads.len());
+    // Each condition's intervals journaled under the hash of what they are computed from.
+    let prefix = format!(
+        "intervals/{}/",
+        debug_hash(&(&reference, &th, &scatter, &fractions))
+    );
+    if let Some(j) = hooks.journal {
+        let found = loads
+            .iter()
+            .filter(|l| j.contains(&format!("{prefix}{}", debug_hash(l))))
+            .count();
+        hooks.observer.resumed(found as u64);
+    }
     let conditions = loads
         .iter()
         .map(|l| {
-            hooks.check("intervals at the conditions")?;
-            let c = ConditionIntervals {
-                quantities: prediction_intervals(&ctx, &reference, l, &th, &scatter),
-                band: prediction_band(&ctx, &reference, l, &fractions, &th),
-            };
+            let key = format!("{prefix}{}", debug_hash(l));
+            if let Some(c) = hooks
+                .journal
+                .and_then(|j| j.get::<ConditionRecord>(&key))
+                .and_then(|r| r.intervals())
+            {
+                return Ok(c);
+            }
+            hooks.check(PHASE)?;
+            let ti = Instant::now();
+            let quantities = prediction_intervals(&ctx, &reference, l, &th, &scatter);
+            timings.intervals += ti.elapsed().as_secs_f64();
+            let tb = Instant::now();
+            let band = prediction_band(&ctx, &reference, l, &fractions, &th);
+            timings.bands += tb.elapsed().as_secs_f64();
+            let c = ConditionIntervals { quantities, band };
+            if let Some(j) = hooks.journal {
+                j.put(&key, &ConditionRecord::of(&c))?;
+            }
             hooks.step();
             Ok(c)
         })
         .collect::<crate::error::Result<_>>()?;
+    timings.total = t0.elapsed().as_secs_f64();
     Ok(IntervalsRun {
         refit,
         conditions,
         calibration,
+        timings,
     })
 }
