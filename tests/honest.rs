@@ -184,14 +184,19 @@ fn predict_intervals_have_one_centre() {
     for (k, r) in p.iter().enumerate() {
         let b: Vec<&HashMap<String, String>> = band[9 * k..9 * (k + 1)].iter().collect();
         let (t_r, e_r) = (num(r, "rupture_time_h"), num(r, "rupture_strain_pct"));
+        let t_lo95 = num(r, "rupture_time_conf_lo95_h");
         for x in &b {
             assert_eq!(x["stress_MPa"], r["stress_MPa"]);
-            let (e, lo, hi) = (
-                num(x, "strain_pct"),
-                num(x, "strain_conf_lo95_pct"),
-                num(x, "strain_conf_hi95_pct"),
-            );
-            assert!(lo <= e && e <= hi, "{x:?}");
+            let (e, lo) = (num(x, "strain_pct"), num(x, "strain_conf_lo95_pct"));
+            assert!(lo <= e, "{x:?}");
+            // From the rupture time's lower confidence bound on, the upper end is rupture.
+            if num(x, "time_h") >= t_lo95 {
+                assert_eq!(x["strain_conf_hi95_pct"], "", "{x:?}");
+                assert_eq!(x["strain_conf_hi95_ruptured"], "true", "{x:?}");
+            } else {
+                assert!(e <= num(x, "strain_conf_hi95_pct"), "{x:?}");
+                assert_eq!(x["strain_conf_hi95_ruptured"], "false", "{x:?}");
+            }
         }
         let last = b[8];
         assert!(

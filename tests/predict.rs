@@ -406,7 +406,9 @@ fn predict_intervals_add_their_columns() {
         "hierarchical {hier} vs identical specimens {plain}"
     );
     // band.csv: the 95 % confidence band of each predicted curve at 9 times before rupture,
-    // in the order asked, each band around its strain; band.png drawn.
+    // in the order asked, each band around its strain; band.png drawn. From the rupture
+    // time's lower 95 % confidence bound on, the upper end is rupture (cell empty, marked);
+    // before it, a strain above the centre.
     let band = csv(&out.join("band.csv"));
     assert_eq!(
         band[0],
@@ -416,17 +418,27 @@ fn predict_intervals_add_their_columns() {
             "time_h",
             "strain_pct",
             "strain_conf_lo95_pct",
-            "strain_conf_hi95_pct"
+            "strain_conf_hi95_pct",
+            "strain_conf_hi95_ruptured"
         ]
     );
     assert_eq!(band.len(), 1 + 2 * 9);
     for (k, r) in band[1..].iter().enumerate() {
         assert_eq!(r[1], if k < 9 { "70" } else { "85" });
-        let (t, e, lo, hi) = (f(r, 2), f(r, 3), f(r, 4), f(r, 5));
-        let t_r = f(&rows[1 + k / 9], 2);
+        let (t, e, lo) = (f(r, 2), f(r, 3), f(r, 4));
+        let (t_r, t_lo95) = (f(&rows[1 + k / 9], 2), f(&rows[1 + k / 9], 11));
         assert!(t > 0.0 && t < t_r * 1.05, "{r:?}");
-        assert!(lo <= e && e <= hi && lo < hi && lo > 0.0, "{r:?}");
+        assert!(lo <= e && lo > 0.0, "{r:?}");
+        if t >= t_lo95 {
+            assert_eq!((r[5].as_str(), r[6].as_str()), ("", "true"), "{r:?}");
+        } else {
+            let hi = f(r, 5);
+            assert!(e <= hi && lo < hi && r[6] == "false", "{r:?}");
+        }
     }
+    // The last point is the predicted rupture, after the lower bound of its own interval.
+    assert_eq!(band[9][6], "true");
+    assert_eq!(band[18][6], "true");
     assert!(out.join("band.png").exists());
 }
 

@@ -550,10 +550,8 @@ pub fn holdout_observed(
             &train_data,
             &best.params,
             &loads,
-            &crate::progress::Hooks {
-                journal: None,
-                ..*hooks
-            },
+            // Journaled too: the records' keys hash what they are computed from.
+            hooks,
         )?;
         intervals_refit = Some(iv.refit);
         iv.conditions

@@ -704,6 +704,7 @@ pub fn write_outputs(
                         num(b.strain_pct),
                         num(b.lo95_pct),
                         num(b.hi95_pct),
+                        b.hi95_ruptured.to_string(),
                     ]
                 })
             })
@@ -886,14 +887,17 @@ pub const GIVEN_COLUMNS: [&str; 4] = [
 
 /// `band.csv`'s columns under `--intervals`: the 95 % confidence band of each predicted curve
 /// (the model's prediction, from the constants' uncertainty; pointwise prediction profile
-/// likelihood) at `[profile] band_points` fractions of its rupture time.
-pub const BAND_COLUMNS: [&str; 6] = [
+/// likelihood) at `[profile] band_points` fractions of its rupture time. Where constants of
+/// the confidence set rupture the test by the time (`strain_conf_hi95_ruptured`), the upper
+/// end is rupture and its cell is empty.
+pub const BAND_COLUMNS: [&str; 7] = [
     "temperature_C",
     "stress_MPa",
     "time_h",
     "strain_pct",
     "strain_conf_lo95_pct",
     "strain_conf_hi95_pct",
+    "strain_conf_hi95_ruptured",
 ];
 
 pub use crate::report::plot::PLOT_POINTS;
@@ -907,14 +911,20 @@ pub type Line = Vec<(f64, f64)>;
 /// interpolated linearly in time between the band's points. At a band point this is the band
 /// itself (band and curve share their centre); between points the band keeps its relative
 /// width about the curve, so that it surrounds the curve it is drawn with (straight lines
-/// between the band's points would cut through a steep tertiary curve). Empty without band
-/// points.
+/// between the band's points would cut through a steep tertiary curve). The upper line ends
+/// at the last band point whose upper end is not rupture (`hi95_ruptured`): after it the
+/// test may have ruptured. Empty without band points.
 pub fn band_lines(
     curve: &[(f64, f64)],
     band: &[crate::uncertainty::predict::BandPoint],
 ) -> (Line, Line) {
     let relative = band.iter().all(|p| p.strain_pct > 0.0);
     let scale = |e: f64| if relative { e } else { 1.0 };
+    let intact_until = band
+        .iter()
+        .filter(|p| !p.hi95_ruptured && p.hi95_pct.is_finite())
+        .map(|p| p.time_h)
+        .fold(f64::NEG_INFINITY, f64::max);
     let mut b: Vec<(f64, f64, f64)> = band
         .iter()
         .map(|p| {
@@ -922,7 +932,11 @@ pub fn band_lines(
             (
                 p.time_h,
                 (p.strain_pct - p.lo95_pct) / e,
-                (p.hi95_pct - p.strain_pct) / e,
+                if p.time_h <= intact_until {
+                    (p.hi95_pct - p.strain_pct) / e
+                } else {
+                    f64::NAN
+                },
             )
         })
         .collect();
@@ -954,6 +968,7 @@ pub fn band_lines(
         .collect();
     let hi = times
         .iter()
+        .filter(|&&(t, _)| t <= intact_until)
         .map(|&(t, e)| (t, e + half(t).1 * scale(e)))
         .collect();
     (lo, hi)
@@ -1275,6 +1290,7 @@ mod tests {
                     strain_pct: e(t),
                     lo95_pct: e(t) * (1.0 - w),
                     hi95_pct: e(t) * (1.0 + 1.5 * w),
+                    hi95_ruptured: false,
                 }
             })
             .collect();
@@ -1298,5 +1314,25 @@ mod tests {
         let tm = 0.5 * (a.time_h + b.time_h);
         assert!(0.5 * (a.lo95_pct + b.lo95_pct) > e(tm));
         assert_eq!(band_lines(&curve, &[]), (vec![], vec![]));
+        // The last three points' upper ends are rupture: the upper line ends at the sixth
+        // point, unchanged before it; the lower line runs to the end as before.
+        let mut cut = band.clone();
+        for p in &mut cut[6..] {
+            p.hi95_pct = f64::NAN;
+            p.hi95_ruptured = true;
+        }
+        let (lo2, hi2) = band_lines(&curve, &cut);
+        assert_eq!(lo2, lo);
+        assert_eq!(hi2.last().unwrap().0, band[5].time_h);
+        assert_eq!(hi2[..], hi[..hi2.len()]);
+        assert!(hi2.iter().all(|p| p.1.is_finite()));
+        // Every upper end rupture: no upper line.
+        for p in &mut cut {
+            p.hi95_pct = f64::NAN;
+            p.hi95_ruptured = true;
+        }
+        let (lo3, hi3) = band_lines(&curve, &cut);
+        assert_eq!(lo3, lo);
+        assert!(hi3.is_empty());
     }
 }

@@ -29,7 +29,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::constrained::{Predicted, Quantity};
-use super::profile::{quantity_interval, QuantityInterval};
+use super::profile::{quantity_interval, quantity_interval_sides, QuantityInterval};
 use super::{normal_quantile, Context, Reference, Thresholds};
 use crate::diagnose::bootstrap::replicate_rng;
 use crate::journal::{debug_hash, Exact};
@@ -344,6 +344,16 @@ pub fn rupture_time_interval(
     Some((iv.value.exp(), iv.lo95.exp(), iv.hi95.exp(), qi.fits()))
 }
 
+/// The lower end of the rupture time's 95 % confidence interval among `quantities` (h), for
+/// [`prediction_band`]; `None` where it has none.
+pub fn rupture_lo95(quantities: &[PredictedInterval]) -> Option<f64> {
+    quantities
+        .iter()
+        .find(|q| q.quantity == QUANTITIES[0].0)
+        .map(|q| q.conf_lo95)
+        .filter(|v| v.is_finite())
+}
+
 /// One time of the band around a predicted curve.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct BandPoint {
@@ -353,17 +363,31 @@ pub struct BandPoint {
     pub strain_pct: f64,
     /// 95 % confidence band of the model's strain at this time, %.
     pub lo95_pct: f64,
+    /// NaN where `hi95_ruptured`.
     pub hi95_pct: f64,
+    /// Whether constants inside the 95 % confidence set rupture the test by this time (the
+    /// time is at or after the rupture time's lower 95 % confidence bound): the strain has
+    /// no upper bound there.
+    pub hi95_ruptured: bool,
 }
 
 /// The 95 % confidence band of the predicted strain at `load` at the fractions `fractions` of
 /// the predicted rupture time (pointwise prediction profile likelihood, in parallel).
+///
+/// At a time at or after `rupture_lo95_h`, the lower end of the rupture time's 95 %
+/// confidence interval under the same thresholds, the upper side is not searched: the
+/// confidence set {Δ ≤ t95} holds constants that rupture by then (those at the rupture
+/// time's lower end), so the strain's upper bound is rupture (`hi95_ruptured`); before it,
+/// every constant of the set still holds the test intact, since the profile of the rupture
+/// time is above t95 below its lower end. (The strain after a rupture is the objective's
+/// linear continuation, which a search would follow to thousands of per cent.)
 pub fn prediction_band(
     ctx: &Context,
     reference: &Reference,
     load: &Load,
     fractions: &[f64],
     th: &Thresholds,
+    rupture_lo95_h: Option<f64>,
 ) -> Vec<BandPoint> {
     let q = Quantity::Prediction {
         load: *load,
@@ -381,13 +405,15 @@ pub fn prediction_band(
                 load: *load,
                 what: Predicted::StrainAt(t),
             };
-            let qi = quantity_interval(ctx, reference, &q, th)?;
+            let ruptured = rupture_lo95_h.is_some_and(|lo| t >= lo);
+            let qi = quantity_interval_sides(ctx, reference, &q, th, !ruptured)?;
             let iv = qi.interval;
             Some(BandPoint {
                 time_h: t,
                 strain_pct: 100.0 * iv.value,
                 lo95_pct: 100.0 * iv.lo95,
-                hi95_pct: 100.0 * iv.hi95,
+                hi95_pct: if ruptured { f64::NAN } else { 100.0 * iv.hi95 },
+                hi95_ruptured: ruptured,
             })
         })
         .collect()
@@ -484,6 +510,7 @@ mod tests {
                 strain_pct: 5e-324,
                 lo95_pct: -0.0,
                 hi95_pct: f64::MAX,
+                hi95_ruptured: true,
             }],
         };
         let text = serde_json::to_string(&ConditionRecord::of(&c)).unwrap();
@@ -607,6 +634,9 @@ struct ConditionRecord {
     quantities: Vec<QuantityRecord>,
     /// Per band point: time (h), strain, lo95, hi95 (%).
     band: Vec<Exact>,
+    /// Per band point, `hi95_ruptured`.
+    #[serde(default)]
+    band_ruptured: Vec<bool>,
 }
 
 /// One [`PredictedInterval`] as journaled.
@@ -657,6 +687,7 @@ impl ConditionRecord {
                 .iter()
                 .map(|b| Exact(vec![b.time_h, b.strain_pct, b.lo95_pct, b.hi95_pct]))
                 .collect(),
+            band_ruptured: c.band.iter().map(|b| b.hi95_ruptured).collect(),
         }
     }
 
@@ -689,15 +720,20 @@ impl ConditionRecord {
                 })
             })
             .collect::<Option<Vec<_>>>()?;
+        if self.band_ruptured.len() != self.band.len() {
+            return None;
+        }
         let band = self
             .band
             .iter()
-            .map(|b| match b.0[..] {
+            .zip(&self.band_ruptured)
+            .map(|(b, &hi95_ruptured)| match b.0[..] {
                 [time_h, strain_pct, lo95_pct, hi95_pct] => Some(BandPoint {
                     time_h,
                     strain_pct,
                     lo95_pct,
                     hi95_pct,
+                    hi95_ruptured,
                 }),
                 _ => None,
             })
@@ -838,7 +874,14 @@ pub fn intervals_at_observed(
             let quantities = prediction_intervals(&ctx, &reference, l, &th, &scatter);
             timings.intervals += ti.elapsed().as_secs_f64();
             let tb = Instant::now();
-            let band = prediction_band(&ctx, &reference, l, &fractions, &th);
+            let band = prediction_band(
+                &ctx,
+                &reference,
+                l,
+                &fractions,
+                &th,
+                rupture_lo95(&quantities),
+            );
             timings.bands += tb.elapsed().as_secs_f64();
             let c = ConditionIntervals { quantities, band };
             if let Some(j) = hooks.journal {

@@ -95,6 +95,9 @@ pub enum SideEnd {
     PointLimit,
     /// The inner fits failed from every start and the step could not be reduced further.
     Failed,
+    /// Not searched: the caller knows the side is open (the upper side of a band point
+    /// after the rupture time's lower confidence bound).
+    NotSearched,
 }
 
 /// One point of a profile.
@@ -975,14 +978,36 @@ pub fn quantity_interval(
     q: &Quantity,
     th: &Thresholds,
 ) -> Option<QuantityInterval> {
+    quantity_interval_sides(ctx, reference, q, th, true)
+}
+
+/// [`quantity_interval`], the upper side searched only if `upper`: else it has no points
+/// (`SideEnd::NotSearched`), and the upper ends are NaN and open.
+pub fn quantity_interval_sides(
+    ctx: &Context,
+    reference: &Reference,
+    q: &Quantity,
+    th: &Thresholds,
+    upper: bool,
+) -> Option<QuantityInterval> {
     let (g_hat, se) = quantity_se(ctx, reference, q);
     if !g_hat.is_finite() {
         return None;
     }
-    let (lower, upper) = rayon::join(
-        || quantity_side(ctx, reference, q, g_hat, se, -1.0, th),
-        || quantity_side(ctx, reference, q, g_hat, se, 1.0, th),
-    );
+    let (lower, upper) = if upper {
+        rayon::join(
+            || quantity_side(ctx, reference, q, g_hat, se, -1.0, th),
+            || quantity_side(ctx, reference, q, g_hat, se, 1.0, th),
+        )
+    } else {
+        (
+            quantity_side(ctx, reference, q, g_hat, se, -1.0, th),
+            Side {
+                points: Vec::new(),
+                end: SideEnd::NotSearched,
+            },
+        )
+    };
     let curve = |s: &Side, dir: f64| {
         let mut c = envelope(&s.points, g_hat, dir);
         c.insert(0, (g_hat, 0.0));
@@ -999,13 +1024,19 @@ pub fn quantity_interval(
                 .then(|| g_hat + (pc - g_hat) * (t / pd).sqrt())
         })
     };
-    let far = |c: &[(f64, f64)]| c.last().map_or(g_hat, |p| p.0);
+    let far = |c: &[(f64, f64)], side: &Side| {
+        if side.end == SideEnd::NotSearched {
+            f64::NAN
+        } else {
+            c.last().map_or(g_hat, |p| p.0)
+        }
+    };
     let interval = Interval {
         value: g_hat,
-        lo68: end(&cl, &lower, th.t68).unwrap_or(far(&cl)),
-        hi68: end(&cu, &upper, th.t68).unwrap_or(far(&cu)),
-        lo95: end(&cl, &lower, th.t95).unwrap_or(far(&cl)),
-        hi95: end(&cu, &upper, th.t95).unwrap_or(far(&cu)),
+        lo68: end(&cl, &lower, th.t68).unwrap_or(far(&cl, &lower)),
+        hi68: end(&cu, &upper, th.t68).unwrap_or(far(&cu, &upper)),
+        lo95: end(&cl, &lower, th.t95).unwrap_or(far(&cl, &lower)),
+        hi95: end(&cu, &upper, th.t95).unwrap_or(far(&cu, &upper)),
         lo_open: end(&cl, &lower, th.t95).is_none(),
         hi_open: end(&cu, &upper, th.t95).is_none(),
     };

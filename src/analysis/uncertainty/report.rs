@@ -378,7 +378,14 @@ pub fn run_observed(
         let quantities = prediction_intervals(&ctx, &reference, l, &pth, &scatter);
         timings.prediction_intervals += ti.elapsed().as_secs_f64();
         let tb = Instant::now();
-        let band = prediction_band(&ctx, &reference, l, &fractions, &pth);
+        let band = prediction_band(
+            &ctx,
+            &reference,
+            l,
+            &fractions,
+            &pth,
+            super::predict::rupture_lo95(&quantities),
+        );
         timings.bands += tb.elapsed().as_secs_f64();
         predictions.push(LoadPrediction {
             temperature_c: *t,
