@@ -397,7 +397,7 @@ pub fn prediction_band(
         return vec![];
     };
     let t_r = ln_t.exp();
-    fractions
+    let found: Vec<(BandPoint, Vec<Vec<f64>>)> = fractions
         .par_iter()
         .filter_map(|&f| {
             let t = f * t_r;
@@ -408,15 +408,74 @@ pub fn prediction_band(
             let ruptured = rupture_lo95_h.is_some_and(|lo| t >= lo);
             let qi = quantity_interval_sides(ctx, reference, &q, th, !ruptured)?;
             let iv = qi.interval;
-            Some(BandPoint {
-                time_h: t,
-                strain_pct: 100.0 * iv.value,
-                lo95_pct: 100.0 * iv.lo95,
-                hi95_pct: if ruptured { f64::NAN } else { 100.0 * iv.hi95 },
-                hi95_ruptured: ruptured,
+            // The constants of the confidence set this search found.
+            let members = qi
+                .lower
+                .points
+                .iter()
+                .chain(&qi.upper.points)
+                .filter(|p| p.delta <= th.t95)
+                .map(|p| p.params.clone())
+                .collect();
+            Some((
+                BandPoint {
+                    time_h: t,
+                    strain_pct: 100.0 * iv.value,
+                    lo95_pct: 100.0 * iv.lo95,
+                    hi95_pct: if ruptured { f64::NAN } else { 100.0 * iv.hi95 },
+                    hi95_ruptured: ruptured,
+                },
+                members,
+            ))
+        })
+        .collect();
+    let mut band: Vec<BandPoint> = found.iter().map(|(b, _)| b.clone()).collect();
+    // Every member's strain at every band time (%; None once it has ruptured).
+    let times: Vec<f64> = band.iter().map(|b| b.time_h).collect();
+    let ode = super::constrained::prediction_ode(ctx);
+    let strains: Vec<Vec<Option<f64>>> = found
+        .iter()
+        .flat_map(|(_, m)| m)
+        .collect::<Vec<_>>()
+        .par_iter()
+        .filter_map(|x| {
+            let mut out = vec![0.0; times.len()];
+            let r = ctx.model.simulate(x, load, &times, &mut out, &ode);
+            (r.outcome == crate::ode::Outcome::Ruptured).then(|| {
+                (0..times.len())
+                    .map(|k| (k < r.n_out).then(|| 100.0 * out[k]))
+                    .collect()
             })
         })
-        .collect()
+        .collect();
+    widen_to_members(&mut band, &strains);
+    band
+}
+
+/// Each band point widened to every member of the confidence set found by any point's
+/// search (`strains[m][k]`: member m's strain at band time k, %, `None` once it has ruptured):
+/// the set's strain at a time spans at least its members', so a search that stopped short
+/// at one time (a lower end above what another time's search found, although the strain
+/// only grows with time) is corrected by the others. A member ruptured by a time makes that
+/// time's upper end rupture.
+fn widen_to_members(band: &mut [BandPoint], strains: &[Vec<Option<f64>>]) {
+    for (k, b) in band.iter_mut().enumerate() {
+        for m in strains {
+            match m.get(k).copied().flatten() {
+                Some(e) if e.is_finite() => {
+                    b.lo95_pct = b.lo95_pct.min(e);
+                    if !b.hi95_ruptured {
+                        b.hi95_pct = b.hi95_pct.max(e);
+                    }
+                }
+                Some(_) => {}
+                None => {
+                    b.hi95_ruptured = true;
+                    b.hi95_pct = f64::NAN;
+                }
+            }
+        }
+    }
 }
 
 /// Predictions of replicate data sets: ln of (rupture time, minimum rate, rupture strain) at
@@ -530,6 +589,48 @@ mod tests {
         let short = text.replacen("[1234.5678,", "[", 1);
         let r: ConditionRecord = serde_json::from_str(&short).unwrap();
         assert!(r.intervals().is_none(), "{short}");
+    }
+
+    /// The band spans every member of the confidence set at every time: a lower end above a
+    /// member's strain comes down to it, an upper end below it goes up, a member ruptured by
+    /// a time makes that time's upper end rupture; members inside change nothing.
+    #[test]
+    fn the_band_spans_every_member_found() {
+        let point = |t: f64, lo: f64, e: f64, hi: f64| BandPoint {
+            time_h: t,
+            strain_pct: e,
+            lo95_pct: lo,
+            hi95_pct: hi,
+            hi95_ruptured: !hi.is_finite(),
+        };
+        let band = vec![
+            point(1.0, 1.0, 1.5, 2.0),
+            point(2.0, 5.8, 6.0, 6.5),
+            point(3.0, 4.5, 9.0, f64::NAN),
+        ];
+        // Inside: nothing moves.
+        let mut b = band.clone();
+        widen_to_members(&mut b, &[vec![Some(1.2), Some(6.0), Some(8.0)]]);
+        assert_eq!(format!("{b:?}"), format!("{band:?}"));
+        // A member at 4.9 % at time 2 (the search's 5.8 % was too high), above the upper end
+        // at time 1, and ruptured by time 3.
+        let mut b = band.clone();
+        widen_to_members(
+            &mut b,
+            &[
+                vec![Some(2.4), Some(4.9), None],
+                vec![Some(1.1), Some(6.1), Some(4.0)],
+            ],
+        );
+        assert_eq!((b[0].lo95_pct, b[0].hi95_pct), (1.0, 2.4));
+        assert_eq!((b[1].lo95_pct, b[1].hi95_pct), (4.9, 6.5));
+        assert_eq!(b[2].lo95_pct, 4.0);
+        assert!(b[2].hi95_ruptured && b[2].hi95_pct.is_nan());
+        // A member ruptured by time 2 marks time 2 too.
+        let mut b = band.clone();
+        widen_to_members(&mut b, &[vec![Some(1.5), None, None]]);
+        assert!(!b[0].hi95_ruptured && b[1].hi95_ruptured && b[1].hi95_pct.is_nan());
+        assert_eq!(b[1].lo95_pct, 5.8);
     }
 
     #[test]
