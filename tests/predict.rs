@@ -636,6 +636,82 @@ fn predict_tests_scores_a_file_of_measured_lives() {
     assert!(!o.status.success());
 }
 
+/// `[predict] tests = "FILE"` (relative to the configuration) scores the file as `--tests`
+/// does, to the byte; `--at` replaces it; `at` and `tests` both in the file are refused
+/// naming the field; a missing file is a one-line error naming it.
+#[test]
+fn predict_tests_from_the_configuration() {
+    let tmp = TempDir::new().unwrap();
+    let constants = joint_constants(tmp.path());
+    let c = constants.to_str().unwrap();
+    let dir = tmp.path().join("cfg");
+    std::fs::create_dir(&dir).unwrap();
+    std::fs::write(
+        dir.join("campaign.csv"),
+        "temperature_C,stress_MPa,rupture_time_h,specimen\n575,100,20000,X-1\n590,110,5000,X-2\n",
+    )
+    .unwrap();
+    let text = std::fs::read_to_string(root().join("configs/cmv-joint.toml"))
+        .unwrap()
+        .replace(
+            "../data/",
+            &format!("{}/", root().join("data").to_str().unwrap()),
+        );
+    assert!(text.contains("at = [\"575:100\", \"560:70\"]"));
+    let write = |name: &str, predict: &str| {
+        let p = dir.join(name);
+        std::fs::write(&p, text.replace("at = [\"575:100\", \"560:70\"]", predict)).unwrap();
+        p
+    };
+    let keyed = write("keyed.toml", "tests = \"campaign.csv\"");
+    let run = |cfg: &Path, out: &Path, extra: &[&str]| {
+        let mut args = vec![
+            "predict",
+            cfg.to_str().unwrap(),
+            "--constants",
+            c,
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        creepfit(&args)
+    };
+    let (a, b) = (tmp.path().join("a"), tmp.path().join("b"));
+    let o = run(&keyed, &a, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let file = dir.join("campaign.csv");
+    let o = run(&keyed, &b, &["--tests", file.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for f in ["tests.csv", "predictions.csv", "summary.json"] {
+        let (x, y) = (
+            std::fs::read(a.join(f)).unwrap(),
+            std::fs::read(b.join(f)).unwrap(),
+        );
+        assert!(x == y, "{f} differs");
+    }
+    assert_eq!(csv(&a.join("tests.csv")).len(), 3);
+    // --at replaces the file's tests: predictions at 575:90 only, nothing scored.
+    let at = tmp.path().join("at");
+    let o = run(&keyed, &at, &["--at", "575:90"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(csv(&at.join("predictions.csv")).len(), 2);
+    assert!(!at.join("tests.csv").exists());
+    // Both keys: refused, naming the field.
+    let both = write("both.toml", "at = [\"575:100\"]\ntests = \"campaign.csv\"");
+    let o = run(&both, &tmp.path().join("both"), &[]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(e.contains("predict.tests") && e.contains("not both"), "{e}");
+    assert_eq!(e.trim().lines().count(), 1, "{e}");
+    // A missing file: one line naming it.
+    let missing = write("missing.toml", "tests = \"nowhere.csv\"");
+    let o = run(&missing, &tmp.path().join("missing"), &[]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(e.contains("nowhere.csv"), "{e}");
+    assert_eq!(e.trim().lines().count(), 1, "{e}");
+}
+
 /// The model, constants and integrator [`law_data`] makes its tests with: KHD with Arrhenius A
 /// and Kc about 575 °C.
 fn law_truth() -> (Box<dyn creepfit::model::Model>, [f64; 8], OdeOptions) {

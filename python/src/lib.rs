@@ -582,7 +582,11 @@ fn predict(
     };
     run_detached(py, None, move |_| {
         let mut warnings = Vec::new();
-        let (cfg, data) = resolve(&src, &cli, tables.as_ref(), &mut warnings)?;
+        let (mut cfg, data) = resolve(&src, &cli, tables.as_ref(), &mut warnings)?;
+        let tests = match tests {
+            Some(t) => Some(t),
+            None => creepfit::predict::measured::from_config(&mut cfg)?,
+        };
         creepfit::predict::check_asked(&cfg)?;
         let model = cfg.build_model()?;
         let name = PathBuf::from(constants_name.as_deref().unwrap_or(CONSTANTS_NAME));

@@ -159,6 +159,14 @@ def test_predict_tests_equals_cli(run_cli, cli_fit, tmp_path, curves, ruptures):
     assert res.attrs["summary"]["tests"]["file"] == cli_summary["tests"]["file"]
     with pytest.raises(creepfit.CreepfitError, match="not both"):
         creepfit.predict(CONFIG, constants, curves, ruptures, tests=tests, at=[(560, 100)])
+    # The file named in the configuration ([predict] tests, relative to it): the same tests.
+    keyed = tmp_path / "keyed.toml"
+    data = CONFIG.parent.parent / "data"
+    keyed.write_text(CONFIG.read_text().replace("../data/", f"{data.as_posix()}/")
+                     + '\n[predict]\ntests = "campaign.csv"\n')
+    res = creepfit.predict(keyed, constants, curves, ruptures)
+    assert_same_table(read_table(out / "tests.csv"), res.attrs["tests"], "tests.csv")
+    assert_same_table(read_table(out / "predictions.csv"), res, "predictions.csv")
 
 
 def test_predict_from_a_fit_result_and_a_dict(cli_fit, curves, ruptures):

@@ -139,7 +139,9 @@ pub fn predict(
     tests: Option<&(PathBuf, Vec<crate::data::RuptureRecord>)>,
     cli: &Overrides,
 ) -> Result<()> {
-    let (cfg, data) = load(config, cli)?;
+    let (mut cfg, data) = load(config, cli)?;
+    let from_config = crate::predict::measured::from_config(&mut cfg)?;
+    let tests = tests.or(from_config.as_ref());
     crate::predict::check_asked(&cfg)?;
     let model = cfg.build_model()?;
     let params = crate::report::tables::read_constants_for(constants, &cfg, model.as_ref())?;

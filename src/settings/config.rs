@@ -607,6 +607,11 @@ pub struct PredictConfig {
     /// °C:MPa), for the Wilshire baseline of `predict` and `holdout`; empty: no Wilshire.
     #[serde(default)]
     pub tensile_strength: Vec<crate::baseline::TensileStrength>,
+    /// Tests to predict and score (`tests = "campaign.csv"` in the file, relative to it: a
+    /// rupture-times file, as `--tests` reads), instead of `at`; `--tests` and `--at` replace
+    /// it. `None`: none.
+    #[serde(default)]
+    pub tests: Option<PathBuf>,
 }
 
 impl Default for PredictConfig {
@@ -616,6 +621,7 @@ impl Default for PredictConfig {
             lmp_degree: crate::lmp::DEFAULT_DEGREE,
             intervals: false,
             tensile_strength: Vec::new(),
+            tests: None,
         }
     }
 }
@@ -629,6 +635,7 @@ struct RawPredict {
     intervals: Option<bool>,
     #[serde(default)]
     tensile_strength: Vec<String>,
+    tests: Option<String>,
 }
 
 /// `[profile]`: the profile likelihoods, intervals and prediction intervals of
@@ -1386,6 +1393,19 @@ impl RunConfig {
                             .map_err(|m| invalid(format!("predict.tensile_strength[{k}]"), m))
                     })
                     .collect::<std::result::Result<_, _>>()?,
+                // The command line's conditions (`--at`, or `--tests`'s) replace the file's.
+                tests: match (&cli.predict_at, &raw.predict.tests) {
+                    (None, Some(t)) if !raw.predict.at.is_empty() => {
+                        return Err(invalid(
+                            "predict.tests",
+                            format!(
+                                "\"{t}\": give either predict.at (conditions) or predict.tests (a file of tests), not both"
+                            ),
+                        ))
+                    }
+                    (None, Some(t)) => Some(dir.join(t)),
+                    _ => None,
+                },
             },
             profile: raw.profile,
             run: cli.run.clone(),

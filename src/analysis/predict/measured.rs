@@ -78,6 +78,20 @@ pub fn read(file: &Path) -> Result<Vec<RuptureRecord>> {
     non_empty(file, crate::data::read_ruptures(file)?)
 }
 
+/// `[predict] tests`: the file the configuration names read and its tests made `cfg`'s
+/// conditions, as `--tests` does; `None` when it names none (or the command line's `--at` or
+/// `--tests` replaced it).
+pub fn from_config(
+    cfg: &mut crate::config::RunConfig,
+) -> Result<Option<(PathBuf, Vec<RuptureRecord>)>> {
+    let Some(file) = cfg.predict.tests.clone() else {
+        return Ok(None);
+    };
+    let records = read(&file)?;
+    cfg.predict.at = conditions(&records);
+    Ok(Some((file, records)))
+}
+
 /// [`read`] of the table's CSV text in memory, named `name` in errors.
 pub fn read_bytes(name: &Path, bytes: &[u8]) -> Result<Vec<RuptureRecord>> {
     non_empty(name, crate::data::read_ruptures_bytes(name, bytes)?)

@@ -344,7 +344,7 @@ pub fn check_asked(cfg: &RunConfig) -> Result<()> {
     if cfg.predict.at.is_empty() {
         return Err(Error::config(
             &cfg.path,
-            "predict.at: no conditions to predict: give --at T:stress[,T:stress…] or [predict] at",
+            "predict.at: no conditions to predict: give --at T:stress[,T:stress…], --tests FILE, [predict] at or [predict] tests",
         ));
     }
     Ok(())
