@@ -384,7 +384,8 @@ fn an_interrupted_prediction_with_intervals_resumes_to_the_same_files() {
         "-q",
     ]));
     let constants = fit.join("constants.csv");
-    let run = |out: &Path, at: &str, extra: &[&str]| {
+    // `predict … --at AT --out OUT EXTRA…`, with `--intervals` unless `plain`.
+    let predict = |out: &Path, at: &str, plain: bool, extra: &[&str]| {
         let mut args = vec![
             "predict",
             cfg.to_str().unwrap(),
@@ -392,13 +393,16 @@ fn an_interrupted_prediction_with_intervals_resumes_to_the_same_files() {
             constants.to_str().unwrap(),
             "--at",
             at,
-            "--intervals",
             "--out",
             out.to_str().unwrap(),
         ];
+        if !plain {
+            args.push("--intervals");
+        }
         args.extend_from_slice(extra);
         creepfit(&args)
     };
+    let run = |out: &Path, at: &str, extra: &[&str]| predict(out, at, false, extra);
     let at = "560:70,560:80";
     let plain = d.path().join("plain");
     ok(&run(&plain, at, &["--threads", "2"]));
@@ -449,18 +453,7 @@ fn an_interrupted_prediction_with_intervals_resumes_to_the_same_files() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("predict"), "{err}");
     // Without --intervals nothing is journaled and the journal of the run before is removed.
-    let o = creepfit(&[
-        "predict",
-        cfg.to_str().unwrap(),
-        "--constants",
-        constants.to_str().unwrap(),
-        "--at",
-        at,
-        "--out",
-        plain.to_str().unwrap(),
-        "-q",
-    ]);
-    ok(&o);
+    ok(&predict(&plain, at, true, &["-q"]));
     assert!(!plain.join("journal.jsonl").exists());
     assert!(!plain.join("timings.json").exists());
 }

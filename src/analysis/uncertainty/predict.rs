@@ -736,7 +736,6 @@ struct ConditionRecord {
     /// Per band point: time (h), strain, lo95, hi95 (%).
     band: Vec<Exact>,
     /// Per band point, `hi95_ruptured`.
-    #[serde(default)]
     band_ruptured: Vec<bool>,
 }
 
