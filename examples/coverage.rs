@@ -1,6 +1,7 @@
 //! Measured coverage of the intervals of `creepfit profile` on synthetic data sets with known
 //! truth (README, "How sure"): `cargo run --release --example coverage -- OUT FIRST_SEED N
-//! [--calibrate B] [--bootstrap B] [--starts N] [--threads T] [--world specimens]`. Resumes an
+//! [--calibrate B] [--bootstrap B] [--starts N] [--threads T] [--band-points N] [--world
+//! specimens]` (the band at 9 times by default, 0: none). Resumes an
 //! interrupted run in OUT; writes OUT/coverage.md (the table) and OUT/coverage.json. With
 //! `--world specimens` the sets carry specimen scatter and replicates
 //! ([`creepfit::synth::World::Specimens`]) and every fit integrates the specimens' factors out.
@@ -10,7 +11,7 @@ use creepfit::uncertainty::coverage::{run_coverage, table, table_md, CoverageSet
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let usage = "usage: coverage OUT FIRST_SEED N [--calibrate B] [--bootstrap B] [--starts N] [--threads T] [--world specimens]";
+    let usage = "usage: coverage OUT FIRST_SEED N [--calibrate B] [--bootstrap B] [--starts N] [--threads T] [--band-points N] [--world specimens]";
     if args.len() < 3 {
         eprintln!("{usage}");
         std::process::exit(2);
@@ -40,6 +41,7 @@ fn main() {
             "--bootstrap" => s.bootstrap = v,
             "--starts" => s.starts = v,
             "--threads" => threads = Some(v),
+            "--band-points" => s.band_points = v,
             _ => {
                 eprintln!("{usage}");
                 std::process::exit(2);
@@ -66,6 +68,11 @@ fn main() {
         errors
     );
     md += &table_md(&rows);
+    let band = creepfit::uncertainty::coverage::band_md(&results);
+    if !band.is_empty() {
+        md += "\nThe 95 % strain band at the untested stress, pointwise:\n\n";
+        md += &band;
+    }
     for (label, get) in [
         (
             "constants",

@@ -419,7 +419,8 @@ fn predict_intervals_add_their_columns() {
             "strain_pct",
             "strain_conf_lo95_pct",
             "strain_conf_hi95_pct",
-            "strain_conf_hi95_ruptured"
+            "strain_conf_hi95_ruptured",
+            "strain_conf_lo95_open"
         ]
     );
     assert_eq!(band.len(), 1 + 2 * 9);
@@ -429,6 +430,7 @@ fn predict_intervals_add_their_columns() {
         let (t_r, t_lo95) = (f(&rows[1 + k / 9], 2), f(&rows[1 + k / 9], 11));
         assert!(t > 0.0 && t < t_r * 1.05, "{r:?}");
         assert!(lo <= e && lo > 0.0, "{r:?}");
+        assert!(matches!(r[7].as_str(), "true" | "false"), "{r:?}");
         if t >= t_lo95 {
             assert_eq!((r[5].as_str(), r[6].as_str()), ("", "true"), "{r:?}");
         } else {

@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use creepfit::uncertainty::coverage::{
-    run_coverage, run_coverage_observed, table, CoverageSettings,
+    band_table, run_coverage, run_coverage_observed, table, CoverageSettings,
 };
 use tempfile::TempDir;
 
@@ -231,7 +231,11 @@ fn bad_profile_settings_are_one_line_errors() {
 #[test]
 fn coverage_on_a_reduced_battery() {
     let dir = TempDir::new().unwrap();
-    let s = CoverageSettings::default();
+    // The strain band at 3 times of each set (9 in the measured battery).
+    let s = CoverageSettings {
+        band_points: 3,
+        ..CoverageSettings::default()
+    };
     let progress = TestProgress::new("coverage_on_a_reduced_battery");
     let results = run_coverage_observed(dir.path(), 7001, 12, &s, &progress).unwrap();
     assert_eq!(results.len(), 12);
@@ -265,6 +269,20 @@ fn coverage_on_a_reduced_battery() {
     // The rupture time at the untested stress is measured in every set.
     let rt = rows.last().unwrap();
     assert_eq!(rt.sets, 12);
+    // The 95 % strain band there holds the true curve pointwise, as the 95 % intervals do.
+    let (band, whole) = band_table(&results);
+    assert_eq!((band[0].covered.n, whole.n), (36, 12));
+    let rb = band[0].covered.rate();
+    eprintln!(
+        "band: {}/{} points ({} below, {} above), whole band {}/{}",
+        band[0].covered.covered,
+        band[0].covered.n,
+        band[0].below,
+        band[0].above,
+        whole.covered,
+        whole.n
+    );
+    assert!(rb >= 0.85, "95 % band covers {rb:.3}");
     // Resuming recomputes nothing.
     let again = run_coverage(dir.path(), 7001, 12, &s, false).unwrap();
     assert_eq!(

@@ -705,6 +705,7 @@ pub fn write_outputs(
                         num(b.lo95_pct),
                         num(b.hi95_pct),
                         b.hi95_ruptured.to_string(),
+                        b.lo95_open.to_string(),
                     ]
                 })
             })
@@ -889,8 +890,9 @@ pub const GIVEN_COLUMNS: [&str; 4] = [
 /// (the model's prediction, from the constants' uncertainty; pointwise prediction profile
 /// likelihood) at `[profile] band_points` fractions of its rupture time. Where constants of
 /// the confidence set rupture the test by the time (`strain_conf_hi95_ruptured`), the upper
-/// end is rupture and its cell is empty.
-pub const BAND_COLUMNS: [&str; 7] = [
+/// end is rupture and its cell is empty. Where the lower end's search stopped before it
+/// crossed the threshold (`strain_conf_lo95_open`), the set's lowest strain may lie below.
+pub const BAND_COLUMNS: [&str; 8] = [
     "temperature_C",
     "stress_MPa",
     "time_h",
@@ -898,6 +900,7 @@ pub const BAND_COLUMNS: [&str; 7] = [
     "strain_conf_lo95_pct",
     "strain_conf_hi95_pct",
     "strain_conf_hi95_ruptured",
+    "strain_conf_lo95_open",
 ];
 
 pub use crate::report::plot::PLOT_POINTS;
@@ -1291,6 +1294,7 @@ mod tests {
                     lo95_pct: e(t) * (1.0 - w),
                     hi95_pct: e(t) * (1.0 + 1.5 * w),
                     hi95_ruptured: false,
+                    lo95_open: false,
                 }
             })
             .collect();

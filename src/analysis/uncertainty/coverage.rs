@@ -49,6 +49,10 @@ pub struct CoverageSettings {
     /// specimen effects, `auto`: every set has replicates).
     #[serde(default)]
     pub world: World,
+    /// Times of the strain band measured at the untested stress (`[profile] band_points`;
+    /// 0: the band is not measured).
+    #[serde(default)]
+    pub band_points: usize,
 }
 
 impl Default for CoverageSettings {
@@ -59,6 +63,7 @@ impl Default for CoverageSettings {
             bootstrap: 0,
             stress_factor: 0.85,
             world: World::Identical,
+            band_points: 9,
         }
     }
 }
@@ -139,6 +144,60 @@ pub struct RuptureCoverage {
     pub open: bool,
 }
 
+/// One time of the 95 % strain band at the untested stress (`creepfit profile`'s and
+/// `predict --intervals`' band: calibrated thresholds, the upper end rupture from the rupture
+/// time's lower 95 % bound on) beside the true model's strain there.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BandCoverage {
+    /// Time, h (a fraction of the predicted rupture time).
+    #[serde(deserialize_with = "de_f64")]
+    pub time_h: f64,
+    /// The true constants' strain at this time, % (NaN once they have ruptured).
+    #[serde(deserialize_with = "de_f64")]
+    pub truth_pct: f64,
+    /// Whether the true constants have ruptured by this time.
+    pub truth_ruptured: bool,
+    /// The band's ends, % (`hi95_pct` NaN where `hi95_ruptured`).
+    #[serde(deserialize_with = "de_f64")]
+    pub lo95_pct: f64,
+    #[serde(deserialize_with = "de_f64")]
+    pub hi95_pct: f64,
+    /// Whether the band's upper end is rupture.
+    pub hi95_ruptured: bool,
+}
+
+/// Where a band point stands against the truth.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BandHit {
+    Covered,
+    /// The truth's strain below the lower end.
+    Below,
+    /// The truth's strain above the upper end, or the truth ruptured where the band holds
+    /// the test intact.
+    Above,
+}
+
+impl BandCoverage {
+    /// Covered when the truth's strain lies between the ends; a truth ruptured by this time
+    /// is covered only by an upper end that is rupture.
+    pub fn hit(&self) -> BandHit {
+        if self.truth_ruptured {
+            return if self.hi95_ruptured {
+                BandHit::Covered
+            } else {
+                BandHit::Above
+            };
+        }
+        if !(self.truth_pct >= self.lo95_pct) {
+            BandHit::Below
+        } else if !self.hi95_ruptured && !(self.truth_pct <= self.hi95_pct) {
+            BandHit::Above
+        } else {
+            BandHit::Covered
+        }
+    }
+}
+
 /// One set's result.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SetCoverage {
@@ -160,6 +219,10 @@ pub struct SetCoverage {
     pub prediction_factor: f64,
     pub constants: Vec<ConstantCoverage>,
     pub rupture: Option<RuptureCoverage>,
+    /// The strain band at the untested stress (empty where the rupture time's interval is
+    /// not known, or in records written before the band was measured).
+    #[serde(default)]
+    pub band: Vec<BandCoverage>,
     /// Inner fits of the profiles.
     pub fits: usize,
     /// Times the profiles were redone from a better optimum found on them.
@@ -187,6 +250,7 @@ pub fn run_set(dir: &Path, seed: u64, s: &CoverageSettings) -> SetCoverage {
         prediction_factor: f64::NAN,
         constants: vec![],
         rupture: None,
+        band: vec![],
         fits: 0,
         restarts: 0,
         wall_s: f64::NAN,
@@ -352,6 +416,40 @@ fn measure(dir: &Path, seed: u64, s: &CoverageSettings, out: &mut SetCoverage) -
                 new_test_h: new_specimen_h.unwrap_or(truth_run.t_end) * (t.lifetime_sd * zt).exp(),
                 open: ic.lo_open || ic.hi_open,
             });
+            // The strain band, as `profile` computes it (but for the members of the other
+            // quantities' searches, which `profile` adds), against the truth's curve.
+            let fractions = super::predict::band_fractions(s.band_points);
+            let band = super::predict::prediction_band(
+                &ctx,
+                &reference,
+                &load,
+                &fractions,
+                &pth,
+                ic.lo95.is_finite().then(|| ic.lo95.exp()),
+                &[],
+            );
+            let times: Vec<f64> = band.iter().map(|b| b.time_h).collect();
+            let mut strain = vec![f64::NAN; times.len()];
+            let r = model.simulate(&t.constants, &load, &times, &mut strain, &tight);
+            out.band = band
+                .iter()
+                .enumerate()
+                .map(|(k, b)| {
+                    let ruptured = r.ruptured() && k >= r.n_out;
+                    BandCoverage {
+                        time_h: b.time_h,
+                        truth_pct: if ruptured {
+                            f64::NAN
+                        } else {
+                            100.0 * strain[k]
+                        },
+                        truth_ruptured: ruptured,
+                        lo95_pct: b.lo95_pct,
+                        hi95_pct: b.hi95_pct,
+                        hi95_ruptured: b.hi95_ruptured,
+                    }
+                })
+                .collect();
         }
     }
     Ok(())
@@ -542,6 +640,87 @@ pub fn table(results: &[SetCoverage]) -> Vec<Row> {
     rows
 }
 
+/// The band's pointwise coverage over the sets: all points, and by band time (k of n, the
+/// fraction k/n of the predicted rupture time), with the misses on each side, and the sets
+/// whose whole band holds the truth's curve.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct BandRow {
+    /// The band time's index (1-based) and the number of band times; 0 for all points.
+    pub k: usize,
+    pub of: usize,
+    pub covered: Count,
+    pub below: usize,
+    pub above: usize,
+}
+
+/// [`BandRow`]s of `results`, the first over all points, then one per band time; and the
+/// count of sets whose every band point covers.
+pub fn band_table(results: &[SetCoverage]) -> (Vec<BandRow>, Count) {
+    let ok: Vec<&SetCoverage> = results
+        .iter()
+        .filter(|r| r.error.is_none() && !r.band.is_empty())
+        .collect();
+    let n = ok.iter().map(|r| r.band.len()).max().unwrap_or(0);
+    let mut rows: Vec<BandRow> = (0..=n)
+        .map(|k| BandRow {
+            k,
+            of: n,
+            ..BandRow::default()
+        })
+        .collect();
+    let mut whole = Count::default();
+    for r in &ok {
+        let mut all = true;
+        for (k, b) in r.band.iter().enumerate() {
+            let hit = b.hit();
+            all &= hit == BandHit::Covered;
+            for row in [0, k + 1] {
+                let row = &mut rows[row];
+                row.covered.add(hit == BandHit::Covered);
+                row.below += usize::from(hit == BandHit::Below);
+                row.above += usize::from(hit == BandHit::Above);
+            }
+        }
+        whole.add(all);
+    }
+    (rows, whole)
+}
+
+/// [`band_table`] as Markdown.
+pub fn band_md(results: &[SetCoverage]) -> String {
+    let (rows, whole) = band_table(results);
+    if whole.n == 0 {
+        return String::new();
+    }
+    let mut md = String::from(
+        "| band time (fraction of the predicted rupture time) | points | 95 % band holds the truth | truth below | truth above (or ruptured) |\n|---|---|---|---|---|\n",
+    );
+    for r in &rows {
+        let what = if r.k == 0 {
+            "all".to_string()
+        } else {
+            format!("{}/{}", r.k, r.of)
+        };
+        md += &format!(
+            "| {} | {} | {:.1} % ({}/{}) | {} | {} |\n",
+            what,
+            r.covered.n,
+            100.0 * r.covered.rate(),
+            r.covered.covered,
+            r.covered.n,
+            r.below,
+            r.above
+        );
+    }
+    md += &format!(
+        "\nWhole band (every time of a set covered): {:.1} % ({}/{}).\n",
+        100.0 * whole.rate(),
+        whole.covered,
+        whole.n
+    );
+    md
+}
+
 /// The table as Markdown.
 pub fn table_md(rows: &[Row]) -> String {
     let pct = |c: &Count| {
@@ -598,5 +777,73 @@ mod tests {
         assert!(back.boot95.0.is_nan() && back.wald95.1.is_nan());
         assert_eq!(back.cal95, r.cal95);
         assert!(covers(back.cal95, 1.0) && !covers(back.boot95, 1.0));
+    }
+
+    #[test]
+    fn a_band_point_covers_as_a_table() {
+        let b = |truth: f64, truth_ruptured, lo, hi: f64, hi_r| BandCoverage {
+            time_h: 1.0,
+            truth_pct: truth,
+            truth_ruptured,
+            lo95_pct: lo,
+            hi95_pct: hi,
+            hi95_ruptured: hi_r,
+        };
+        let nan = f64::NAN;
+        for (p, want) in [
+            (b(2.0, false, 1.0, 3.0, false), BandHit::Covered),
+            (b(1.0, false, 1.0, 3.0, false), BandHit::Covered),
+            (b(0.5, false, 1.0, 3.0, false), BandHit::Below),
+            (b(3.5, false, 1.0, 3.0, false), BandHit::Above),
+            // An upper end that is rupture holds any strain above the lower end.
+            (b(50.0, false, 1.0, nan, true), BandHit::Covered),
+            (b(0.5, false, 1.0, nan, true), BandHit::Below),
+            // A truth ruptured by then: covered only where the band allows rupture.
+            (b(nan, true, 1.0, nan, true), BandHit::Covered),
+            (b(nan, true, 1.0, 3.0, false), BandHit::Above),
+            // A NaN end is no end that holds the truth.
+            (b(2.0, false, nan, 3.0, false), BandHit::Below),
+        ] {
+            assert_eq!(p.hit(), want, "{p:?}");
+        }
+        let set = |band: Vec<BandCoverage>| SetCoverage {
+            name: "s".into(),
+            seed: 1,
+            family: String::new(),
+            sampling: String::new(),
+            noise_phi: nan,
+            curves: 0,
+            points: 0,
+            factor: nan,
+            mean_t: nan,
+            prediction_factor: nan,
+            constants: vec![],
+            rupture: None,
+            band,
+            fits: 0,
+            restarts: 0,
+            wall_s: nan,
+            error: None,
+        };
+        let (rows, whole) = band_table(&[
+            set(vec![
+                b(2.0, false, 1.0, 3.0, false),
+                b(0.5, false, 1.0, 3.0, false),
+            ]),
+            set(vec![
+                b(2.0, false, 1.0, 3.0, false),
+                b(nan, true, 1.0, nan, true),
+            ]),
+        ]);
+        assert_eq!(rows.len(), 3);
+        assert_eq!((rows[0].covered.covered, rows[0].covered.n), (3, 4));
+        assert_eq!((rows[0].below, rows[0].above), (1, 0));
+        assert_eq!((rows[1].covered.covered, rows[2].covered.covered), (2, 1));
+        assert_eq!((whole.covered, whole.n), (1, 2));
+        // A record written before the band was measured reads with an empty band.
+        let mut v = serde_json::to_value(set(vec![])).unwrap();
+        v.as_object_mut().unwrap().remove("band");
+        let back: SetCoverage = serde_json::from_value(v).unwrap();
+        assert!(back.band.is_empty());
     }
 }

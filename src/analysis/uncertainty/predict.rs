@@ -29,7 +29,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::constrained::{Predicted, Quantity};
-use super::profile::{quantity_interval, quantity_interval_sides, QuantityInterval};
+use super::profile::{quantity_interval, quantity_interval_sides, Interval, QuantityInterval};
 use super::{normal_quantile, Context, Reference, Thresholds};
 use crate::diagnose::bootstrap::replicate_rng;
 use crate::journal::{debug_hash, Exact};
@@ -264,18 +264,60 @@ fn widen(g: f64, lo: f64, hi: f64, s: f64) -> (f64, f64) {
     )
 }
 
+/// The constants of the 95 % confidence set {Δ ≤ t95} that a search found, with their Δ.
+fn members_of<'a>(
+    qi: &'a QuantityInterval,
+    th: &'a Thresholds,
+) -> impl Iterator<Item = (&'a Vec<f64>, f64)> + 'a {
+    qi.lower
+        .points
+        .iter()
+        .chain(&qi.upper.points)
+        .filter(move |p| p.delta <= th.t95)
+        .map(|p| (&p.params, p.delta))
+}
+
+/// An interval's ends widened to every member of the confidence set: `members` holds each
+/// member's value of the quantity (NaN where it cannot be predicted) and its Δ. The interval
+/// of g is the range of g over the set {Δ ≤ t} (the profile's duality), so a member outside
+/// an end shows that end's search stopped short; members within t68 widen the 68 % ends too.
+/// Returns whether an end moved.
+fn widen_to_set(iv: &mut Interval, members: &[(f64, f64)], th: &Thresholds) -> bool {
+    let before = (iv.lo95, iv.hi95, iv.lo68, iv.hi68);
+    for &(g, d) in members.iter().filter(|(g, _)| g.is_finite()) {
+        if d <= th.t95 {
+            iv.lo95 = iv.lo95.min(g);
+            iv.hi95 = iv.hi95.max(g);
+        }
+        if d <= th.t68 {
+            iv.lo68 = iv.lo68.min(g);
+            iv.hi68 = iv.hi68.max(g);
+        }
+    }
+    before != (iv.lo95, iv.hi95, iv.lo68, iv.hi68)
+}
+
+/// The intervals at one load and the confidence set's members their searches found.
+pub struct LoadIntervals {
+    pub quantities: Vec<PredictedInterval>,
+    /// Constants inside the 95 % confidence set, for [`prediction_band`].
+    pub members: Vec<Vec<f64>>,
+}
+
 /// Confidence and prediction intervals of rupture time, minimum rate and rupture strain at
 /// `load` (the three profile searches in parallel), the prediction intervals widened by
 /// `scatter` ([`specimen_scatter`], the same at every load: computed once per run, since
 /// with specimen effects it is a hierarchical fit). A quantity that cannot be predicted (no
-/// rupture within the horizon at the fitted constants) is left out.
+/// rupture within the horizon at the fitted constants) is left out. The three searches
+/// explore one confidence set: each interval spans every member any of them found
+/// ([`widen_to_set`]).
 pub fn prediction_intervals(
     ctx: &Context,
     reference: &Reference,
     load: &Load,
     th: &Thresholds,
     scatter: &[(f64, usize); 3],
-) -> Vec<PredictedInterval> {
+) -> LoadIntervals {
     let qi: Vec<Option<QuantityInterval>> = QUANTITIES
         .par_iter()
         .map(|&(_, what, _)| {
@@ -283,13 +325,36 @@ pub fn prediction_intervals(
             quantity_interval(ctx, reference, &q, th)
         })
         .collect();
-    QUANTITIES
+    let members: Vec<(&Vec<f64>, f64)> = qi
         .iter()
-        .zip(qi)
+        .flatten()
+        .flat_map(|q| members_of(q, th))
+        .collect();
+    // Every member's three quantities (NaN where it does not predict one).
+    let values: Vec<[f64; 3]> = members
+        .par_iter()
+        .map(|(x, _)| {
+            QUANTITIES.map(|(_, what, _)| {
+                Quantity::Prediction { load: *load, what }
+                    .value(ctx, x)
+                    .unwrap_or(f64::NAN)
+            })
+        })
+        .collect();
+    let quantities = QUANTITIES
+        .iter()
+        .zip(qi.iter())
         .zip(scatter.iter().copied())
-        .filter_map(|(((name, _, unit), qi), (s, n))| {
-            let qi = qi?;
-            let iv = qi.interval;
+        .enumerate()
+        .filter_map(|(k, (((name, _, unit), qi), (s, n)))| {
+            let qi = qi.as_ref()?;
+            let mut iv = qi.interval;
+            let pooled: Vec<(f64, f64)> = values
+                .iter()
+                .zip(&members)
+                .map(|(v, (_, d))| (v[k], *d))
+                .collect();
+            widen_to_set(&mut iv, &pooled, th);
             let (plo, phi) = widen(
                 iv.value,
                 iv.lo95,
@@ -325,7 +390,11 @@ pub fn prediction_intervals(
                 profile,
             })
         })
-        .collect()
+        .collect();
+    LoadIntervals {
+        quantities,
+        members: members.into_iter().map(|(x, _)| x.clone()).collect(),
+    }
 }
 
 /// The 95 % confidence interval of the rupture time alone at `load` (h): (value, lo, hi).
@@ -369,6 +438,9 @@ pub struct BandPoint {
     /// time is at or after the rupture time's lower 95 % confidence bound): the strain has
     /// no upper bound there.
     pub hi95_ruptured: bool,
+    /// Whether the lower end is open: its search stopped (at the box, a step limit or a
+    /// failure) before Δ crossed the threshold, so the set's lowest strain may lie below.
+    pub lo95_open: bool,
 }
 
 /// The 95 % confidence band of the predicted strain at `load` at the fractions `fractions` of
@@ -380,7 +452,9 @@ pub struct BandPoint {
 /// time's lower end), so the strain's upper bound is rupture (`hi95_ruptured`); before it,
 /// every constant of the set still holds the test intact, since the profile of the rupture
 /// time is above t95 below its lower end. (The strain after a rupture is the objective's
-/// linear continuation, which a search would follow to thousands of per cent.)
+/// linear continuation, which a search would follow to thousands of per cent.) Each end spans
+/// every member of the confidence set found by any time's search or given in `members`
+/// (those of the three quantities' searches, [`LoadIntervals::members`]).
 pub fn prediction_band(
     ctx: &Context,
     reference: &Reference,
@@ -388,6 +462,7 @@ pub fn prediction_band(
     fractions: &[f64],
     th: &Thresholds,
     rupture_lo95_h: Option<f64>,
+    members: &[Vec<f64>],
 ) -> Vec<BandPoint> {
     let q = Quantity::Prediction {
         load: *load,
@@ -424,28 +499,42 @@ pub fn prediction_band(
                     lo95_pct: 100.0 * iv.lo95,
                     hi95_pct: if ruptured { f64::NAN } else { 100.0 * iv.hi95 },
                     hi95_ruptured: ruptured,
+                    lo95_open: iv.lo_open,
                 },
                 members,
             ))
         })
         .collect();
     let mut band: Vec<BandPoint> = found.iter().map(|(b, _)| b.clone()).collect();
-    // Every member's strain at every band time (%; None once it has ruptured).
+    // Every member's strain at every band time (%; None once it has ruptured; NaN beyond the
+    // horizon of a member that did not rupture within it; a failed simulation is unused).
     let times: Vec<f64> = band.iter().map(|b| b.time_h).collect();
     let ode = super::constrained::prediction_ode(ctx);
     let strains: Vec<Vec<Option<f64>>> = found
         .iter()
         .flat_map(|(_, m)| m)
+        .chain(members)
         .collect::<Vec<_>>()
         .par_iter()
         .filter_map(|x| {
             let mut out = vec![0.0; times.len()];
             let r = ctx.model.simulate(x, load, &times, &mut out, &ode);
-            (r.outcome == crate::ode::Outcome::Ruptured).then(|| {
+            let after = match r.outcome {
+                crate::ode::Outcome::Ruptured => None,
+                crate::ode::Outcome::Horizon => Some(f64::NAN),
+                _ => return None,
+            };
+            Some(
                 (0..times.len())
-                    .map(|k| (k < r.n_out).then(|| 100.0 * out[k]))
-                    .collect()
-            })
+                    .map(|k| {
+                        if k < r.n_out {
+                            Some(100.0 * out[k])
+                        } else {
+                            after
+                        }
+                    })
+                    .collect(),
+            )
         })
         .collect();
     widen_to_members(&mut band, &strains);
@@ -453,7 +542,8 @@ pub fn prediction_band(
 }
 
 /// Each band point widened to every member of the confidence set found by any point's
-/// search (`strains[m][k]`: member m's strain at band time k, %, `None` once it has ruptured):
+/// search (`strains[m][k]`: member m's strain at band time k, %, `None` once it has ruptured,
+/// NaN where it is not known):
 /// the set's strain at a time spans at least its members', so a search that stopped short
 /// at one time (a lower end above what another time's search found, although the strain
 /// only grows with time) is corrected by the others. A member ruptured by a time makes that
@@ -570,6 +660,7 @@ mod tests {
                 lo95_pct: -0.0,
                 hi95_pct: f64::MAX,
                 hi95_ruptured: true,
+                lo95_open: true,
             }],
         };
         let text = serde_json::to_string(&ConditionRecord::of(&c)).unwrap();
@@ -602,6 +693,7 @@ mod tests {
             lo95_pct: lo,
             hi95_pct: hi,
             hi95_ruptured: !hi.is_finite(),
+            lo95_open: false,
         };
         let band = vec![
             point(1.0, 1.0, 1.5, 2.0),
@@ -626,11 +718,54 @@ mod tests {
         assert_eq!((b[1].lo95_pct, b[1].hi95_pct), (4.9, 6.5));
         assert_eq!(b[2].lo95_pct, 4.0);
         assert!(b[2].hi95_ruptured && b[2].hi95_pct.is_nan());
+        // A member that did not rupture within its horizon: its strains up to it count, and
+        // after it nothing is known (NaN), which marks nothing.
+        let mut b = band.clone();
+        widen_to_members(&mut b, &[vec![Some(0.9), Some(f64::NAN), Some(f64::NAN)]]);
+        assert_eq!((b[0].lo95_pct, b[1].lo95_pct), (0.9, 5.8));
+        assert!(!b[1].hi95_ruptured && b[1].hi95_pct == 6.5);
         // A member ruptured by time 2 marks time 2 too.
         let mut b = band.clone();
         widen_to_members(&mut b, &[vec![Some(1.5), None, None]]);
         assert!(!b[0].hi95_ruptured && b[1].hi95_ruptured && b[1].hi95_pct.is_nan());
         assert_eq!(b[1].lo95_pct, 5.8);
+    }
+
+    /// An interval spans every member of the confidence set: a member within t95 outside an
+    /// end moves that 95 % end, within t68 the 68 % end too; members beyond t95 or without a
+    /// value move nothing.
+    #[test]
+    fn an_interval_spans_every_member_of_the_set() {
+        let th = Thresholds {
+            t68: 1.0,
+            t95: 4.0,
+            factor: 1.0,
+        };
+        let iv = Interval {
+            value: 0.0,
+            lo68: -1.0,
+            hi68: 1.0,
+            lo95: -2.0,
+            hi95: 2.0,
+            lo_open: false,
+            hi_open: false,
+        };
+        let ends = |i: &Interval| (i.lo95, i.lo68, i.hi68, i.hi95);
+        for (members, moved, want) in [
+            (vec![(0.5, 0.3), (-1.5, 3.0)], false, (-2.0, -1.0, 1.0, 2.0)),
+            (vec![(-2.5, 3.9)], true, (-2.5, -1.0, 1.0, 2.0)),
+            (vec![(1.4, 0.9), (3.0, 4.0)], true, (-2.0, -1.0, 1.4, 3.0)),
+            (
+                vec![(9.0, 4.5), (f64::NAN, 0.1), (-9.0, f64::NAN)],
+                false,
+                (-2.0, -1.0, 1.0, 2.0),
+            ),
+        ] {
+            let mut i = iv;
+            assert_eq!(widen_to_set(&mut i, &members, &th), moved, "{members:?}");
+            assert_eq!(ends(&i), want, "{members:?}");
+            assert_eq!((i.value, i.lo_open, i.hi_open), (0.0, false, false));
+        }
     }
 
     #[test]
@@ -737,6 +872,8 @@ struct ConditionRecord {
     band: Vec<Exact>,
     /// Per band point, `hi95_ruptured`.
     band_ruptured: Vec<bool>,
+    /// Per band point, `lo95_open`.
+    band_lo_open: Vec<bool>,
 }
 
 /// One [`PredictedInterval`] as journaled.
@@ -788,6 +925,7 @@ impl ConditionRecord {
                 .map(|b| Exact(vec![b.time_h, b.strain_pct, b.lo95_pct, b.hi95_pct]))
                 .collect(),
             band_ruptured: c.band.iter().map(|b| b.hi95_ruptured).collect(),
+            band_lo_open: c.band.iter().map(|b| b.lo95_open).collect(),
         }
     }
 
@@ -820,20 +958,22 @@ impl ConditionRecord {
                 })
             })
             .collect::<Option<Vec<_>>>()?;
-        if self.band_ruptured.len() != self.band.len() {
+        if self.band_ruptured.len() != self.band.len() || self.band_lo_open.len() != self.band.len()
+        {
             return None;
         }
         let band = self
             .band
             .iter()
-            .zip(&self.band_ruptured)
-            .map(|(b, &hi95_ruptured)| match b.0[..] {
+            .zip(self.band_ruptured.iter().zip(&self.band_lo_open))
+            .map(|(b, (&hi95_ruptured, &lo95_open))| match b.0[..] {
                 [time_h, strain_pct, lo95_pct, hi95_pct] => Some(BandPoint {
                     time_h,
                     strain_pct,
                     lo95_pct,
                     hi95_pct,
                     hi95_ruptured,
+                    lo95_open,
                 }),
                 _ => None,
             })
@@ -971,7 +1111,7 @@ pub fn intervals_at_observed(
             }
             hooks.check(PHASE)?;
             let ti = Instant::now();
-            let quantities = prediction_intervals(&ctx, &reference, l, &th, &scatter);
+            let li = prediction_intervals(&ctx, &reference, l, &th, &scatter);
             timings.intervals += ti.elapsed().as_secs_f64();
             let tb = Instant::now();
             let band = prediction_band(
@@ -980,8 +1120,10 @@ pub fn intervals_at_observed(
                 l,
                 &fractions,
                 &th,
-                rupture_lo95(&quantities),
+                rupture_lo95(&li.quantities),
+                &li.members,
             );
+            let quantities = li.quantities;
             timings.bands += tb.elapsed().as_secs_f64();
             let c = ConditionIntervals { quantities, band };
             if let Some(j) = hooks.journal {

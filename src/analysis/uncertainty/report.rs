@@ -375,7 +375,7 @@ pub fn run_observed(
             .outcome
             .as_str();
         let ti = Instant::now();
-        let quantities = prediction_intervals(&ctx, &reference, l, &pth, &scatter);
+        let li = prediction_intervals(&ctx, &reference, l, &pth, &scatter);
         timings.prediction_intervals += ti.elapsed().as_secs_f64();
         let tb = Instant::now();
         let band = prediction_band(
@@ -384,8 +384,10 @@ pub fn run_observed(
             l,
             &fractions,
             &pth,
-            super::predict::rupture_lo95(&quantities),
+            super::predict::rupture_lo95(&li.quantities),
+            &li.members,
         );
+        let quantities = li.quantities;
         timings.bands += tb.elapsed().as_secs_f64();
         predictions.push(LoadPrediction {
             temperature_c: *t,
