@@ -142,6 +142,15 @@ pub struct RuptureCoverage {
     pub new_test_h: f64,
     /// Whether the calibrated interval is open on a side.
     pub open: bool,
+    /// The 95 % confidence interval `predict --intervals` and `profile` write: `cal95`
+    /// widened to the confidence-set members of the three quantities' searches (NaN in
+    /// records written before it was measured).
+    #[serde(default = "nan_iv", deserialize_with = "de_iv")]
+    pub shipped95: Iv,
+}
+
+fn nan_iv() -> Iv {
+    (f64::NAN, f64::NAN)
 }
 
 /// One time of the 95 % strain band at the untested stress (`creepfit profile`'s and
@@ -415,9 +424,23 @@ fn measure(dir: &Path, seed: u64, s: &CoverageSettings, out: &mut SetCoverage) -
                 pred95: e(pred),
                 new_test_h: new_specimen_h.unwrap_or(truth_run.t_end) * (t.lifetime_sd * zt).exp(),
                 open: ic.lo_open || ic.hi_open,
+                shipped95: nan_iv(),
             });
-            // The strain band, as `profile` computes it (but for the members of the other
-            // quantities' searches, which `profile` adds), against the truth's curve.
+            // The intervals and the strain band as `profile` and `predict --intervals`
+            // compute them (each spanning the members of every search), against the truth.
+            let li = super::predict::prediction_intervals(
+                &ctx,
+                &reference,
+                &load,
+                &pth,
+                &[(scatter, 0), (0.0, 0), (0.0, 0)],
+            );
+            if let (Some(rc), Some(q)) = (out.rupture.as_mut(), li.quantities.first()) {
+                if q.quantity == "rupture_time_h" {
+                    rc.shipped95 = (q.conf_lo95, q.conf_hi95);
+                }
+            }
+            out.fits += li.quantities.iter().map(|q| q.fits).sum::<usize>();
             let fractions = super::predict::band_fractions(s.band_points);
             let band = super::predict::prediction_band(
                 &ctx,
@@ -425,8 +448,8 @@ fn measure(dir: &Path, seed: u64, s: &CoverageSettings, out: &mut SetCoverage) -
                 &load,
                 &fractions,
                 &pth,
-                ic.lo95.is_finite().then(|| ic.lo95.exp()),
-                &[],
+                super::predict::rupture_lo95(&li.quantities),
+                &li.members,
             );
             let times: Vec<f64> = band.iter().map(|b| b.time_h).collect();
             let mut strain = vec![f64::NAN; times.len()];
@@ -686,6 +709,22 @@ pub fn band_table(results: &[SetCoverage]) -> (Vec<BandRow>, Count) {
     (rows, whole)
 }
 
+/// How often the shipped 95 % interval of the rupture time at the untested stress
+/// ([`RuptureCoverage::shipped95`]) holds the truth, over the sets where it was measured and
+/// the calibrated interval is closed.
+pub fn shipped_rupture(results: &[SetCoverage]) -> Count {
+    let mut c = Count::default();
+    for rc in results
+        .iter()
+        .filter(|r| r.error.is_none())
+        .filter_map(|r| r.rupture.as_ref())
+        .filter(|rc| !rc.open && rc.shipped95.0.is_finite())
+    {
+        c.add(covers(rc.shipped95, rc.truth_h));
+    }
+    c
+}
+
 /// [`band_table`] as Markdown.
 pub fn band_md(results: &[SetCoverage]) -> String {
     let (rows, whole) = band_table(results);
@@ -718,6 +757,15 @@ pub fn band_md(results: &[SetCoverage]) -> String {
         whole.covered,
         whole.n
     );
+    let s = shipped_rupture(results);
+    if s.n > 0 {
+        md += &format!(
+            "The rupture time's 95 % interval as shipped (spanning the members of the three quantities' searches): {:.1} % ({}/{}).\n",
+            100.0 * s.rate(),
+            s.covered,
+            s.n
+        );
+    }
     md
 }
 
@@ -771,6 +819,7 @@ mod tests {
             pred95: (0.4, 2.5),
             new_test_h: 1.1,
             open: false,
+            shipped95: (0.5, 2.0),
         };
         let text = serde_json::to_string(&r).unwrap();
         let back: RuptureCoverage = serde_json::from_str(&text).unwrap();
