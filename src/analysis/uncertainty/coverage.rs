@@ -242,29 +242,36 @@ pub struct SetCoverage {
     pub error: Option<String>,
 }
 
+impl SetCoverage {
+    /// A set's result before anything is measured: every number NaN or zero.
+    fn unmeasured(name: String, seed: u64) -> SetCoverage {
+        SetCoverage {
+            name,
+            seed,
+            family: String::new(),
+            sampling: String::new(),
+            noise_phi: f64::NAN,
+            curves: 0,
+            points: 0,
+            factor: f64::NAN,
+            mean_t: f64::NAN,
+            prediction_factor: f64::NAN,
+            constants: vec![],
+            rupture: None,
+            band: vec![],
+            fits: 0,
+            restarts: 0,
+            wall_s: f64::NAN,
+            error: None,
+        }
+    }
+}
+
 /// Generate set `seed` (scenario `none`) into `dir/sets/set-<seed>/` and measure it.
 pub fn run_set(dir: &Path, seed: u64, s: &CoverageSettings) -> SetCoverage {
     let t0 = Instant::now();
     let name = format!("set-{seed}");
-    let mut out = SetCoverage {
-        name: name.clone(),
-        seed,
-        family: String::new(),
-        sampling: String::new(),
-        noise_phi: f64::NAN,
-        curves: 0,
-        points: 0,
-        factor: f64::NAN,
-        mean_t: f64::NAN,
-        prediction_factor: f64::NAN,
-        constants: vec![],
-        rupture: None,
-        band: vec![],
-        fits: 0,
-        restarts: 0,
-        wall_s: f64::NAN,
-        error: None,
-    };
+    let mut out = SetCoverage::unmeasured(name, seed);
     if let Err(e) = measure(dir, seed, s, &mut out) {
         out.error = Some(e.to_string());
     }
@@ -428,6 +435,8 @@ fn measure(dir: &Path, seed: u64, s: &CoverageSettings, out: &mut SetCoverage) -
             });
             // The intervals and the strain band as `profile` and `predict --intervals`
             // compute them (each spanning the members of every search), against the truth.
+            // Only their confidence intervals are read: the scatter given is the rupture
+            // time's, the others' new-test widths are not used.
             let li = super::predict::prediction_intervals(
                 &ctx,
                 &reference,
@@ -856,23 +865,8 @@ mod tests {
             assert_eq!(p.hit(), want, "{p:?}");
         }
         let set = |band: Vec<BandCoverage>| SetCoverage {
-            name: "s".into(),
-            seed: 1,
-            family: String::new(),
-            sampling: String::new(),
-            noise_phi: nan,
-            curves: 0,
-            points: 0,
-            factor: nan,
-            mean_t: nan,
-            prediction_factor: nan,
-            constants: vec![],
-            rupture: None,
             band,
-            fits: 0,
-            restarts: 0,
-            wall_s: nan,
-            error: None,
+            ..SetCoverage::unmeasured("s".into(), 1)
         };
         let (rows, whole) = band_table(&[
             set(vec![
