@@ -302,7 +302,7 @@ fn profile_from_given_constants_says_it_refits() {
         out.to_str().unwrap(),
     ]);
     let (h, r) = rows(&out.join("intervals.csv"));
-    assert_eq!(&h[7..], ["value_source", "given_value", "given_in95"]);
+    assert_eq!(&h[7..10], ["value_source", "given_value", "given_in95"]);
     let (_, given) = rows(&c);
     let mut outside = Vec::new();
     for (row, g) in r.iter().zip(&given) {

@@ -52,7 +52,7 @@ fn profile_writes_its_contract_on_the_seed_data() {
     // (Then where the values come from and the given constants, empty without --constants.)
     assert_eq!(
         lines.next().unwrap(),
-        "name,value,lo68,hi68,lo95,hi95,class,value_source,given_value,given_in95"
+        "name,value,lo68,hi68,lo95,hi95,class,value_source,given_value,given_in95,t68,t95"
     );
     let bounds = [
         ("A", 1e-10, 1e-9),
@@ -143,7 +143,89 @@ fn profile_writes_its_contract_on_the_seed_data() {
     assert!((th["prediction_t95"].as_f64().unwrap() / pf - 3.8415).abs() < 1e-3);
     let cal = &summary["calibration"];
     assert_eq!(cal["prediction_factor"].as_f64().unwrap(), pf);
+    // Each calibrated quantity its own thresholds: its replicates' mean T times F(1, n)'s
+    // quantile, floored at χ²₁'s (recomputed here from the replicates' T); each constant's
+    // interval read at its own (intervals.csv's t95, and the profile crosses it there).
+    let f95 = |n: usize| {
+        use statrs::distribution::{ContinuousCDF, StudentsT};
+        StudentsT::new(0.0, 1.0, n as f64)
+            .unwrap()
+            .inverse_cdf(0.975)
+            .powi(2)
+    };
+    let own: Vec<(String, f64)> = cal["per_quantity"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|q| {
+            let t: Vec<f64> = q["t"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|v| v.as_f64().unwrap())
+                .collect();
+            assert_eq!(t.len() as u64, q["replicates"].as_u64().unwrap());
+            let mean = t.iter().sum::<f64>() / t.len() as f64;
+            let want = (mean * f95(t.len())).max(3.841_458_820_694_124);
+            let got = q["thresholds"]["t95"].as_f64().unwrap();
+            assert!((got - want).abs() < 1e-9 * want, "{q}: {got} != {want}");
+            (q["quantity"].as_str().unwrap().to_string(), got)
+        })
+        .collect();
+    let points: Vec<Vec<String>> = p
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(String::from).collect())
+        .collect();
+    let mut own_constants = 0;
+    for r in &rows {
+        let t95 = parse(&r[11]);
+        if let Some((_, t)) = own.iter().find(|(q, _)| *q == r[0]) {
+            own_constants += 1;
+            assert_eq!(t95, *t, "{r:?}");
+        } else {
+            // Not calibrated (on a bound here): the calibrated constants' pooled thresholds.
+            assert_eq!(
+                t95,
+                cal["constants_pooled"]["t95"].as_f64().unwrap(),
+                "{r:?}"
+            );
+        }
+        if r[6] != "identifiable" {
+            continue;
+        }
+        // On each side the 95 % end lies between the last point below t95 (or the optimum)
+        // and the first at or above it, nearest the optimum first.
+        let (v, lo95, hi95) = (parse(&r[1]), parse(&r[4]), parse(&r[5]));
+        for (side, end) in [("lower", lo95), ("upper", hi95)] {
+            let mut pts: Vec<(f64, f64)> = points
+                .iter()
+                .filter(|q| q[0] == r[0] && q[1] == side && !q[3].is_empty())
+                .map(|q| (parse(&q[2]), parse(&q[3])))
+                .collect();
+            pts.sort_by(|a, b| (a.0 - v).abs().total_cmp(&(b.0 - v).abs()));
+            let k = pts
+                .iter()
+                .position(|&(_, d)| d >= t95)
+                .unwrap_or_else(|| panic!("{} {side}: never at {t95}: {pts:?}", r[0]));
+            let inner = if k == 0 { v } else { pts[k - 1].0 };
+            let outer = pts[k].0;
+            assert!(
+                (end - inner) * (outer - end) >= 0.0,
+                "{} {side}: the end {end} not between {inner} and {outer} (t95 {t95}): {pts:?}",
+                r[0]
+            );
+        }
+    }
+    // At 560 °C only C is inside its bounds by two Wald errors.
+    assert!(own_constants >= 1, "{own:?}");
     let pred = &summary["predictions"][0];
+    // The prediction's intervals at its rupture time's own thresholds.
+    let rt = own
+        .iter()
+        .find(|(q, _)| q == "rupture time at 70 MPa")
+        .expect("the rupture time calibrated");
+    assert_eq!(pred["thresholds"]["t95"].as_f64().unwrap(), rt.1);
     assert_eq!(pred["stress_mpa"], 70.0);
     let q = &pred["quantities"][0];
     assert_eq!(q["quantity"], "rupture_time_h");

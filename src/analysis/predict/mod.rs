@@ -764,13 +764,13 @@ pub fn summary_json(cfg: &RunConfig, data: &Dataset, model: &dyn Model, run: &Pr
             })).collect::<Vec<_>>(),
         })),
         "interval_calibration": run.calibration.as_ref().map(|c| json!({
-            "what": "the parametric-bootstrap calibration of the intervals' likelihood-ratio thresholds ([profile] calibrate replicates): each χ² threshold is multiplied by prediction_factor = max(1, the mean over replicates of T for the rupture times at the conditions)",
+            "what": "the parametric-bootstrap calibration of the intervals' likelihood-ratio thresholds ([profile] calibrate replicates): each condition's intervals use the thresholds of its own rupture time, mean T over the replicates times the quantile of F(1, replicates), floored at χ²₁'s (per_quantity); prediction_factor is the 95 % threshold over χ²₁'s of the rupture times pooled",
             "replicates": c.replicates,
             "failed": c.failed,
             "prediction_factor": jnum(c.prediction_factor),
             "constants_factor": jnum(c.factor),
             "mean_t": jnum(c.mean_t),
-            "per_quantity": c.per_quantity.iter().map(|(l, m, n)| json!({"quantity": l, "mean_t": jnum(*m), "replicates": n})).collect::<Vec<_>>(),
+            "per_quantity": c.per_quantity.iter().map(|q| json!({"quantity": q.quantity, "mean_t": jnum(q.mean_t), "replicates": q.replicates, "t": q.t, "t68": jnum(q.thresholds.t68), "t95": jnum(q.thresholds.t95)})).collect::<Vec<_>>(),
         })),
         "predictions": run.predictions.iter().enumerate().map(|(k, p)| {
             let at = model.constants_at(params, p.condition.temperature_c);

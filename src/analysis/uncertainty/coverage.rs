@@ -111,6 +111,30 @@ pub struct ConstantCoverage {
     /// Wald 95 % interval (unit box, clamped to the bounds).
     #[serde(deserialize_with = "de_iv")]
     pub wald95: Iv,
+    /// The truth's likelihood-ratio statistic and the calibration behind the thresholds
+    /// (None in records written before it was measured).
+    #[serde(default)]
+    pub statistic: Option<TruthStatistic>,
+}
+
+/// A quantity's likelihood-ratio statistic at its true value on the data, beside its
+/// calibration replicates' statistics and the thresholds its intervals were read at: whatever
+/// the rule that turns the replicates into thresholds, the interval covers the truth where
+/// `t_truth` lies below the threshold (up to the profile's interpolation), so other rules can
+/// be measured on the same sets.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TruthStatistic {
+    /// −2 ln L with the quantity held at its true value, minus the optimum's (the lower of the
+    /// two, should the held fit find a lower one); NaN where the held fit failed.
+    #[serde(deserialize_with = "de_f64")]
+    pub t_truth: f64,
+    /// T of each calibration replicate for this quantity (empty: not calibrated itself).
+    pub t_replicates: Vec<f64>,
+    /// The thresholds of its 68 % and 95 % intervals.
+    #[serde(deserialize_with = "de_f64")]
+    pub t68: f64,
+    #[serde(deserialize_with = "de_f64")]
+    pub t95: f64,
 }
 
 /// The rupture time at the untested stress in one set (h).
@@ -147,6 +171,9 @@ pub struct RuptureCoverage {
     /// records written before it was measured).
     #[serde(default = "nan_iv", deserialize_with = "de_iv")]
     pub shipped95: Iv,
+    /// The statistic of the true rupture time (of ln t_r) and its calibration.
+    #[serde(default)]
+    pub statistic: Option<TruthStatistic>,
 }
 
 fn nan_iv() -> Iv {
@@ -334,15 +361,38 @@ fn measure(dir: &Path, seed: u64, s: &CoverageSettings, out: &mut SetCoverage) -
     } else {
         ctx
     };
-    let (reference, th, pth, profiles) = (
-        c.reference,
-        c.thresholds,
-        c.prediction_thresholds,
-        c.profiles,
-    );
+    let pth = c
+        .load_thresholds
+        .first()
+        .copied()
+        .unwrap_or(c.prediction_thresholds);
+    let calibration = c.calibration;
+    let (reference, th, profiles) = (c.reference, c.thresholds, c.profiles);
     out.factor = th.factor;
     out.prediction_factor = pth.factor;
-    out.mean_t = c.calibration.as_ref().map_or(f64::NAN, |c| c.mean_t);
+    let replicates_of = |label: &str| {
+        calibration
+            .as_ref()
+            .and_then(|c| c.per_quantity.iter().find(|q| q.quantity == label))
+            .map(|q| q.t.clone())
+            .unwrap_or_default()
+    };
+    // −2 ln L held at a true value: from the optimum and from the truth, the lower.
+    let lower = |a: super::constrained::PointFit, b: super::constrained::PointFit| {
+        [a, b]
+            .into_iter()
+            .filter(|f| f.ok())
+            .map(|f| f.neg2ll)
+            .fold(f64::NAN, f64::min)
+    };
+    let statistic = |held: f64| {
+        if held.is_finite() {
+            (held - reference.neg2ll).max(0.0)
+        } else {
+            f64::NAN
+        }
+    };
+    out.mean_t = calibration.as_ref().map_or(f64::NAN, |c| c.mean_t);
     out.restarts = c.restarts;
     let plain = Thresholds::chi2(1.0);
 
@@ -359,7 +409,18 @@ fn measure(dir: &Path, seed: u64, s: &CoverageSettings, out: &mut SetCoverage) -
             ctx.space.from_unit_one(j, (u - w).max(0.0)),
             ctx.space.from_unit_one(j, (u + w).min(1.0)),
         );
+        let v = t.constants[j];
+        let held = lower(
+            super::constrained::held_fit(&ctx, j, v, &reference.params, true),
+            super::constrained::held_fit(&ctx, j, v, &t.constants, true),
+        );
         out.constants.push(ConstantCoverage {
+            statistic: Some(TruthStatistic {
+                t_truth: statistic(held),
+                t_replicates: replicates_of(names[j]),
+                t68: p.thresholds.t68,
+                t95: p.thresholds.t95,
+            }),
             name: names[j].to_string(),
             truth: t.constants[j],
             value: reference.params[j],
@@ -432,6 +493,42 @@ fn measure(dir: &Path, seed: u64, s: &CoverageSettings, out: &mut SetCoverage) -
                 new_test_h: new_specimen_h.unwrap_or(truth_run.t_end) * (t.lifetime_sd * zt).exp(),
                 open: ic.lo_open || ic.hi_open,
                 shipped95: nan_iv(),
+                statistic: Some(TruthStatistic {
+                    t_truth: {
+                        let (g, se) = super::profile::quantity_se(&ctx, &reference, &q);
+                        let tau = q.penalty_fraction()
+                            * if se.is_finite() && se > 0.0 {
+                                se.min(q.search_cap(g))
+                            } else {
+                                q.search_cap(g)
+                            };
+                        let target = truth_run.t_end.ln();
+                        statistic(lower(
+                            super::constrained::constrained_fit(
+                                &ctx,
+                                &q,
+                                target,
+                                tau,
+                                &reference.params,
+                                true,
+                            ),
+                            super::constrained::constrained_fit(
+                                &ctx,
+                                &q,
+                                target,
+                                tau,
+                                &t.constants,
+                                true,
+                            ),
+                        ))
+                    },
+                    t_replicates: replicates_of(&format!(
+                        "rupture time at {} MPa",
+                        load.stress_mpa
+                    )),
+                    t68: pth.t68,
+                    t95: pth.t95,
+                }),
             });
             // The intervals and the strain band as `profile` and `predict --intervals`
             // compute them (each spanning the members of every search), against the truth.
@@ -829,11 +926,20 @@ mod tests {
             new_test_h: 1.1,
             open: false,
             shipped95: (0.5, 2.0),
+            statistic: Some(TruthStatistic {
+                t_truth: f64::NAN,
+                t_replicates: vec![0.5, 2.25],
+                t68: 1.0,
+                t95: 4.1,
+            }),
         };
         let text = serde_json::to_string(&r).unwrap();
         let back: RuptureCoverage = serde_json::from_str(&text).unwrap();
         assert!(back.boot95.0.is_nan() && back.wald95.1.is_nan());
         assert_eq!(back.cal95, r.cal95);
+        let st = back.statistic.unwrap();
+        assert!(st.t_truth.is_nan());
+        assert_eq!((st.t_replicates, st.t95), (vec![0.5, 2.25], 4.1));
         assert!(covers(back.cal95, 1.0) && !covers(back.boot95, 1.0));
     }
 

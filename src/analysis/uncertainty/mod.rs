@@ -581,14 +581,14 @@ pub fn covariance(info: &DMatrix<f64>) -> DMatrix<f64> {
 }
 
 /// The likelihood-ratio thresholds of Δ(−2 ln L) for the 68.27 % and 95 % intervals: χ²₁
-/// quantiles (1.0 and 3.841), times a calibration factor (1 when uncalibrated).
+/// quantiles (1.0 and 3.841) when uncalibrated, else [`Thresholds::calibrated`].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Thresholds {
     /// Threshold of the 68.27 % interval.
     pub t68: f64,
     /// Threshold of the 95 % interval.
     pub t95: f64,
-    /// The calibration factor applied to the χ²₁ quantiles.
+    /// The 95 % threshold over χ²₁'s (1 when uncalibrated).
     pub factor: f64,
 }
 
@@ -603,6 +603,34 @@ impl Thresholds {
             t95: factor * chi2_1(0.95),
             factor,
         }
+    }
+
+    /// The thresholds of a quantity whose likelihood-ratio statistic T has mean `mean_t` over
+    /// `n` parametric-bootstrap replicates. T ≈ c·χ²₁ (Bartlett), and c is estimated by that
+    /// mean: T/ĉ then follows F(1, n), exactly when the replicates' T are independent c·χ²₁,
+    /// so the threshold at level p is ĉ·F₁,ₙ(p) — ĉ·χ²₁(p) would cover 93.6 %, not 95 %, with
+    /// n = 20. Floored at χ²₁(p); uncalibrated (n = 0, or no finite mean): χ²₁.
+    pub fn calibrated(mean_t: f64, n: usize) -> Thresholds {
+        if n == 0 || !mean_t.is_finite() {
+            return Thresholds::chi2(1.0);
+        }
+        let at = |p: f64| chi2_1(p).max(mean_t * f_1n(p, n));
+        let t95 = at(0.95);
+        Thresholds {
+            t68: at(LEVEL_68),
+            t95,
+            factor: t95 / chi2_1(0.95),
+        }
+    }
+}
+
+/// Quantile of F(1, n) at probability `p`: the square of Student's t with n degrees of
+/// freedom at (1 + p)/2.
+pub fn f_1n(p: f64, n: usize) -> f64 {
+    use statrs::distribution::{ContinuousCDF, StudentsT};
+    match StudentsT::new(0.0, 1.0, n as f64) {
+        Ok(t) => t.inverse_cdf(0.5 + 0.5 * p).powi(2),
+        Err(_) => f64::NAN,
     }
 }
 
@@ -629,6 +657,59 @@ mod tests {
         assert!((chi2_1(LEVEL_68) - 1.0).abs() < 1e-9);
         let t = Thresholds::chi2(1.5);
         assert!((t.t95 - 1.5 * 3.841_458_820_694_124).abs() < 1e-9);
+    }
+
+    #[test]
+    fn f_quantiles_are_the_textbook_values() {
+        // F(1, n) 95 % quantiles from the tables (Abramowitz & Stegun 26.6): n = 10, 20, 120.
+        for (n, want) in [(10, 4.9646), (20, 4.3512), (120, 3.9201)] {
+            assert!(
+                (f_1n(0.95, n) - want).abs() < 1e-3,
+                "n {n}: {}",
+                f_1n(0.95, n)
+            );
+        }
+        // Toward χ²₁ as n grows.
+        assert!((f_1n(0.95, 100_000) - chi2_1(0.95)).abs() < 1e-3);
+    }
+
+    #[test]
+    fn calibrated_thresholds_cover_at_their_level_when_t_is_a_scaled_chi2() {
+        // T = c·χ²₁ with c = 2.3; each trial estimates c from n = 20 replicates and asks
+        // whether a new T falls below the thresholds. The F rule covers at its level; the
+        // mean-scaled χ² quantile (the rule before) falls short at 95 %.
+        use rand::SeedableRng;
+        use rand_distr::{Distribution, StandardNormal};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(90_017);
+        let c = 2.3;
+        let mut draw = || {
+            let z: f64 = StandardNormal.sample(&mut rng);
+            c * z * z
+        };
+        let (trials, n) = (40_000, 20);
+        let (mut in95, mut in68, mut in95_chi) = (0, 0, 0);
+        for _ in 0..trials {
+            let mean = (0..n).map(|_| draw()).sum::<f64>() / n as f64;
+            let th = Thresholds::calibrated(mean, n);
+            let t = draw();
+            in95 += usize::from(t <= th.t95);
+            in68 += usize::from(t <= th.t68);
+            in95_chi += usize::from(t <= mean * chi2_1(0.95));
+        }
+        let r = |k: usize| k as f64 / trials as f64;
+        // Binomial sd at 40,000 trials: 0.0011 (95 %), 0.0023 (68 %).
+        assert!((r(in95) - 0.95).abs() < 0.005, "F rule 95 %: {}", r(in95));
+        assert!(
+            (r(in68) - LEVEL_68).abs() < 0.01,
+            "F rule 68 %: {}",
+            r(in68)
+        );
+        assert!(r(in95_chi) < 0.945, "mean-scaled χ² 95 %: {}", r(in95_chi));
+        // Uncalibrated and floored.
+        assert_eq!(Thresholds::calibrated(f64::NAN, 20), Thresholds::chi2(1.0));
+        assert_eq!(Thresholds::calibrated(2.0, 0), Thresholds::chi2(1.0));
+        let low = Thresholds::calibrated(0.5, 20);
+        assert_eq!((low.t68, low.t95), (chi2_1(LEVEL_68), chi2_1(0.95)));
     }
 
     #[test]

@@ -1075,9 +1075,9 @@ pub fn intervals_at_observed(
             .collect();
         let cal =
             super::calibrate::bartlett(&ctx, &reference, &cons, &qs, pc.calibrate, pc.seed, hooks)?;
-        (Thresholds::chi2(cal.prediction_factor), Some(cal))
+        (cal.prediction_thresholds.clone(), Some(cal))
     } else {
-        (Thresholds::chi2(1.0), None)
+        (vec![Thresholds::chi2(1.0); loads.len()], None)
     };
     timings.calibration = t1.elapsed().as_secs_f64();
     let fractions = band_fractions(pc.band_points);
@@ -1100,7 +1100,8 @@ pub fn intervals_at_observed(
     }
     let conditions = loads
         .iter()
-        .map(|l| {
+        .zip(&th)
+        .map(|(l, th)| {
             let key = format!("{prefix}{}", debug_hash(l));
             if let Some(c) = hooks
                 .journal
@@ -1111,7 +1112,7 @@ pub fn intervals_at_observed(
             }
             hooks.check(PHASE)?;
             let ti = Instant::now();
-            let li = prediction_intervals(&ctx, &reference, l, &th, &scatter);
+            let li = prediction_intervals(&ctx, &reference, l, th, &scatter);
             timings.intervals += ti.elapsed().as_secs_f64();
             let tb = Instant::now();
             let band = prediction_band(
@@ -1119,7 +1120,7 @@ pub fn intervals_at_observed(
                 &reference,
                 l,
                 &fractions,
-                &th,
+                th,
                 rupture_lo95(&li.quantities),
                 &li.members,
             );

@@ -198,6 +198,8 @@ pub struct ConstantProfile {
     pub ub: f64,
     /// The intervals.
     pub interval: Interval,
+    /// The thresholds of Δ(−2 ln L) they were read at.
+    pub thresholds: Thresholds,
     /// Identifiability.
     pub class: Class,
     /// Sides that did not cross the 95 % threshold.
@@ -494,7 +496,8 @@ pub fn wald_se(ctx: &Context, reference: &Reference) -> Vec<f64> {
     }
 }
 
-/// Profiles of the constants `which` (indices, model order), their sides in parallel. Each
+/// Profiles of the constants `which` (indices, model order), each against its own
+/// thresholds `th[j]` (model order), their sides in parallel. Each
 /// side is a step of the phase `profile sides` of `hooks.observer`, journaled in
 /// `hooks.journal` as it finishes (keyed by the hash of the reference and the thresholds, the
 /// constant and the side), each step's point too (a side killed half-way resumes at its last
@@ -504,7 +507,7 @@ pub fn profile_constants(
     ctx: &Context,
     reference: &Reference,
     which: &[usize],
-    th: &Thresholds,
+    th: &[Thresholds],
     hooks: &Hooks,
 ) -> crate::Result<Vec<ConstantProfile>> {
     let se = wald_se(ctx, reference);
@@ -536,7 +539,7 @@ pub fn profile_constants(
                 key: k.clone(),
                 write_error: &write_error,
             };
-            let side = constant_side(ctx, reference, j, dir, se[j], th, &memo)?;
+            let side = constant_side(ctx, reference, j, dir, se[j], &th[j], &memo)?;
             if let Some(jl) = hooks.journal {
                 if let Err(e) = jl.put(&k, &SideRecord::from(&side)) {
                     write_error
@@ -563,7 +566,7 @@ pub fn profile_constants(
         .map(|(k, &j)| {
             let lower = sides[2 * k].clone();
             let upper = sides[2 * k + 1].clone();
-            summarise(ctx, reference, j, names[j], lower, upper, se[j], th)
+            summarise(ctx, reference, j, names[j], lower, upper, se[j], &th[j])
         })
         .collect())
 }
@@ -726,6 +729,7 @@ fn summarise(
         lb: sp.lb[j],
         ub: sp.ub[j],
         interval,
+        thresholds: *th,
         class,
         open,
         wald_se_unit: se_u,

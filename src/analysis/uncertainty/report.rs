@@ -41,6 +41,9 @@ pub struct LoadPrediction {
     pub quantities: Vec<PredictedInterval>,
     /// The 95 % band of the predicted curve.
     pub band: Vec<BandPoint>,
+    /// The thresholds of Δ(−2 ln L) of these intervals and the band (the rupture time's at
+    /// this load).
+    pub thresholds: Thresholds,
 }
 
 /// Wall times of the phases, s.
@@ -158,8 +161,13 @@ pub struct Core {
     pub reference: Reference,
     pub reference_from: String,
     pub given_neg2ll: Option<f64>,
+    /// The pooled thresholds of the constants and of the predictions
+    /// ([`Calibration::constants_pooled`]); each profile carries its own.
     pub thresholds: Thresholds,
     pub prediction_thresholds: Thresholds,
+    /// The thresholds of the predictions at each load (in the order given): its rupture
+    /// time's own.
+    pub load_thresholds: Vec<Thresholds>,
     pub calibration: Option<Calibration>,
     pub profiles: Vec<ConstantProfile>,
     pub restarts: usize,
@@ -263,19 +271,30 @@ pub fn core(
             let cal = bartlett(ctx, &reference, &cons, &qs, pc.calibrate, pc.seed, hooks)?;
             (
                 (
-                    Thresholds::chi2(cal.factor),
-                    Thresholds::chi2(cal.prediction_factor),
+                    cal.constants_pooled,
+                    cal.predictions_pooled,
+                    cal.constant_thresholds.clone(),
+                    cal.prediction_thresholds.clone(),
                 ),
                 Some(cal),
             )
         } else {
-            ((Thresholds::chi2(1.0), Thresholds::chi2(1.0)), None)
+            let chi2 = Thresholds::chi2(1.0);
+            (
+                (
+                    chi2,
+                    chi2,
+                    vec![chi2; ctx.space.len()],
+                    vec![chi2; loads.len()],
+                ),
+                None,
+            )
         };
-        let (th, pth) = th;
+        let (th, pth, cth, lth) = th;
         timings.calibration += t1.elapsed().as_secs_f64();
         let t2 = Instant::now();
         let all: Vec<usize> = (0..ctx.space.len()).collect();
-        let profiles = profile_constants(ctx, &reference, &all, &th, hooks)?;
+        let profiles = profile_constants(ctx, &reference, &all, &cth, hooks)?;
         timings.profiles += t2.elapsed().as_secs_f64();
         let better = profiles
             .iter()
@@ -303,6 +322,7 @@ pub fn core(
                     given_neg2ll,
                     thresholds: th,
                     prediction_thresholds: pth,
+                    load_thresholds: lth,
                     calibration: cal,
                     profiles,
                     restarts,
@@ -363,7 +383,7 @@ pub fn run_observed(
         hooks.phase("predictions", loads.len());
     }
     let scatter = super::predict::specimen_scatter_for(&ctx, &reference, loads.len());
-    for (t, l) in &loads {
+    for ((t, l), pth) in loads.iter().zip(&c.load_thresholds) {
         hooks.check("predictions")?;
         let condition = crate::data::Condition {
             temperature_c: *t,
@@ -375,7 +395,7 @@ pub fn run_observed(
             .outcome
             .as_str();
         let ti = Instant::now();
-        let li = prediction_intervals(&ctx, &reference, l, &pth, &scatter);
+        let li = prediction_intervals(&ctx, &reference, l, pth, &scatter);
         timings.prediction_intervals += ti.elapsed().as_secs_f64();
         let tb = Instant::now();
         let band = prediction_band(
@@ -383,7 +403,7 @@ pub fn run_observed(
             &reference,
             l,
             &fractions,
-            &pth,
+            pth,
             super::predict::rupture_lo95(&li.quantities),
             &li.members,
         );
@@ -398,6 +418,7 @@ pub fn run_observed(
             outcome,
             quantities,
             band,
+            thresholds: *pth,
         });
         hooks.step();
     }
@@ -431,8 +452,9 @@ fn shown(scale: Scale, v: f64) -> f64 {
 
 /// `intervals.csv`'s columns: the contract's, then where `value` comes from
 /// (`ml_multistart`, or `ml_refit` from the given constants), the given constant and whether
-/// it lies inside the 95 % interval (both empty without `--constants`).
-pub const INTERVAL_HEADER: [&str; 10] = [
+/// it lies inside the 95 % interval (both empty without `--constants`), and the thresholds of
+/// Δ(−2 ln L) the constant's 68 % and 95 % intervals were read at (each constant its own).
+pub const INTERVAL_HEADER: [&str; 12] = [
     "name",
     "value",
     "lo68",
@@ -443,6 +465,8 @@ pub const INTERVAL_HEADER: [&str; 10] = [
     "value_source",
     "given_value",
     "given_in95",
+    "t68",
+    "t95",
 ];
 
 impl ProfileRun {
@@ -475,6 +499,8 @@ pub fn interval_rows(run: &ProfileRun) -> Vec<Vec<String>> {
                 run.value_source().to_string(),
                 given.map_or(String::new(), num),
                 given.map_or(String::new(), |g| (i.lo95 <= g && g <= i.hi95).to_string()),
+                num(p.thresholds.t68),
+                num(p.thresholds.t95),
             ]
         })
         .collect()
@@ -568,7 +594,7 @@ pub fn write_outputs(cfg: &RunConfig, run: &ProfileRun, out: &Path) -> Result<Ve
             .filter(|q| !q.delta.is_finite())
             .map(|q| x(q.value))
             .collect();
-        let th = run.thresholds;
+        let th = p.thresholds;
         let plot = ProfilePlot {
             x_label: match scale {
                 Scale::Log => format!("log10 {} ({} in {unit})", p.name, p.name),
@@ -616,6 +642,8 @@ pub fn summary(cfg: &RunConfig, run: &ProfileRun) -> serde_json::Value {
                 "lo95": jnum(p.interval.lo95),
                 "hi95": jnum(p.interval.hi95),
                 "class": p.class,
+                "t68": jnum(p.thresholds.t68),
+                "t95": jnum(p.thresholds.t95),
                 "open": p.open.iter().map(|o| json!({
                     "side": o.side,
                     "end": o.end,
@@ -753,8 +781,8 @@ pub fn report_md(cfg: &RunConfig, run: &ProfileRun) -> String {
     }
     md += &match &run.calibration {
         Some(c) => format!(
-            "Thresholds of Δ(−2 ln L): {:.3} (68 %) and {:.3} (95 %) for the constants, {:.3} and {:.3} for the predictions: the χ²₁ quantiles × {:.3} and × {:.3}, the mean likelihood-ratio statistic of the constants' and of the predictions' true values over {} parametric-bootstrap replicates ({} failed) at the fitted values (Bartlett correction; floored at 1).\n\n",
-            th.t68, th.t95, run.prediction_thresholds.t68, run.prediction_thresholds.t95, th.factor, run.prediction_thresholds.factor, c.replicates, c.failed
+            "Thresholds of Δ(−2 ln L), each quantity its own: the mean likelihood-ratio statistic T of its true value over {} parametric-bootstrap replicates ({} failed) at the fitted values (Bartlett correction) times the quantile of F(1, replicates) (the mean is itself estimated), floored at χ²₁'s (1.000 and 3.841); each constant's in the table below, each prediction's with it. A constant on a bound or in a flat direction takes the calibrated constants' pooled thresholds, {:.3} (68 %) and {:.3} (95 %); the predictions pooled: {:.3} and {:.3}.\n\n",
+            c.replicates, c.failed, th.t68, th.t95, run.prediction_thresholds.t68, run.prediction_thresholds.t95
         ),
         None => format!(
             "Thresholds of Δ(−2 ln L): the χ²₁ quantiles {:.3} (68 %) and {:.3} (95 %), not calibrated.\n\n",
@@ -767,7 +795,7 @@ pub fn report_md(cfg: &RunConfig, run: &ProfileRun) -> String {
             run.restarts
         );
     }
-    md += "## Constants\n\n| constant | value | 68 % | 95 % | class | open side(s) |\n|---|---|---|---|---|---|\n";
+    md += "## Constants\n\n| constant | value | 68 % | 95 % | thresholds (68 %, 95 %) | class | open side(s) |\n|---|---|---|---|---|---|---|\n";
     for p in &run.profiles {
         let i = &p.interval;
         let open: Vec<String> = p
@@ -789,13 +817,15 @@ pub fn report_md(cfg: &RunConfig, run: &ProfileRun) -> String {
             })
             .collect();
         md += &format!(
-            "| {} | {} | [{}, {}] | [{}, {}] | {} | {} |\n",
+            "| {} | {} | [{}, {}] | [{}, {}] | {:.2}, {:.2} | {} | {} |\n",
             p.name,
             g(i.value),
             g(i.lo68),
             g(i.hi68),
             g(i.lo95),
             g(i.hi95),
+            p.thresholds.t68,
+            p.thresholds.t95,
             p.class.as_str(),
             if open.is_empty() {
                 "—".to_string()
@@ -853,7 +883,7 @@ pub fn report_md(cfg: &RunConfig, run: &ProfileRun) -> String {
             }
             for q in &p.quantities {
                 md += &format!(
-                    "| {} °C, {} MPa | {} | {} | [{}, {}]{} | [{}, {}] | {:.3} ({} residuals) |\n",
+                    "| {} °C, {} MPa | {} | {} | [{}, {}]{} (threshold {:.2}) | [{}, {}] | {:.3} ({} residuals) |\n",
                     p.temperature_c,
                     p.stress_mpa,
                     q.quantity,
@@ -865,6 +895,7 @@ pub fn report_md(cfg: &RunConfig, run: &ProfileRun) -> String {
                     } else {
                         ""
                     },
+                    p.thresholds.t95,
                     g(q.pred_lo95),
                     g(q.pred_hi95),
                     q.scatter_sd,
