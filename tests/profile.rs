@@ -283,6 +283,55 @@ fn a_hierarchical_profile_point_stuck_at_its_start_is_refitted_cold() {
     );
 }
 
+/// Generated set 90016 (specimens world, five specimens at 590 °C), the minimum rate g at the
+/// untested 85 MPa (ln g, g as a fraction per hour): the warm fits of its lower side held at
+/// ln g = −13.703 ended at Δ 9.8, and the search wandered among points whose Δ jumped between
+/// 2 and 8 for g 0.04 % apart (24 fits, 95 % lower end 1.125e-4 %/h). A fit from the optimum
+/// cold (new specimens' effects, the white stage first) held one step farther out, at
+/// −13.742 (1.075e-4 %/h), ends at Δ 3.80, inside the 95 % set (χ²: 3.84). The lower end
+/// must reach that member.
+#[test]
+fn a_hierarchical_quantity_search_stuck_at_its_warm_starts_is_refitted_cold() {
+    let dir = TempDir::new().unwrap();
+    let set = creepfit::synth::generate_in(
+        "set-90016",
+        "none",
+        None,
+        90016,
+        creepfit::synth::World::Specimens,
+    )
+    .unwrap();
+    creepfit::synth::write_set(&set, dir.path()).unwrap();
+    let cfg = dir.path().join("config.toml");
+    let text = std::fs::read_to_string(&cfg).unwrap()
+        + "\n[profile]\nstarts = 16\nseed = 90016\ncalibrate = 0\npredict_stress_MPa = [85]\n";
+    std::fs::write(&cfg, text).unwrap();
+    let out = dir.path().join("out");
+    let o = creepfit(&[
+        "profile",
+        cfg.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--threads",
+        "2",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let q = summary["predictions"][0]["quantities"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|q| q["quantity"] == "min_rate_pct_per_h")
+        .unwrap();
+    let lo95 = q["conf_lo95"].as_f64().unwrap();
+    let member = 100.0 * (-13.742f64).exp() * 1.001;
+    assert!(
+        lo95 <= member,
+        "the minimum rate's 95 % lower end {lo95:e} %/h misses the member {member:e}"
+    );
+}
+
 /// At 590 °C B trades with H* along the ridge B·(1−H*) ≈ 0.074: B's upper profile rises
 /// slowly (Δ ≈ 0.36 at B = 0.151). Continuation that restarted each point from the previous
 /// one alone could not take a step larger than 0.0125 of the box (a warm fit off the ridge

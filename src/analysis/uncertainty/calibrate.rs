@@ -26,11 +26,12 @@ use std::sync::Mutex;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::constrained::{constrained_fit, held_fit, Quantity};
-use super::profile::quantity_se;
+use super::constrained::{constrained_fit, held_fit, Predicted, Quantity};
+use super::profile::penalty_scale;
 use super::{Context, Reference, Thresholds};
 use crate::diagnose::bootstrap::replicate_rng;
 use crate::journal::{debug_hash, Exact};
+use crate::model::Load;
 use crate::progress::Hooks;
 
 /// Random stream of the calibration bootstrap.
@@ -119,6 +120,28 @@ pub fn pooled(stats: &[(f64, usize)], n_constants: usize) -> (f64, Thresholds, T
     (all.0, constants, predictions)
 }
 
+/// The calibration's label of the rupture time at `load`: `rupture time at S MPa` (the
+/// coverage run looks the quantity's replicates up by it).
+pub fn rupture_time_label(load: &Load) -> String {
+    format!("rupture time at {} MPa", load.stress_mpa)
+}
+
+/// The rupture time (ln h) at every load of `loads`, labelled, as [`bartlett`] takes them.
+pub fn rupture_time_quantities(loads: &[Load]) -> Vec<(String, Quantity)> {
+    loads
+        .iter()
+        .map(|l| {
+            (
+                rupture_time_label(l),
+                Quantity::Prediction {
+                    load: *l,
+                    what: Predicted::LnRuptureTime,
+                },
+            )
+        })
+        .collect()
+}
+
 /// Bootstrap `b` replicates and compute T for each constant of `constants` (indices) and
 /// each quantity of `quantities` (labelled). Each replicate is a step of the phase
 /// `calibration replicates` of `hooks.observer`, journaled in `hooks.journal` as it finishes
@@ -133,21 +156,10 @@ pub fn bartlett(
     seed: u64,
     hooks: &Hooks,
 ) -> crate::Result<Calibration> {
-    // τ of each quantity's penalty: 2 % of its Wald standard error at the data's optimum.
+    // τ of each quantity's penalty: a fraction of its Wald standard error at the data's optimum.
     let targets: Vec<(f64, f64)> = quantities
         .iter()
-        .map(|(_, q)| {
-            let (g, se) = quantity_se(ctx, reference, q);
-            (
-                g,
-                q.penalty_fraction()
-                    * if se.is_finite() && se > 0.0 {
-                        se.min(q.search_cap(g))
-                    } else {
-                        q.search_cap(g)
-                    },
-            )
-        })
+        .map(|(_, q)| penalty_scale(ctx, reference, q))
         .collect();
     let prefix = format!(
         "cal/{}/",

@@ -495,13 +495,7 @@ fn measure(dir: &Path, seed: u64, s: &CoverageSettings, out: &mut SetCoverage) -
                 shipped95: nan_iv(),
                 statistic: Some(TruthStatistic {
                     t_truth: {
-                        let (g, se) = super::profile::quantity_se(&ctx, &reference, &q);
-                        let tau = q.penalty_fraction()
-                            * if se.is_finite() && se > 0.0 {
-                                se.min(q.search_cap(g))
-                            } else {
-                                q.search_cap(g)
-                            };
+                        let (_, tau) = super::profile::penalty_scale(&ctx, &reference, &q);
                         let target = truth_run.t_end.ln();
                         statistic(lower(
                             super::constrained::constrained_fit(
@@ -522,10 +516,7 @@ fn measure(dir: &Path, seed: u64, s: &CoverageSettings, out: &mut SetCoverage) -
                             ),
                         ))
                     },
-                    t_replicates: replicates_of(&format!(
-                        "rupture time at {} MPa",
-                        load.stress_mpa
-                    )),
+                    t_replicates: replicates_of(&super::calibrate::rupture_time_label(&load)),
                     t68: pth.t68,
                     t95: pth.t95,
                 }),

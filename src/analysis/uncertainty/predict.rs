@@ -1061,18 +1061,7 @@ pub fn intervals_at_observed(
     let pc = &setup.profile;
     let (th, calibration) = if pc.calibrate > 0 {
         let cons = super::report::calibration_constants(&ctx, &reference);
-        let qs: Vec<(String, Quantity)> = loads
-            .iter()
-            .map(|l| {
-                (
-                    format!("rupture time at {} MPa", l.stress_mpa),
-                    Quantity::Prediction {
-                        load: *l,
-                        what: Predicted::LnRuptureTime,
-                    },
-                )
-            })
-            .collect();
+        let qs = super::calibrate::rupture_time_quantities(loads);
         let cal =
             super::calibrate::bartlett(&ctx, &reference, &cons, &qs, pc.calibrate, pc.seed, hooks)?;
         (cal.prediction_thresholds.clone(), Some(cal))

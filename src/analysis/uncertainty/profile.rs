@@ -794,14 +794,31 @@ pub fn quantity_se(ctx: &Context, reference: &Reference, q: &Quantity) -> (f64, 
     (g, (gv.transpose() * &c * &gv)[(0, 0)].max(0.0).sqrt())
 }
 
+/// The quantity's value ĝ at the reference and the scale τ of the penalty that holds it
+/// there for the calibration and the coverage run: [`Quantity::penalty_fraction`] of its Wald
+/// standard error, capped by [`Quantity::search_cap`] (the cap alone where the error cannot
+/// be evaluated). The interval search ([`quantity_side`]) adapts τ to the profile's width.
+pub fn penalty_scale(ctx: &Context, reference: &Reference, q: &Quantity) -> (f64, f64) {
+    let (g, se) = quantity_se(ctx, reference, q);
+    let cap = q.search_cap(g);
+    let se = if se.is_finite() && se > 0.0 {
+        se.min(cap)
+    } else {
+        cap
+    };
+    (g, q.penalty_fraction() * se)
+}
+
 /// Most fits per side of a quantity's interval search.
 pub const MAX_SEARCH: usize = 12;
 
 /// Fit at g = `target` from the warm start, retried from the reference and the other optima
 /// if it fails; and, when it lands above the 68 % threshold, also from the reference (a
 /// penalised fit can stop short of its optimum in a narrow valley: measured, points at
-/// |g − ĝ| < 1e-8 with Δ = 93). Every successful fit is returned: each is a profile point or
-/// an upper bound on one, and [`envelope`] keeps the ones consistent with the others.
+/// |g − ĝ| < 1e-8 with Δ = 93) and, with specimen effects, from the reference cold (new
+/// effects, the white stage first: both warm starts carry effects that can hold the fit where
+/// it began, as [`fit_point`]'s do). Every successful fit is returned: each is a profile point
+/// or an upper bound on one, and [`envelope`] keeps the ones consistent with the others.
 fn quantity_points(
     ctx: &Context,
     reference: &Reference,
@@ -835,6 +852,12 @@ fn quantity_points(
                 out.push(point(alt, 1, true));
             }
         }
+        if d > t68 && ctx.hierarchical() {
+            let cold = constrained_fit(ctx, q, target, tau, &reference.params, false);
+            if cold.ok() {
+                out.push(point(cold, 1, true));
+            }
+        }
         return out;
     }
     let mut fits = 1;
@@ -851,16 +874,22 @@ fn quantity_points(
 }
 
 /// The points of one side (`dir` = ±1 from ĝ) that can be profile points: outward from ĝ,
-/// a point is dropped when a point farther out has a lower Δ (a profile rises away from its
-/// optimum on each side; the dropped fit stopped above its optimum). Returns (coord, Δ),
-/// nearest first.
+/// a point is dropped when a point farther out, or at the same g, has a lower Δ (a profile
+/// rises away from its optimum on each side; the dropped fit stopped above its optimum).
+/// Returns (coord, Δ), nearest first.
 pub fn envelope(points: &[ProfilePoint], g_hat: f64, dir: f64) -> Vec<(f64, f64)> {
     let mut v: Vec<(f64, f64)> = points
         .iter()
         .filter(|p| p.ok() && (p.coord - g_hat) * dir >= 0.0)
         .map(|p| (p.coord, p.delta))
         .collect();
-    v.sort_by(|a, b| ((a.0 - g_hat) * dir).total_cmp(&((b.0 - g_hat) * dir)));
+    // Outward, and at one g the highest Δ first: the scan from the outside then meets the
+    // lowest first and drops the others (fits that landed at one g from several starts).
+    v.sort_by(|a, b| {
+        ((a.0 - g_hat) * dir)
+            .total_cmp(&((b.0 - g_hat) * dir))
+            .then(b.1.total_cmp(&a.1))
+    });
     let mut keep = Vec::with_capacity(v.len());
     let mut min_out = f64::INFINITY;
     for &(c, d) in v.iter().rev() {
@@ -1091,6 +1120,51 @@ mod tests {
         assert!((c - 0.5).abs() < 1e-12, "{c}");
         // Never crosses.
         assert!(crossing(&pts[..2], t).is_none());
+    }
+
+    /// The envelope as a table: (points as (g, Δ), side) → kept points, nearest first.
+    #[test]
+    fn envelope_keeps_the_lowest_point_outward_as_a_table() {
+        let point = |(c, d): (f64, f64)| ProfilePoint {
+            value: c,
+            coord: c,
+            delta: d,
+            params: vec![],
+            fits: 1,
+            retried: false,
+            termination: Termination::ConvergedStep,
+            failure: None,
+        };
+        type Row = (&'static [(f64, f64)], f64, &'static [(f64, f64)]);
+        let rows: [Row; 6] = [
+            // A rising profile: every point kept, nearest first.
+            (
+                &[(1.3, 2.0), (1.1, 0.5), (1.6, 4.0)],
+                1.0,
+                &[(1.1, 0.5), (1.3, 2.0), (1.6, 4.0)],
+            ),
+            // A point above one farther out stopped short of its optimum: dropped.
+            (
+                &[(1.1, 0.5), (1.3, 5.0), (1.6, 4.0)],
+                1.0,
+                &[(1.1, 0.5), (1.6, 4.0)],
+            ),
+            // Points on the other side of ĝ belong to the other side.
+            (&[(0.8, 1.0), (1.2, 1.0)], 1.0, &[(1.2, 1.0)]),
+            (
+                &[(0.8, 1.0), (1.2, 1.0), (0.5, 3.0)],
+                -1.0,
+                &[(0.8, 1.0), (0.5, 3.0)],
+            ),
+            // Fits that landed at one g: the lowest kept, whatever their order.
+            (&[(1.3, 2.8), (1.3, 2.4), (1.3, 2.8)], 1.0, &[(1.3, 2.4)]),
+            // A failed point (NaN) is no point.
+            (&[(1.3, f64::NAN), (1.1, 0.5)], 1.0, &[(1.1, 0.5)]),
+        ];
+        for (pts, dir, want) in rows {
+            let p: Vec<ProfilePoint> = pts.iter().copied().map(point).collect();
+            assert_eq!(envelope(&p, 1.0, dir), want.to_vec(), "{pts:?} dir {dir}");
+        }
     }
 
     #[test]

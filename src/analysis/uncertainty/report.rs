@@ -10,7 +10,6 @@ use serde_json::json;
 
 use super::calibrate::{bartlett, Calibration};
 use super::combos::{well_determined, Combination};
-use super::constrained::{Predicted, Quantity};
 use super::predict::{prediction_band, prediction_intervals, BandPoint, PredictedInterval};
 use super::profile::{profile_constants, wald_se, ConstantProfile};
 use super::{fit_reference, reference_from, starts, Context, Reference, Thresholds};
@@ -256,18 +255,7 @@ pub fn core(
         let t1 = Instant::now();
         let (th, cal) = if pc.calibrate > 0 {
             let cons = calibration_constants(ctx, &reference);
-            let qs: Vec<(String, Quantity)> = loads
-                .iter()
-                .map(|l| {
-                    (
-                        format!("rupture time at {} MPa", l.stress_mpa),
-                        Quantity::Prediction {
-                            load: *l,
-                            what: Predicted::LnRuptureTime,
-                        },
-                    )
-                })
-                .collect();
+            let qs = super::calibrate::rupture_time_quantities(loads);
             let cal = bartlett(ctx, &reference, &cons, &qs, pc.calibrate, pc.seed, hooks)?;
             (
                 (
