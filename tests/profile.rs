@@ -237,26 +237,22 @@ fn profile_writes_its_contract_on_the_seed_data() {
     assert!(md.contains("## Constants") && md.contains("## What the data determine"));
 }
 
-/// Specimens-world set 90014 (6 specimens at 96–126 MPa, 126 tested twice): every held fit
-/// on A's lower side, warm-started from the point before and from the optimum, stopped
-/// where it began (`plateau`, every other constant unmoved), and A's 95 % interval
-/// [5.54e-9, 7.76e-9] (χ² thresholds) missed the true 4.08e-9. With the cold retry of the
-/// hierarchical profile it holds the truth, found in the coverage run (seeds 90001–90056).
-#[test]
-fn a_hierarchical_profile_point_stuck_at_its_start_is_refitted_cold() {
+/// `profile` (16 starts, χ² thresholds, 2 threads) on the specimens-world set of `seed`, its
+/// `[profile]` table completed by `extra`: the folder (output in `out`) and the set.
+fn profile_specimens_set(seed: u64, extra: &str) -> (TempDir, creepfit::synth::SynthSet) {
     let dir = TempDir::new().unwrap();
     let set = creepfit::synth::generate_in(
-        "set-90014",
+        &format!("set-{seed}"),
         "none",
         None,
-        90014,
+        seed,
         creepfit::synth::World::Specimens,
     )
     .unwrap();
     creepfit::synth::write_set(&set, dir.path()).unwrap();
     let cfg = dir.path().join("config.toml");
     let text = std::fs::read_to_string(&cfg).unwrap()
-        + "\n[profile]\nstarts = 16\nseed = 90014\ncalibrate = 0\n";
+        + &format!("\n[profile]\nstarts = 16\nseed = {seed}\ncalibrate = 0\n{extra}");
     std::fs::write(&cfg, text).unwrap();
     let out = dir.path().join("out");
     let o = creepfit(&[
@@ -268,6 +264,18 @@ fn a_hierarchical_profile_point_stuck_at_its_start_is_refitted_cold() {
         "2",
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    (dir, set)
+}
+
+/// Specimens-world set 90014 (6 specimens at 96–126 MPa, 126 tested twice): every held fit
+/// on A's lower side, warm-started from the point before and from the optimum, stopped
+/// where it began (`plateau`, every other constant unmoved), and A's 95 % interval
+/// [5.54e-9, 7.76e-9] (χ² thresholds) missed the true 4.08e-9. With the cold retry of the
+/// hierarchical profile it holds the truth, found in the coverage run (seeds 90001–90056).
+#[test]
+fn a_hierarchical_profile_point_stuck_at_its_start_is_refitted_cold() {
+    let (dir, set) = profile_specimens_set(90014, "");
+    let out = dir.path().join("out");
     let text = std::fs::read_to_string(out.join("intervals.csv")).unwrap();
     let a: Vec<&str> = text
         .lines()
@@ -292,30 +300,8 @@ fn a_hierarchical_profile_point_stuck_at_its_start_is_refitted_cold() {
 /// must reach that member.
 #[test]
 fn a_hierarchical_quantity_search_stuck_at_its_warm_starts_is_refitted_cold() {
-    let dir = TempDir::new().unwrap();
-    let set = creepfit::synth::generate_in(
-        "set-90016",
-        "none",
-        None,
-        90016,
-        creepfit::synth::World::Specimens,
-    )
-    .unwrap();
-    creepfit::synth::write_set(&set, dir.path()).unwrap();
-    let cfg = dir.path().join("config.toml");
-    let text = std::fs::read_to_string(&cfg).unwrap()
-        + "\n[profile]\nstarts = 16\nseed = 90016\ncalibrate = 0\npredict_stress_MPa = [85]\n";
-    std::fs::write(&cfg, text).unwrap();
+    let (dir, _) = profile_specimens_set(90016, "predict_stress_MPa = [85]\n");
     let out = dir.path().join("out");
-    let o = creepfit(&[
-        "profile",
-        cfg.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--threads",
-        "2",
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     let q = summary["predictions"][0]["quantities"]
