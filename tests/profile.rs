@@ -62,8 +62,7 @@ fn profile_writes_its_contract_on_the_seed_data() {
         ("Kc", 1e-6, 3e-5),
         ("C", 3.0, 10.0),
     ];
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let summary: serde_json::Value = json(&out.join("summary.json"));
     let rows: Vec<Vec<String>> = lines
         .map(|l| l.split(',').map(String::from).collect())
         .collect();
@@ -302,8 +301,7 @@ fn a_hierarchical_profile_point_stuck_at_its_start_is_refitted_cold() {
 fn a_hierarchical_quantity_search_stuck_at_its_warm_starts_is_refitted_cold() {
     let (dir, _) = profile_specimens_set(90016, "predict_stress_MPa = [85]\n");
     let out = dir.path().join("out");
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let summary: serde_json::Value = json(&out.join("summary.json"));
     let q = summary["predictions"][0]["quantities"]
         .as_array()
         .unwrap()
@@ -344,8 +342,7 @@ fn a_ridge_profile_follows_the_ridge_to_its_end() {
         out.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let summary: serde_json::Value = json(&out.join("summary.json"));
     let b = summary["constants"]
         .as_array()
         .unwrap()
