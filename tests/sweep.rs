@@ -747,6 +747,23 @@ fn a_sweep_loses_no_start_at_the_horizons_edge() {
     assert_eq!(s["failed"], 0, "{s}");
 }
 
+/// A sweep loses no start whose line toward the guess holds no evaluable point. On a
+/// generated single-crystal-like set (`tests/data/far_sc_21`: `scripts/far_material.py 21
+/// tests/data/far_sc_21`, 17 theta-projection curves at 720–1080 °C, `starts = 40`) the guess
+/// ruptures the 720 °C, 750 MPa curve within the integration horizon, but 0.1 % of the box
+/// away toward most starts it does not: pulled toward the guess alone, 2 of the 41 starts
+/// stayed unevaluable and were lost (13 of 101 with `starts = 100`); toward the nearest
+/// evaluable starts as well, none is.
+#[test]
+fn a_sweep_loses_no_start_whose_anchor_sits_on_the_edge() {
+    let d = TempDir::new().unwrap();
+    let cfg = d.path().join("config.toml");
+    std::fs::write(&cfg, data_config("far_sc_21", "config.toml")).unwrap();
+    let s = sweep_losing_little(&cfg, &d.path().join("sweep"), 41);
+    assert_eq!(s["failed"], 0, "{s}");
+    assert!(s["repaired_starts"].as_array().unwrap().len() >= 30, "{s}");
+}
+
 /// `fit` started at the best constants of a likelihood sweep ends there or better: each
 /// likelihood fit goes both ways (white reading errors first, and directly), as `diagnose`
 /// fits a fresh start. With the white path alone the fit led away from the optimum: on the

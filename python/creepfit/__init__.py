@@ -37,9 +37,11 @@ __all__ = [
     "CreepfitWarning",
     "Diagnosis",
     "FitResult",
+    "HoldoutResult",
     "SweepResult",
     "diagnose",
     "fit",
+    "holdout",
     "predict",
     "sweep",
 ]
@@ -227,6 +229,33 @@ class SweepResult:
                 f"distinct_minima={s.get('distinct_minima')})")
 
 
+class HoldoutResult:
+    """What ``creepfit holdout`` writes (the plots apart): how well a calibration predicts the
+    tests it has not seen, beside the classical time–temperature parameters.
+
+    Attributes:
+        tests: holdout.csv (one row per held-out test: measured and predicted rupture time,
+            creepfit's and every baseline's log10 error, the curve's error up to the predicted
+            rupture; the 95 % interval columns with ``intervals=True``).
+        constants: constants.csv of the training fit.
+        summary: summary.json (each method's mean |log10 error|, ``one_to_beat``, creepfit
+            against each baseline with its 95 % interval over the test conditions, …).
+        warnings: the library's warnings, one line each.
+    """
+
+    def __init__(self, out: Mapping[str, str], warnings: List[str]):
+        self.tests: pd.DataFrame = _frame(out["holdout"])
+        self.constants: pd.DataFrame = _frame(out["constants"])
+        self.summary: Dict[str, Any] = json.loads(out["summary"])
+        self.warnings: List[str] = warnings
+
+    def __repr__(self) -> str:
+        s = self.summary
+        best = (s.get("one_to_beat") or {}).get("name")
+        return (f"HoldoutResult(tests={s.get('tests')}, creepfit="
+                f"{s.get('model_mean_abs_log10_err')}, one_to_beat={best!r})")
+
+
 class Diagnosis(dict):
     """diagnosis.json as a dict (verdict, cause, base, candidates, …), with the candidates
     as a table."""
@@ -337,6 +366,51 @@ def diagnose(
     d = Diagnosis(json.loads(out["diagnosis"]))
     d.warnings = _warn(warns)
     return d
+
+
+def holdout(
+    config: Config,
+    curves: Any = None,
+    ruptures: Any = None,
+    *,
+    temperature: Optional[float] = None,
+    campaign: Optional[str] = None,
+    starts: Optional[int] = None,
+    seed: Optional[int] = None,
+    intervals: Optional[bool] = None,
+    threads: Optional[int] = None,
+    progress: Progress = True,
+) -> HoldoutResult:
+    """``creepfit holdout``: fit on every test but those left out, predict those, and compare
+    with Larson–Miller, Orr–Sherby–Dorn, Manson–Haferd (and Wilshire where tensile strengths
+    are given) fitted to the same training rupture times. In memory: no journal, no output
+    folder, no plots.
+
+    Args:
+        temperature: leave out every test at this temperature, °C (``--temperature``).
+        campaign: or every test of this campaign: specimen labels ``NAME`` or ``NAME-…``
+            (``--campaign``). Exactly one of the two.
+        starts, seed: the training fit's Latin-hypercube starts and their seed (default:
+            ``[sweep]``'s).
+        intervals: add each held-out life's 95 % intervals (``--intervals``; default:
+            ``[predict]``'s).
+        threads: worker threads (default: all cores).
+        progress: a bar (True; the elapsed time), a callback ``(done, total)``, or nothing.
+    """
+    if (temperature is None) == (campaign is None):
+        raise CreepfitError("give the temperature or the campaign to leave out (one of them)")
+    text, kind = _config(config)
+    c, r = _tables(curves, ruptures)
+    cb, close = _progress(progress, "holdout", "s")
+    try:
+        out, warns = _native.holdout(
+            text, kind, c, r, None if temperature is None else float(temperature),
+            None if campaign is None else str(campaign), starts, seed,
+            None if intervals is None else bool(intervals), threads, cb,
+        )
+    finally:
+        close()
+    return HoldoutResult(out, _warn(warns))
 
 
 def _constants(constants: Any) -> Tuple[str, Optional[str]]:

@@ -58,3 +58,16 @@ def predict(
     tests: Optional[str] = None,
     tests_name: Optional[str] = None,
 ) -> _Outputs: ...
+def holdout(
+    config: str,
+    kind: str,
+    curves: Optional[str] = None,
+    ruptures: Optional[str] = None,
+    temperature: Optional[float] = None,
+    campaign: Optional[str] = None,
+    starts: Optional[int] = None,
+    seed: Optional[int] = None,
+    intervals: Optional[bool] = None,
+    threads: Optional[int] = None,
+    progress: _Progress = None,
+) -> _Outputs: ...

@@ -628,9 +628,76 @@ fn predict(
     })
 }
 
+/// `creepfit holdout`: fit without the tests left out (`temperature`, °C, or `campaign`, a
+/// specimen label's prefix; exactly one), predict them, compare with the classical baselines.
+/// Returns holdout.csv, the training fit's constants.csv and summary.json's texts; in memory:
+/// no journal, no output folder, no plots.
+#[pyfunction]
+#[pyo3(signature = (config, kind, curves=None, ruptures=None, temperature=None, campaign=None, starts=None, seed=None, intervals=None, threads=None, progress=None))]
+#[allow(clippy::too_many_arguments)]
+fn holdout(
+    py: Python<'_>,
+    config: String,
+    kind: &str,
+    curves: Option<String>,
+    ruptures: Option<String>,
+    temperature: Option<f64>,
+    campaign: Option<String>,
+    starts: Option<usize>,
+    seed: Option<u64>,
+    intervals: Option<bool>,
+    threads: Option<usize>,
+    progress: Option<Bound<'_, PyAny>>,
+) -> PyResult<Outputs> {
+    let src = Source::new(kind, config)?;
+    let tables = tables_of(curves, ruptures)?;
+    let left_out = match (temperature, campaign) {
+        (Some(t), None) => creepfit::holdout::LeftOut::Temperature(t),
+        (None, Some(name)) => creepfit::holdout::LeftOut::Campaign(name),
+        _ => {
+            return Err(CreepfitError::new_err(
+                "give the temperature or the campaign to leave out (one of them)",
+            ))
+        }
+    };
+    let cli = Overrides {
+        starts,
+        seed,
+        predict_intervals: intervals,
+        run: RunOptions {
+            threads,
+            ..RunOptions::default()
+        },
+        ..Overrides::default()
+    };
+    run_detached(py, progress.as_ref(), move |_| {
+        let mut warnings = Vec::new();
+        let (cfg, data) = resolve(&src, &cli, tables.as_ref(), &mut warnings)?;
+        let h = with_threads(cfg.run.threads, || {
+            creepfit::holdout::holdout(&cfg, &data, &left_out, cfg.predict.intervals)
+        })?;
+        let mut out = HashMap::new();
+        let (h_cols, rows) = creepfit::holdout::csv_table(&h);
+        let h_cols: Vec<&str> = h_cols.iter().map(String::as_str).collect();
+        out.insert("holdout", tables::csv_text(&h_cols, rows.iter()));
+        let constants = tables::constants_rows(
+            h.fit.model.as_ref(),
+            &h.fit.space,
+            &h.fit.fits[h.fit.best].params,
+            h.t_ref,
+        );
+        out.insert(
+            "constants",
+            tables::csv_text(&tables::CONSTANTS_COLUMNS, constants.iter()),
+        );
+        out.insert("summary", json(&creepfit::holdout::summary_json(&cfg, &h)));
+        Ok((out, warnings))
+    })
+}
+
 /// The creepfit library: calibration of creep-damage constitutive equations.
 #[pymodule]
 mod _native {
     #[pymodule_export]
-    use super::{diagnose, fit, predict, sweep, CreepfitError};
+    use super::{diagnose, fit, holdout, predict, sweep, CreepfitError};
 }

@@ -202,3 +202,69 @@ def test_diagnose_equals_cli(run_cli, tmp_path, curves, ruptures):
     for c in cli_d["candidates"]:
         assert table.loc[c["name"], "objective"] == c["objective"]
         assert table.loc[c["name"], "significant"] == c["significant"]
+
+
+@pytest.fixture(scope="module")
+def campaigns(tmp_path_factory, root):
+    """The seed's 560 and 590 °C data (configs/cmv-joint.toml: Arrhenius laws) with a
+    specimen column: the highest stress at each temperature is campaign Q, the others P.
+    (folder with h.toml, c.csv, r.csv; the curves and ruptures as DataFrames)."""
+    d = tmp_path_factory.mktemp("campaigns")
+    curves = pd.read_csv(root / "data" / "creep_cmv.csv")
+    ruptures = pd.read_csv(root / "data" / "lifetimes.csv")
+    top = ruptures.groupby("temperature_C")["stress_MPa"].transform("max")
+    label = {(t, s): ("Q-1" if s == m else f"P-{s:g}")
+             for t, s, m in zip(ruptures["temperature_C"], ruptures["stress_MPa"], top)}
+    for df in (curves, ruptures):
+        df["specimen"] = [label[(t, s)] for t, s in zip(df["temperature_C"], df["stress_MPa"])]
+    curves.to_csv(d / "c.csv", index=False)
+    ruptures.to_csv(d / "r.csv", index=False)
+    text = (root / "configs" / "cmv-joint.toml").read_text()
+    (d / "h.toml").write_text(text.replace('"../data/creep_cmv.csv"', '"c.csv"')
+                              .replace('"../data/lifetimes.csv"', '"r.csv"'))
+    return d, curves, ruptures
+
+
+def test_holdout_equals_cli(run_cli, tmp_path, campaigns):
+    d, curves, ruptures = campaigns
+    run_cli("holdout", d / "h.toml", "--campaign", "Q", "--starts", "1", "--out", tmp_path)
+    calls = []
+    res = creepfit.holdout(d / "h.toml", curves, ruptures, campaign="Q", starts=1,
+                           progress=lambda *a: calls.append(a))
+    assert calls
+    assert_same_table(read_table(tmp_path / "holdout.csv"), res.tests, "holdout.csv")
+    assert_same_table(read_table(tmp_path / "constants.csv"), res.constants, "constants.csv")
+    cli_summary = json.loads((tmp_path / "summary.json").read_text())
+    assert res.summary == cli_summary
+    # One test of campaign Q at each temperature, every classical baseline fitted to the
+    # other four lives at both temperatures (Wilshire needs tensile strengths).
+    assert res.tests["temperature_C"].tolist() == [560.0, 590.0]
+    assert res.tests["specimen"].tolist() == ["Q-1", "Q-1"]
+    assert res.summary["held_out"] == {"kind": "campaign", "campaign": "Q"}
+    assert res.summary["one_to_beat"]["name"] in ("Larson–Miller", "Orr–Sherby–Dorn",
+                                                  "Manson–Haferd")
+    err = res.tests["model_log10_err"].abs().mean()
+    assert err == pytest.approx(res.summary["model_mean_abs_log10_err"], rel=1e-12)
+    # The configuration's own files give the same.
+    again = creepfit.holdout(d / "h.toml", campaign="Q", starts=1, progress=False)
+    pd.testing.assert_frame_equal(again.tests, res.tests, check_exact=True)
+
+
+def test_holdout_intervals_and_errors(run_cli, tmp_path, campaigns):
+    d, curves, ruptures = campaigns
+    run_cli("holdout", d / "h.toml", "--campaign", "Q", "--starts", "1", "--intervals",
+            "--out", tmp_path)
+    res = creepfit.holdout(d / "h.toml", curves, ruptures, campaign="Q", starts=1,
+                           intervals=True, progress=False)
+    assert_same_table(read_table(tmp_path / "holdout.csv"), res.tests, "holdout.csv")
+    assert "rupture_time_lo95_h" in res.tests.columns
+    assert res.summary == json.loads((tmp_path / "summary.json").read_text())
+    with pytest.raises(creepfit.CreepfitError, match="one of them"):
+        creepfit.holdout(d / "h.toml", curves, ruptures, progress=False)
+    with pytest.raises(creepfit.CreepfitError, match="one of them"):
+        creepfit.holdout(d / "h.toml", curves, ruptures, temperature=560, campaign="Q",
+                         progress=False)
+    # The library's own refusal, as the command line words it.
+    refused = "--campaign R: no test.s specimen is of that campaign"
+    with pytest.raises(creepfit.CreepfitError, match=refused):
+        creepfit.holdout(d / "h.toml", curves, ruptures, campaign="R", progress=False)

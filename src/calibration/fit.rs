@@ -644,14 +644,24 @@ pub fn replicate_scatter(curves: &[Curve]) -> (usize, Option<f64>) {
 /// Halvings of the distance to the anchor tried for a start that cannot be evaluated.
 pub const REPAIR_STEPS: usize = 10;
 
+/// Evaluable starts a start tries after the anchor ([`repair_starts`]), nearest first.
+pub const REPAIR_TARGETS: usize = 4;
+
 /// Starts that cannot be evaluated where they were drawn (a curve that does not rupture
 /// within the horizon, or a simulation that fails: measured, 130 of 250 fits of a sweep of
 /// the Kachanov–Rabotnov model over its default box ended at their start) are pulled toward
 /// `anchor` (an evaluable point: the initial guess, the configuration's start, or
-/// [`evaluable_anchor`]) along the straight line in the optimiser's unit box, halving the distance up to [`REPAIR_STEPS`] times; the first
-/// evaluable point replaces the start. A start stays where it was when none is (or the
-/// anchor itself cannot be evaluated): its fit is then reported as failed. Returns the
-/// indices of the moved starts (summary.json `repaired_starts`).
+/// [`evaluable_anchor`]) along the straight line in the optimiser's unit box, halving the
+/// distance up to [`REPAIR_STEPS`] times; the first evaluable point replaces the start.
+/// Where no point on that line is evaluable, the same is tried toward the
+/// [`REPAIR_TARGETS`] nearest of the starts that are evaluable (as drawn, or moved toward
+/// the anchor): an anchor can sit on the edge of the evaluable region, where a step of 0.1 %
+/// of the box toward it still leaves a curve unruptured within the horizon (measured: the
+/// guess of a generated single-crystal-like set, `scripts/far_material.py 21`, a sweep of
+/// 101 starts lost 13 so). A start stays where it was when no line holds an evaluable point
+/// (or the anchor itself cannot be evaluated): its fit is then reported as failed. Returns
+/// the indices of the moved starts (summary.json `repaired_starts`). Which start moves where
+/// does not depend on the order the threads finish in.
 pub fn repair_starts(
     model: &dyn Model,
     curves: &[Curve],
@@ -669,21 +679,57 @@ pub fn repair_starts(
     if bad.is_empty() || !ok(anchor) {
         return vec![];
     }
-    let moved: Vec<(usize, Option<Vec<f64>>)> = bad
-        .into_par_iter()
-        .map(|i| {
-            let us = space.to_unit(&starts[i]);
-            let mut f = 1.0;
-            for _ in 0..REPAIR_STEPS {
-                f *= 0.5;
-                let u: Vec<f64> = ua.iter().zip(&us).map(|(a, s)| a + f * (s - a)).collect();
-                let mut x = starts[i].clone();
-                space.from_unit(&u, &mut x);
-                if ok(&x) {
-                    return (i, Some(x));
-                }
+    // The first evaluable point on the line from `start` toward `target` (unit box).
+    let toward = |start: &[f64], target: &[f64]| -> Option<Vec<f64>> {
+        let us = space.to_unit(start);
+        let mut f = 1.0;
+        for _ in 0..REPAIR_STEPS {
+            f *= 0.5;
+            let u: Vec<f64> = target
+                .iter()
+                .zip(&us)
+                .map(|(a, s)| a + f * (s - a))
+                .collect();
+            let mut x = start.to_vec();
+            space.from_unit(&u, &mut x);
+            if ok(&x) {
+                return Some(x);
             }
-            (i, None)
+        }
+        None
+    };
+    let moved: Vec<(usize, Option<Vec<f64>>)> = bad
+        .par_iter()
+        .map(|&i| (i, toward(&starts[i], &ua)))
+        .collect();
+    // The evaluable starts after the first pass, in the unit box, by index.
+    let fixed: Vec<(usize, Vec<f64>)> = (0..starts.len())
+        .filter_map(|i| match moved.iter().find(|(j, _)| *j == i) {
+            Some((_, Some(x))) => Some((i, space.to_unit(x))),
+            Some((_, None)) => None,
+            None => Some((i, space.to_unit(&starts[i]))),
+        })
+        .collect();
+    let moved: Vec<(usize, Option<Vec<f64>>)> = moved
+        .into_par_iter()
+        .map(|(i, x)| {
+            if x.is_some() {
+                return (i, x);
+            }
+            let us = space.to_unit(&starts[i]);
+            let mut near: Vec<(f64, usize, &Vec<f64>)> = fixed
+                .iter()
+                .map(|(j, u)| {
+                    let d: f64 = u.iter().zip(&us).map(|(a, b)| (a - b).powi(2)).sum();
+                    (d, *j, u)
+                })
+                .collect();
+            near.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            let x = near
+                .iter()
+                .take(REPAIR_TARGETS)
+                .find_map(|(_, _, u)| toward(&starts[i], u));
+            (i, x)
         })
         .collect();
     let mut out = Vec::new();

@@ -4,78 +4,23 @@
 
 use std::path::Path;
 
-use serde_json::json;
-
-use crate::baseline::BaselineKind;
 use crate::config::RunConfig;
 use crate::data::Dataset;
 use crate::error::Result;
-use crate::holdout::{
-    baseline_columns, table, Holdout, LeftOut, RuptureInterval, CURVE_COLUMNS, INTERVAL_COLUMNS,
-};
-use crate::model::objective::mean_abs;
+use crate::holdout::{table, Holdout, LeftOut};
 use crate::predict::diagrams::Diagrams;
 use crate::report::plot::{
     plot_creep_curves, plot_xy, AxisScale, Dash, MarkerShape, Rgb, XyAxes, XyGroup,
 };
-use crate::report::tables::{self, jnum, num, write_csv, write_text};
+use crate::report::tables::{self, write_csv, write_text};
 
 use super::plots_done;
 
 /// Write a finished holdout into `out` and print its table.
 pub fn write(cfg: &RunConfig, data: &Dataset, h: &Holdout, out: &Path) -> Result<()> {
-    let with_intervals = h.tests.iter().any(|t| t.interval.is_some());
     let best = &h.fit.fits[h.fit.best];
-    let specimens = h.tests.iter().any(|t| t.specimen.is_some());
-    let rows: Vec<Vec<String>> = h
-        .tests
-        .iter()
-        .map(|t| {
-            let mut r = vec![
-                num(t.temperature_c),
-                num(t.stress_mpa),
-                num(t.rupture_time_h),
-                num(t.model_rupture_time_h),
-                num(t.lmp_rupture_time_h),
-                num(t.model_log10_err()),
-                num(t.lmp_log10_err()),
-                num(t.curve_rms_pct),
-            ];
-            if with_intervals {
-                let i = t.interval;
-                let f = |g: fn(&RuptureInterval) -> f64| num(i.as_ref().map_or(f64::NAN, g));
-                r.extend([
-                    f(|i| i.pred95.0),
-                    f(|i| i.pred95.1),
-                    f(|i| i.conf95.0),
-                    f(|i| i.conf95.1),
-                    f(|i| i.value_h),
-                ]);
-            }
-            if specimens {
-                r.push(t.specimen.clone().unwrap_or_default());
-            }
-            for k in 1..BaselineKind::ALL.len() {
-                r.push(num(t.baseline_rupture_time_h[k]));
-                r.push(num(t.baseline_log10_err(k)));
-            }
-            r.extend([
-                num(t.predicted_life_pct),
-                t.curve_outcome.as_str().to_string(),
-                t.curve_points.to_string(),
-            ]);
-            r
-        })
-        .collect();
-    let mut header = crate::holdout::LIFE_COLUMNS.to_vec();
-    header.push("curve_rms_pct");
-    if with_intervals {
-        header.extend(INTERVAL_COLUMNS);
-    }
-    let mut header = tables::with_specimen(&header, specimens);
-    let baseline_columns = baseline_columns();
-    header.extend(baseline_columns.iter().map(String::as_str));
-    header.extend(CURVE_COLUMNS);
+    let (header, rows) = crate::holdout::csv_table(h);
+    let header: Vec<&str> = header.iter().map(String::as_str).collect();
     write_csv(&out.join("holdout.csv"), &header, &rows)?;
     tables::write_constants(
         &out.join("constants.csv"),
@@ -84,64 +29,7 @@ pub fn write(cfg: &RunConfig, data: &Dataset, h: &Holdout, out: &Path) -> Result
         &best.params,
         h.t_ref,
     )?;
-    let inside_pred95 = {
-        let (inside, with) = h.inside_pred95();
-        json!({"inside": inside, "tests": with})
-    };
-    let scores = h.scores();
-    let (baselines, one_to_beat) = crate::holdout::scores_json(&scores, &h.baselines);
-    let [complete, early, no_rupture, failed, no_curve] = h.curve_outcomes();
-    let summary = json!({
-        "held_out_temperature_C": h.left_out.temperature_c(),
-        "held_out": match &h.left_out {
-            LeftOut::Temperature(t) => json!({"kind": "temperature", "temperature_C": t}),
-            LeftOut::Campaign(name) => json!({"kind": "campaign", "campaign": name}),
-        },
-        "model": h.fit.model.name(),
-        "objective_kind": cfg.objective.kind,
-        "T_ref_C": h.t_ref,
-        "training_objective": jnum(best.eval.objective),
-        "training_w": best.w,
-        "training_termination": best.lm.termination,
-        "training_lifetime_err_pct": best.lifetime_err_pct.iter().map(|v| jnum(*v)).collect::<Vec<_>>(),
-        "training_caution": h.training_caution(),
-        "specimen_effects_not_fitted": h.effects_left_out,
-        "objective_note": h.objective_note(),
-        "tests": h.tests.len(),
-        "model_mean_abs_log10_err": jnum(h.model_mean_abs_log10()),
-        "lmp_mean_abs_log10_err": jnum(h.lmp_mean_abs_log10()),
-        "inside_pred95": inside_pred95,
-        "interval_scope": h.interval_scope(),
-        "intervals_refit": h.intervals_refit.as_ref().map(|r| json!({
-            "what": "the intervals and ml_rupture_time_h come from the maximum-likelihood refit of the training fit's constants",
-            "neg2ll": jnum(r.neg2ll),
-            "training_fit_neg2ll": jnum(r.given_neg2ll),
-            "delta_neg2ll": jnum(r.delta_neg2ll()),
-            "specimen_effects": r.specimen_effects,
-            "constants": h.fit.model.constants().iter().zip(r.given.iter().zip(&r.params)).map(|(c, (g, v))| json!({
-                "name": c.name, "training_fit": g, "refit": v, "difference": v - g,
-            })).collect::<Vec<_>>(),
-        })),
-        "mean_curve_rms_pct": jnum(mean_abs(&h.tests.iter().map(|t| t.curve_rms_pct).collect::<Vec<_>>())),
-        "larson_miller": match &h.lmp {
-            Ok(l) => json!(l),
-            Err(e) => json!({"error": e}),
-        },
-        "model_tests_predicted": h.model_score().1,
-        "model_mean_log10_err": jnum(scores.model_bias()),
-        "baselines": baselines,
-        "one_to_beat": one_to_beat,
-        "creepfit_vs_one_to_beat": h.verdict(),
-        "curve_outcomes": {
-            "complete": complete,
-            "ruptured_early": early,
-            "no_rupture": no_rupture,
-            "failed": failed,
-            "no_curve": no_curve,
-        },
-        "training_temperatures_C": h.training_temperatures_c(),
-        "temperature_extrapolation": h.temperature_extrapolation(),
-    });
+    let summary = crate::holdout::summary_json(cfg, h);
     write_text(
         &out.join("summary.json"),
         &serde_json::to_string_pretty(&summary).expect("JSON of plain values"),
