@@ -703,12 +703,14 @@ pub fn repair_starts(
         .map(|&i| (i, toward(&starts[i], &ua)))
         .collect();
     // The evaluable starts after the first pass, in the unit box, by index.
-    let fixed: Vec<(usize, Vec<f64>)> = (0..starts.len())
-        .filter_map(|i| match moved.iter().find(|(j, _)| *j == i) {
-            Some((_, Some(x))) => Some((i, space.to_unit(x))),
-            Some((_, None)) => None,
-            None => Some((i, space.to_unit(&starts[i]))),
-        })
+    let mut now: Vec<Option<&Vec<f64>>> = starts.iter().map(Some).collect();
+    for (i, x) in &moved {
+        now[*i] = x.as_ref();
+    }
+    let fixed: Vec<(usize, Vec<f64>)> = now
+        .iter()
+        .enumerate()
+        .filter_map(|(i, x)| x.map(|x| (i, space.to_unit(x))))
         .collect();
     let moved: Vec<(usize, Option<Vec<f64>>)> = moved
         .into_par_iter()
