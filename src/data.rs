@@ -961,7 +961,9 @@ fn check_one_temperature(raw: &[RawCurve], path: &Path) -> Result<()> {
         format!(
             "column 'temperature_C': the curves are at {} temperatures ({} °C) and the \
              configuration has no temperature_C filter: one set of constants does not fit \
-             several temperatures; set temperature_C = {} (say) in the configuration",
+             several temperatures; set temperature_C = {} (say) in the configuration, or \
+             give constants a temperature law for one calibration across them (e.g. law = \
+             \"arrhenius\" on A and Kc, docs/TEMPERATURES.md)",
             temps.len(),
             list.join(", "),
             list[0]
@@ -2829,6 +2831,23 @@ mod tests {
             e.contains("matches no curve (the configuration keeps temperature_C = 920 only)"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn several_temperatures_without_a_filter_or_a_law_are_refused_with_both_ways_out() {
+        let dir = tempfile::tempdir().unwrap();
+        let (c, r) = two_temperatures(dir.path());
+        let e = load(&c, &r, &LoadOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with(&format!("{}:", c.display())), "{e}");
+        assert!(
+            e.contains("the curves are at 2 temperatures (720, 920 °C)"),
+            "{e}"
+        );
+        assert!(e.contains("set temperature_C = 720 (say)"), "{e}");
+        assert!(e.contains("law = \"arrhenius\" on A and Kc"), "{e}");
+        assert!(!e.contains('\n'), "one line: {e}");
     }
 
     #[test]

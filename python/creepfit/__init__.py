@@ -38,11 +38,13 @@ __all__ = [
     "Diagnosis",
     "FitResult",
     "HoldoutResult",
+    "ProfileResult",
     "SweepResult",
     "diagnose",
     "fit",
     "holdout",
     "predict",
+    "profile",
     "sweep",
 ]
 
@@ -256,6 +258,34 @@ class HoldoutResult:
                 f"{s.get('model_mean_abs_log10_err')}, one_to_beat={best!r})")
 
 
+class ProfileResult:
+    """What ``creepfit profile`` writes (the plots apart): how sure the constants and the
+    predictions are.
+
+    Attributes:
+        intervals: intervals.csv (per constant: the maximum-likelihood value, its 68 % and
+            95 % profile intervals, the identifiability class, the given value and whether the
+            95 % interval holds it, the calibrated thresholds).
+        profiles: profiles.csv (every profile point: the constant's value, Δ(−2 ln L), status,
+            and the other constants refitted there).
+        summary: summary.json (reference fit, calibration of the thresholds, well-determined
+            combinations, prediction intervals).
+        report: report.md's text.
+        warnings: the library's warnings, one line each.
+    """
+
+    def __init__(self, out: Mapping[str, str], warnings: List[str]):
+        self.intervals: pd.DataFrame = _frame(out["intervals"])
+        self.profiles: pd.DataFrame = _frame(out["profiles"])
+        self.summary: Dict[str, Any] = json.loads(out["summary"])
+        self.report: str = out["report"]
+        self.warnings: List[str] = warnings
+
+    def __repr__(self) -> str:
+        classes = dict(zip(self.intervals["name"], self.intervals["class"]))
+        return f"ProfileResult({self.summary.get('name')!r}, {classes})"
+
+
 class Diagnosis(dict):
     """diagnosis.json as a dict (verdict, cause, base, candidates, …), with the candidates
     as a table."""
@@ -433,6 +463,38 @@ def _constants(constants: Any) -> Tuple[str, Optional[str]]:
         "constants: expected a FitResult, a DataFrame (name, value), a dict or a path, "
         f"not {type(constants).__name__}"
     )
+
+
+def profile(
+    config: Config,
+    curves: Any = None,
+    ruptures: Any = None,
+    *,
+    constants: Any = None,
+    threads: Optional[int] = None,
+    progress: Progress = True,
+) -> ProfileResult:
+    """``creepfit profile``: the profile likelihood of every constant, its 68 % and 95 %
+    intervals with thresholds calibrated by a parametric bootstrap, the identifiability of
+    each, the well-determined combinations and the prediction intervals. In memory: no
+    journal, no output folder, no plots.
+
+    Args:
+        constants: where the maximum-likelihood fit starts (``--constants``): a
+            :class:`FitResult`, a DataFrame (name, value), a dict or a constants.csv path;
+            default: a multistart.
+        threads: worker threads (default: all cores).
+        progress: a bar (True; the elapsed time), a callback ``(done, total)``, or nothing.
+    """
+    text, kind = _config(config)
+    c, r = _tables(curves, ruptures)
+    ctext, cname = (None, None) if constants is None else _constants(constants)
+    cb, close = _progress(progress, "profile", "s")
+    try:
+        out, warns = _native.profile(text, kind, ctext, cname, c, r, threads, cb)
+    finally:
+        close()
+    return ProfileResult(out, _warn(warns))
 
 
 def predict(

@@ -71,3 +71,13 @@ def holdout(
     threads: Optional[int] = None,
     progress: _Progress = None,
 ) -> _Outputs: ...
+def profile(
+    config: str,
+    kind: str,
+    constants: Optional[str] = None,
+    constants_name: Optional[str] = None,
+    curves: Optional[str] = None,
+    ruptures: Optional[str] = None,
+    threads: Optional[int] = None,
+    progress: _Progress = None,
+) -> _Outputs: ...

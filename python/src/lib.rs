@@ -695,9 +695,72 @@ fn holdout(
     })
 }
 
+/// `creepfit profile`: profile likelihoods of every constant, their intervals, the
+/// well-determined combinations and the prediction intervals, from the maximum-likelihood fit
+/// started at `constants` (a constants table's CSV text, named `constants_name` in errors) or,
+/// without it, from a multistart. Returns intervals.csv, profiles.csv, summary.json and
+/// report.md's texts; in memory: no journal, no output folder, no plots.
+#[pyfunction]
+#[pyo3(signature = (config, kind, constants=None, constants_name=None, curves=None, ruptures=None, threads=None, progress=None))]
+#[allow(clippy::too_many_arguments)]
+fn profile(
+    py: Python<'_>,
+    config: String,
+    kind: &str,
+    constants: Option<String>,
+    constants_name: Option<String>,
+    curves: Option<String>,
+    ruptures: Option<String>,
+    threads: Option<usize>,
+    progress: Option<Bound<'_, PyAny>>,
+) -> PyResult<Outputs> {
+    let src = Source::new(kind, config)?;
+    let tables = tables_of(curves, ruptures)?;
+    let cli = Overrides {
+        run: RunOptions {
+            threads,
+            ..RunOptions::default()
+        },
+        ..Overrides::default()
+    };
+    run_detached(py, progress.as_ref(), move |_| {
+        let mut warnings = Vec::new();
+        let (cfg, data) = resolve(&src, &cli, tables.as_ref(), &mut warnings)?;
+        let run = with_threads(cfg.run.threads, || {
+            let model = cfg.build_model()?;
+            let given = match &constants {
+                Some(text) => {
+                    let name = PathBuf::from(constants_name.as_deref().unwrap_or(CONSTANTS_NAME));
+                    Some(tables::read_constants_bytes(
+                        &name,
+                        text.as_bytes(),
+                        &cfg,
+                        model.as_ref(),
+                    )?)
+                }
+                None => None,
+            };
+            creepfit::uncertainty::report::check(&cfg, &data)?;
+            creepfit::uncertainty::report::run(&cfg, &data, given.as_deref(), &cfg.profile)
+        })?;
+        use creepfit::uncertainty::report as r;
+        let mut out = HashMap::new();
+        out.insert(
+            "intervals",
+            tables::csv_text(&r::INTERVAL_HEADER, r::interval_rows(&run).iter()),
+        );
+        let (h, rows) = r::profiles_table(&cfg, &run);
+        let h: Vec<&str> = h.iter().map(String::as_str).collect();
+        out.insert("profiles", tables::csv_text(&h, rows.iter()));
+        out.insert("summary", json(&r::summary(&cfg, &run)));
+        out.insert("report", r::report_md(&cfg, &run));
+        Ok((out, warnings))
+    })
+}
+
 /// The creepfit library: calibration of creep-damage constitutive equations.
 #[pymodule]
 mod _native {
     #[pymodule_export]
-    use super::{diagnose, fit, holdout, predict, sweep, CreepfitError};
+    use super::{diagnose, fit, holdout, predict, profile, sweep, CreepfitError};
 }

@@ -268,3 +268,32 @@ def test_holdout_intervals_and_errors(run_cli, tmp_path, campaigns):
     refused = "--campaign R: no test.s specimen is of that campaign"
     with pytest.raises(creepfit.CreepfitError, match=refused):
         creepfit.holdout(d / "h.toml", curves, ruptures, campaign="R", progress=False)
+
+
+def test_profile_equals_cli(run_cli, cli_fit, tmp_path, curves, ruptures):
+    """`profile` from the fit's constants: every interval, every profile point, the summary
+    and the report equal the binary's; the constants as a FitResult give the same."""
+    run_cli("profile", CONFIG, "--constants", cli_fit / "constants.csv", "--out", tmp_path)
+    calls = []
+    res = creepfit.profile(CONFIG, curves, ruptures, constants=cli_fit / "constants.csv",
+                           progress=lambda *a: calls.append(a))
+    assert calls
+    assert_same_table(read_table(tmp_path / "intervals.csv"), res.intervals, "intervals.csv")
+    assert_same_table(read_table(tmp_path / "profiles.csv"), res.profiles, "profiles.csv")
+    assert res.summary == json.loads((tmp_path / "summary.json").read_text())
+    assert res.report == (tmp_path / "report.md").read_text()
+    # Each constant's maximum-likelihood value lies inside its 95 % interval, and is the
+    # value of its profile's optimum row.
+    iv = res.intervals.set_index("name")
+    assert list(iv.index) == ["A", "B", "Hstar", "h", "Kc", "C"]
+    assert ((iv["lo95"] <= iv["value"]) & (iv["value"] <= iv["hi95"])).all()
+    opt = res.profiles[res.profiles["side"] == "optimum"].set_index("name")
+    assert (opt["value"] == iv["value"]).all()
+    assert (iv["value_source"] == "ml_refit").all()
+    # The constants as the package's own fit result: the same computation.
+    fitted = creepfit.fit(CONFIG, curves, ruptures)
+    again = creepfit.profile(CONFIG, curves, ruptures, constants=fitted, progress=False)
+    pd.testing.assert_frame_equal(again.intervals, res.intervals, check_exact=True)
+    # A constants table that names no KHD constant is refused, the table named.
+    with pytest.raises(creepfit.CreepfitError, match="<constants>"):
+        creepfit.profile(CONFIG, curves, ruptures, constants={"X": 1.0}, progress=False)

@@ -655,7 +655,7 @@ pub const REPAIR_TARGETS: usize = 4;
 /// distance up to [`REPAIR_STEPS`] times; the first evaluable point replaces the start.
 /// Where no point on that line is evaluable, the same is tried toward the
 /// [`REPAIR_TARGETS`] nearest of the starts that are evaluable (as drawn, or moved toward
-/// the anchor): an anchor can sit on the edge of the evaluable region, where a point 0.1 %
+/// the anchor; the anchor itself, where it is one of the starts, is not tried twice): an anchor can sit on the edge of the evaluable region, where a point 0.1 %
 /// of the way out of it still leaves a curve unruptured within the horizon (measured: the
 /// guess of a generated single-crystal-like set, `scripts/far_material.py 21`, a sweep of
 /// 101 starts lost 13 so). A start stays where it was when no line holds an evaluable point
@@ -707,10 +707,12 @@ pub fn repair_starts(
     for (i, x) in &moved {
         now[*i] = x.as_ref();
     }
+    // The anchor itself (a sweep's first start is its guess) is left out: its line was tried.
     let fixed: Vec<(usize, Vec<f64>)> = now
         .iter()
         .enumerate()
         .filter_map(|(i, x)| x.map(|x| (i, space.to_unit(x))))
+        .filter(|(_, u)| *u != ua)
         .collect();
     let moved: Vec<(usize, Option<Vec<f64>>)> = moved
         .into_par_iter()

@@ -494,17 +494,11 @@ pub fn interval_rows(run: &ProfileRun) -> Vec<Vec<String>> {
         .collect()
 }
 
-/// Write every output of `creepfit profile` into `out`; plots last. Returns the plots that
-/// could not be written.
-pub fn write_outputs(cfg: &RunConfig, run: &ProfileRun, out: &Path) -> Result<Vec<String>> {
+/// `profiles.csv`: every profile point, the optimum included, with the other constants (the
+/// header, then the rows).
+pub fn profiles_table(cfg: &RunConfig, run: &ProfileRun) -> (Vec<String>, Vec<Vec<String>>) {
     let names: Vec<String> = cfg.constants.iter().map(|c| c.name.clone()).collect();
-    write_csv(
-        &out.join("intervals.csv"),
-        &INTERVAL_HEADER,
-        &interval_rows(run),
-    )?;
-    // profiles.csv: every profile point, the optimum included, with the other constants.
-    let mut header: Vec<&str> = vec![
+    let mut header: Vec<String> = [
         "name",
         "side",
         "value",
@@ -512,8 +506,10 @@ pub fn write_outputs(cfg: &RunConfig, run: &ProfileRun, out: &Path) -> Result<Ve
         "status",
         "fits",
         "termination",
-    ];
-    header.extend(names.iter().map(|s| s.as_str()));
+    ]
+    .map(String::from)
+    .to_vec();
+    header.extend(names);
     let mut rows = Vec::new();
     for p in &run.profiles {
         let mut opt = vec![
@@ -554,6 +550,19 @@ pub fn write_outputs(cfg: &RunConfig, run: &ProfileRun, out: &Path) -> Result<Ve
             }
         }
     }
+    (header, rows)
+}
+
+/// Write every output of `creepfit profile` into `out`; plots last. Returns the plots that
+/// could not be written.
+pub fn write_outputs(cfg: &RunConfig, run: &ProfileRun, out: &Path) -> Result<Vec<String>> {
+    write_csv(
+        &out.join("intervals.csv"),
+        &INTERVAL_HEADER,
+        &interval_rows(run),
+    )?;
+    let (header, rows) = profiles_table(cfg, run);
+    let header: Vec<&str> = header.iter().map(String::as_str).collect();
     write_csv(&out.join("profiles.csv"), &header, &rows)?;
     write_text(
         &out.join("summary.json"),
