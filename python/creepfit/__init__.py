@@ -39,12 +39,14 @@ __all__ = [
     "FitResult",
     "HoldoutResult",
     "ProfileResult",
+    "SimulateResult",
     "SweepResult",
     "diagnose",
     "fit",
     "holdout",
     "predict",
     "profile",
+    "simulate",
     "sweep",
 ]
 
@@ -286,6 +288,32 @@ class ProfileResult:
         return f"ProfileResult({self.summary.get('name')!r}, {classes})"
 
 
+class SimulateResult:
+    """What ``creepfit simulate`` writes (the plot apart): the configured tests simulated at
+    given constants.
+
+    Attributes:
+        curves: curves.csv (every test's trajectory on a dense grid and the measured times up
+            to its end: time h, strain %, the model's state variables).
+        ruptures: ruptures.csv (per test: rupture time h and strain % where it ruptured, the
+            minimum rate %/h, how the simulation ended).
+        objective: objective.json with ``w`` (the eq. 8 objective at that lifetime weight, its
+            normalised residual and the lifetime errors, %), else None.
+        warnings: the library's warnings, one line each.
+    """
+
+    def __init__(self, out: Mapping[str, str], warnings: List[str]):
+        self.curves: pd.DataFrame = _frame(out["curves"])
+        self.ruptures: pd.DataFrame = _frame(out["ruptures"])
+        self.objective: Optional[Dict[str, Any]] = (
+            json.loads(out["objective"]) if "objective" in out else None
+        )
+        self.warnings: List[str] = warnings
+
+    def __repr__(self) -> str:
+        return f"SimulateResult(tests={len(self.ruptures)}, points={len(self.curves)})"
+
+
 class Diagnosis(dict):
     """diagnosis.json as a dict (verdict, cause, base, candidates, …), with the candidates
     as a table."""
@@ -495,6 +523,30 @@ def profile(
     finally:
         close()
     return ProfileResult(out, _warn(warns))
+
+
+def simulate(
+    config: Config,
+    constants: Any = None,
+    curves: Any = None,
+    ruptures: Any = None,
+    *,
+    w: Optional[float] = None,
+) -> SimulateResult:
+    """``creepfit simulate``: every configured test simulated at the constants, to its rupture
+    or the integration horizon.
+
+    Args:
+        constants: a :class:`FitResult`, a DataFrame (name, value), a dict or a
+            constants.csv path; default: the configuration's start values.
+        w: also the eq. 8 objective with this lifetime weight on every curve (``--w``).
+    """
+    text, kind = _config(config)
+    c, r = _tables(curves, ruptures)
+    ctext, cname = (None, None) if constants is None else _constants(constants)
+    out, warns = _native.simulate(text, kind, ctext, cname, c, r,
+                                  None if w is None else float(w))
+    return SimulateResult(out, _warn(warns))
 
 
 def predict(

@@ -81,3 +81,12 @@ def profile(
     threads: Optional[int] = None,
     progress: _Progress = None,
 ) -> _Outputs: ...
+def simulate(
+    config: str,
+    kind: str,
+    constants: Optional[str] = None,
+    constants_name: Optional[str] = None,
+    curves: Optional[str] = None,
+    ruptures: Optional[str] = None,
+    w: Optional[float] = None,
+) -> _Outputs: ...

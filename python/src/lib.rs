@@ -758,9 +758,78 @@ fn profile(
     })
 }
 
+/// `creepfit simulate`: every configured test simulated at the constants (a constants table's
+/// CSV text, named `constants_name` in errors; default: the configuration's start values), to
+/// its rupture or the horizon. Returns curves.csv and ruptures.csv's texts, and
+/// objective.json's with `w` (the eq. 8 objective at that one lifetime weight).
+#[pyfunction]
+#[pyo3(signature = (config, kind, constants=None, constants_name=None, curves=None, ruptures=None, w=None))]
+#[allow(clippy::too_many_arguments)]
+fn simulate(
+    py: Python<'_>,
+    config: String,
+    kind: &str,
+    constants: Option<String>,
+    constants_name: Option<String>,
+    curves: Option<String>,
+    ruptures: Option<String>,
+    w: Option<f64>,
+) -> PyResult<Outputs> {
+    let src = Source::new(kind, config)?;
+    let tables = tables_of(curves, ruptures)?;
+    if let Some(w) = w {
+        if !(0.0..=1.0).contains(&w) {
+            return Err(py_err(Error::Invalid(format!(
+                "w: must be a weight in [0, 1], not {w}"
+            ))));
+        }
+    }
+    run_detached(py, None, move |_| {
+        let mut warnings = Vec::new();
+        let (cfg, data) = resolve(&src, &Overrides::default(), tables.as_ref(), &mut warnings)?;
+        let model = cfg.build_model()?;
+        let params = match &constants {
+            Some(text) => {
+                let name = PathBuf::from(constants_name.as_deref().unwrap_or(CONSTANTS_NAME));
+                tables::read_constants_bytes(&name, text.as_bytes(), &cfg, model.as_ref())?
+            }
+            None => cfg.starts_all_given().ok_or_else(|| {
+                Error::config(
+                    &cfg.path,
+                    "simulate needs constants or a start value for every constant",
+                )
+            })?,
+        };
+        let settings = creepfit::fit::FitSettings::from_config(&cfg);
+        let model = model.as_ref();
+        let sims = creepfit::simulate::simulate(
+            model,
+            &params,
+            &data,
+            cfg.objective.omega_f,
+            &settings.ode,
+        );
+        use creepfit::simulate as sim;
+        let mut out = HashMap::new();
+        let h = sim::curves_header(model, &data);
+        let h: Vec<&str> = h.iter().map(String::as_str).collect();
+        out.insert(
+            "curves",
+            tables::csv_text(&h, sim::curves_rows(&sims, &data)),
+        );
+        let (h, rows) = sim::ruptures_table(&sims);
+        out.insert("ruptures", tables::csv_text(&h, rows.iter()));
+        if let Some(w) = w {
+            let e = sim::objective_at(model, &data, &params, w, settings.objective());
+            out.insert("objective", json(&sim::objective_json(&data, w, &e)));
+        }
+        Ok((out, warnings))
+    })
+}
+
 /// The creepfit library: calibration of creep-damage constitutive equations.
 #[pymodule]
 mod _native {
     #[pymodule_export]
-    use super::{diagnose, fit, holdout, predict, profile, sweep, CreepfitError};
+    use super::{diagnose, fit, holdout, predict, profile, simulate, sweep, CreepfitError};
 }

@@ -297,3 +297,29 @@ def test_profile_equals_cli(run_cli, cli_fit, tmp_path, curves, ruptures):
     # A constants table that names no KHD constant is refused, the table named.
     with pytest.raises(creepfit.CreepfitError, match="<constants>"):
         creepfit.profile(CONFIG, curves, ruptures, constants={"X": 1.0}, progress=False)
+
+
+def test_simulate_equals_cli(run_cli, cli_fit, tmp_path, curves, ruptures):
+    """`simulate` at the fit's constants with a lifetime weight: the dense curves, the
+    ruptures and the objective equal the binary's; the simulated lives are the fit's."""
+    run_cli("simulate", CONFIG, "--constants", cli_fit / "constants.csv", "--w", "0.5",
+            "--out", tmp_path)
+    fitted = creepfit.fit(CONFIG, curves, ruptures)
+    res = creepfit.simulate(CONFIG, fitted, curves, ruptures, w=0.5)
+    assert_same_table(read_table(tmp_path / "curves.csv"), res.curves, "curves.csv")
+    assert_same_table(read_table(tmp_path / "ruptures.csv"), res.ruptures, "ruptures.csv")
+    assert res.objective == json.loads((tmp_path / "objective.json").read_text())
+    assert res.objective["w"] == 0.5
+    # One row per test, in the data's order, each ruptured at the life errors.csv predicts.
+    assert (res.ruptures["outcome"] == "ruptured").all()
+    pd.testing.assert_series_equal(
+        res.ruptures["rupture_time_h"].reset_index(drop=True),
+        fitted.errors["rupture_time_pred_h"].reset_index(drop=True),
+        check_names=False, rtol=1e-9,
+    )
+    # Without w no objective; from a path the same curves.
+    plain = creepfit.simulate(CONFIG, cli_fit / "constants.csv")
+    assert plain.objective is None
+    pd.testing.assert_frame_equal(plain.curves, res.curves, check_exact=True)
+    with pytest.raises(creepfit.CreepfitError, match=r"w: must be a weight in \[0, 1\]"):
+        creepfit.simulate(CONFIG, fitted, w=2.0)

@@ -1,11 +1,13 @@
 //! `simulate`: the measured tests simulated at given constants, each to its rupture or to
 //! the integration horizon ([`crate::model::objective::curve_horizon`]), with a dense trajectory
-//! for the curve files and plots. The computation only: `crate::export::simulate` writes it.
+//! for the curve files and plots. The computation and its tables (curves.csv, ruptures.csv,
+//! objective.json): `crate::export::simulate` writes them, the Python package returns them.
 
 use crate::data::{Curve, Dataset};
 use crate::model::objective::{Evaluation, Objective, ObjectiveSettings};
 use crate::model::{Load, Model};
 use crate::ode::{OdeOptions, SimResult};
+use crate::report::tables::{has_specimens, num, with_specimen};
 
 /// Points of the dense time grid of each simulated curve (besides the measured times).
 pub const GRID_POINTS: usize = 200;
@@ -67,4 +69,97 @@ pub fn objective_at(
     settings: ObjectiveSettings,
 ) -> Evaluation {
     Objective::new(model, &data.curves, vec![w; data.curves.len()], settings).evaluate(params)
+}
+
+/// `ruptures.csv`'s columns before the `specimen` column (present when a curve has one).
+pub const RUPTURES_COLUMNS: [&str; 6] = [
+    "temperature_C",
+    "stress_MPa",
+    "rupture_time_h",
+    "rupture_strain_pct",
+    "min_rate_pct_per_h",
+    "outcome",
+];
+
+/// `ruptures.csv`: each simulated test's rupture time (h) and strain (%) where it ruptured,
+/// its minimum rate (%/h) where it has one, and how the simulation ended (header, rows).
+pub fn ruptures_table(sims: &[Simulated]) -> (Vec<&'static str>, Vec<Vec<String>>) {
+    let specimens = sims.iter().any(|s| s.curve.specimen.is_some());
+    let rows = sims
+        .iter()
+        .map(|s| {
+            let (c, res) = (s.curve, &s.result);
+            let mut row = vec![
+                num(c.temperature_c),
+                num(c.stress_mpa),
+                if res.ruptured() {
+                    num(res.t_end)
+                } else {
+                    String::new()
+                },
+                if res.ruptured() {
+                    num(100.0 * res.strain_end)
+                } else {
+                    String::new()
+                },
+                // A failed simulation has no minimum rate (only a rupture or the horizon do).
+                s.min_rate().map(|r| num(100.0 * r)).unwrap_or_default(),
+                res.outcome.as_str().to_string(),
+            ];
+            if specimens {
+                row.push(c.specimen.clone().unwrap_or_default());
+            }
+            row
+        })
+        .collect();
+    (with_specimen(&RUPTURES_COLUMNS, specimens), rows)
+}
+
+/// `curves.csv`'s header: the load, time (h) and strain (%), the model's outputs (H, Phi,
+/// omega for KHD), and `specimen` when a curve of `data` has one.
+pub fn curves_header(model: &dyn Model, data: &Dataset) -> Vec<String> {
+    let mut h: Vec<String> = ["temperature_C", "stress_MPa", "time_h", "strain_pct"]
+        .map(String::from)
+        .to_vec();
+    h.extend(model.output_names().iter().map(|n| n.to_string()));
+    if has_specimens(&data.curves) {
+        h.push("specimen".into());
+    }
+    h
+}
+
+/// `curves.csv`'s rows ([`curves_header`]), one per trajectory point, formatted as they are
+/// written: an iterator, since a logged curve gives a million of them.
+pub fn curves_rows<'a>(
+    sims: &'a [Simulated],
+    data: &Dataset,
+) -> impl Iterator<Item = Vec<String>> + 'a {
+    let specimens = has_specimens(&data.curves);
+    sims.iter().flat_map(move |s| {
+        let c = s.curve;
+        s.trajectory.iter().map(move |(t, e, y)| {
+            let mut row = vec![
+                num(c.temperature_c),
+                num(c.stress_mpa),
+                num(*t),
+                num(100.0 * e),
+            ];
+            row.extend(y.iter().map(|v| num(*v)));
+            if specimens {
+                row.push(c.specimen.clone().unwrap_or_default());
+            }
+            row
+        })
+    })
+}
+
+/// `objective.json`: the eq. 8 objective `e` at the one lifetime weight `w`, its normalised
+/// residual and each curve's lifetime error (%).
+pub fn objective_json(data: &Dataset, w: f64, e: &Evaluation) -> serde_json::Value {
+    serde_json::json!({
+        "w": w,
+        "objective": e.objective,
+        "norm_residual": e.norm_residual,
+        "lifetime_errors_pct": e.lifetime_errors_pct(&data.curves),
+    })
 }

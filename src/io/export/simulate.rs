@@ -12,8 +12,8 @@ use crate::model::Model;
 use crate::ode::OdeOptions;
 use crate::predict::curve_plots;
 use crate::report::plot::plot_creep_curves;
-use crate::report::tables::{self, num, write_csv, write_text};
-use crate::simulate::Simulated;
+use crate::report::tables::{self, write_csv, write_text};
+use crate::simulate::{self, Simulated};
 
 use super::plots_done;
 
@@ -29,31 +29,8 @@ pub fn write(
     objective: Option<(f64, &Evaluation)>,
     out: &Path,
 ) -> Result<()> {
-    let specimens = tables::has_specimens(&data.curves);
-    let specimen =
-        |c: &crate::data::Curve| specimens.then(|| c.specimen.clone().unwrap_or_default());
-    let mut rupture_rows = Vec::new();
     for s in sims {
         let (c, res) = (s.curve, &s.result);
-        let mut row = vec![
-            num(c.temperature_c),
-            num(c.stress_mpa),
-            if res.ruptured() {
-                num(res.t_end)
-            } else {
-                String::new()
-            },
-            if res.ruptured() {
-                num(100.0 * res.strain_end)
-            } else {
-                String::new()
-            },
-            // A failed simulation has no minimum rate (only a rupture or the horizon do).
-            s.min_rate().map(|r| num(100.0 * r)).unwrap_or_default(),
-            res.outcome.as_str().to_string(),
-        ];
-        row.extend(specimen(c));
-        rupture_rows.push(row);
         println!(
             "{} °C {:>6} MPa{}: {} at t = {:.1} h, strain {:.3} %, min rate {:.4e} %/h",
             c.temperature_c,
@@ -68,56 +45,24 @@ pub fn write(
             100.0 * res.min_rate
         );
     }
-    // The model's output columns (H, Phi, omega for KHD) after the strain.
-    let mut curve_header = vec!["temperature_C", "stress_MPa", "time_h", "strain_pct"];
-    curve_header.extend(model.output_names());
-    // Rows formatted as they are written (a logged curve gives a million of them).
-    let curve_rows = sims.iter().flat_map(|s| {
-        let c = s.curve;
-        s.trajectory.iter().map(move |(t, e, y)| {
-            let mut row = vec![
-                num(c.temperature_c),
-                num(c.stress_mpa),
-                num(*t),
-                num(100.0 * e),
-            ];
-            row.extend(y.iter().map(|v| num(*v)));
-            row.extend(specimen(c));
-            row
-        })
-    });
+    let header = simulate::curves_header(model, data);
+    let header: Vec<&str> = header.iter().map(String::as_str).collect();
     tables::write_csv_rows(
         &out.join("curves.csv"),
-        &tables::with_specimen(&curve_header, specimens),
-        curve_rows,
+        &header,
+        simulate::curves_rows(sims, data),
     )?;
-    let rupture_header = [
-        "temperature_C",
-        "stress_MPa",
-        "rupture_time_h",
-        "rupture_strain_pct",
-        "min_rate_pct_per_h",
-        "outcome",
-    ];
-    write_csv(
-        &out.join("ruptures.csv"),
-        &tables::with_specimen(&rupture_header, specimens),
-        &rupture_rows,
-    )?;
+    let (header, rows) = simulate::ruptures_table(sims);
+    write_csv(&out.join("ruptures.csv"), &header, &rows)?;
     if let Some((w, e)) = objective {
         println!(
             "objective {:.12e} at w = {w} (normalised residual {:.12e})",
             e.objective, e.norm_residual
         );
-        let json = serde_json::json!({
-            "w": w,
-            "objective": e.objective,
-            "norm_residual": e.norm_residual,
-            "lifetime_errors_pct": e.lifetime_errors_pct(&data.curves),
-        });
         write_text(
             &out.join("objective.json"),
-            &serde_json::to_string_pretty(&json).expect("JSON of plain values"),
+            &serde_json::to_string_pretty(&simulate::objective_json(data, w, e))
+                .expect("JSON of plain values"),
         )?;
     }
     let plots = curve_plots(cfg, data, params, ode, model);
