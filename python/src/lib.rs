@@ -354,6 +354,18 @@ fn tables_of(curves: Option<String>, ruptures: Option<String>) -> PyResult<Optio
     }
 }
 
+/// The constants of a constants table's CSV text (name,value[,…]), named `name` in errors
+/// ([`CONSTANTS_NAME`] when `None`), for `cfg`'s model.
+fn given_constants(
+    text: &str,
+    name: Option<&str>,
+    cfg: &RunConfig,
+    model: &dyn creepfit::model::Model,
+) -> Result<Vec<f64>, Error> {
+    let name = PathBuf::from(name.unwrap_or(CONSTANTS_NAME));
+    tables::read_constants_bytes(&name, text.as_bytes(), cfg, model)
+}
+
 /// Outputs by name (CSV or JSON text) and the warnings of the run.
 type Outputs = (HashMap<&'static str, String>, Vec<String>);
 
@@ -589,9 +601,7 @@ fn predict(
         };
         creepfit::predict::check_asked(&cfg)?;
         let model = cfg.build_model()?;
-        let name = PathBuf::from(constants_name.as_deref().unwrap_or(CONSTANTS_NAME));
-        let params =
-            tables::read_constants_bytes(&name, constants.as_bytes(), &cfg, model.as_ref())?;
+        let params = given_constants(&constants, constants_name.as_deref(), &cfg, &*model)?;
         match &tests {
             Some((name, records)) => {
                 creepfit::predict::measured::check(name, records, &cfg, &data)?
@@ -728,18 +738,10 @@ fn profile(
         let (cfg, data) = resolve(&src, &cli, tables.as_ref(), &mut warnings)?;
         let run = with_threads(cfg.run.threads, || {
             let model = cfg.build_model()?;
-            let given = match &constants {
-                Some(text) => {
-                    let name = PathBuf::from(constants_name.as_deref().unwrap_or(CONSTANTS_NAME));
-                    Some(tables::read_constants_bytes(
-                        &name,
-                        text.as_bytes(),
-                        &cfg,
-                        model.as_ref(),
-                    )?)
-                }
-                None => None,
-            };
+            let given = constants
+                .as_deref()
+                .map(|text| given_constants(text, constants_name.as_deref(), &cfg, &*model))
+                .transpose()?;
             creepfit::uncertainty::report::check(&cfg, &data)?;
             creepfit::uncertainty::report::run(&cfg, &data, given.as_deref(), &cfg.profile)
         })?;
@@ -789,10 +791,7 @@ fn simulate(
         let (cfg, data) = resolve(&src, &Overrides::default(), tables.as_ref(), &mut warnings)?;
         let model = cfg.build_model()?;
         let params = match &constants {
-            Some(text) => {
-                let name = PathBuf::from(constants_name.as_deref().unwrap_or(CONSTANTS_NAME));
-                tables::read_constants_bytes(&name, text.as_bytes(), &cfg, model.as_ref())?
-            }
+            Some(text) => given_constants(text, constants_name.as_deref(), &cfg, &*model)?,
             None => cfg.starts_all_given().ok_or_else(|| {
                 Error::config(
                     &cfg.path,
