@@ -55,3 +55,12 @@ print(diagnosis.table()[["k", "objective", "aic", "lr", "p_holm", "significant"]
 # %% Predict: a stress inside the tested range and one below it (marked as an extrapolation).
 predictions = creepfit.predict(config, fitted, curves, ruptures, at=[(560, 95), (560, 70)])
 print(predictions[["stress_MPa", "rupture_time_h", "rupture_strain_pct", "min_rate_pct_per_h", "extrapolation"]])
+
+# %% How sure: each constant's profile-likelihood intervals and whether the data determine it.
+sure = creepfit.profile(config, curves, ruptures, constants=fitted, threads=2)
+print(sure.intervals[["name", "value", "lo95", "hi95", "class"]].to_string())
+
+# %% Simulate: the model's curves at the fitted constants (state variables included), e.g. to plot.
+sim = creepfit.simulate(config, fitted, curves, ruptures)
+print(sim.ruptures[["stress_MPa", "rupture_time_h", "rupture_strain_pct", "outcome"]].to_string())
+print(sim.curves.groupby("stress_MPa")["strain_pct"].max())

@@ -65,7 +65,7 @@ runpy.run_path(sys.argv[1], run_name="__main__")
 
 
 def test_quickstart_example_runs(root):
-    """python/examples/quickstart.py runs whole and prints its three results."""
+    """python/examples/quickstart.py runs whole and prints its five results."""
     import subprocess
     import sys
 
@@ -77,3 +77,5 @@ def test_quickstart_example_runs(root):
     assert "lifetime_err_pct" in p.stdout
     assert "verdict: " in p.stdout
     assert "extrapolation" in p.stdout and "stress" in p.stdout
+    assert "identifiable" in p.stdout and "lo95" in p.stdout
+    assert "ruptured" in p.stdout and "outcome" in p.stdout
