@@ -655,8 +655,9 @@ pub const REPAIR_TARGETS: usize = 4;
 /// distance up to [`REPAIR_STEPS`] times; the first evaluable point replaces the start.
 /// Where no point on that line is evaluable, the same is tried toward the
 /// [`REPAIR_TARGETS`] nearest of the starts that are evaluable (as drawn, or moved toward
-/// the anchor; the anchor itself, where it is one of the starts, is not tried twice): an anchor can sit on the edge of the evaluable region, where a point 0.1 %
-/// of the way out of it still leaves a curve unruptured within the horizon (measured: the
+/// the anchor; the anchor itself, where it is one of the starts, is not tried twice): an
+/// anchor can sit on the edge of the evaluable region, where a point 0.1 % of the way out
+/// of it still leaves a curve unruptured within the horizon (measured: the
 /// guess of a generated single-crystal-like set, `scripts/far_material.py 21`, a sweep of
 /// 101 starts lost 13 so). A start stays where it was when no line holds an evaluable point
 /// (or the anchor itself cannot be evaluated): its fit is then reported as failed. Returns
