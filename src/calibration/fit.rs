@@ -200,12 +200,16 @@ fn likelihood_fit(
     // the white stage leads away from; the better is kept. With the white path alone, `fit`
     // from a sweep's best constants ended 19.7 units of −2 ln L above them (generated
     // single-crystal-like data at 850 °C, `scripts/far_material.py 1`).
-    let white = crate::likelihood::ml_fit(model, curves, space, start, settings, &opts);
+    // The two paths are independent: run side by side (a fit from the guess is one start,
+    // so the second core would otherwise wait); the better is kept whichever ends first.
     let direct_opts = crate::likelihood::MlOptions {
         white_first: false,
         ..opts
     };
-    let direct = crate::likelihood::ml_fit(model, curves, space, start, settings, &direct_opts);
+    let (white, direct) = rayon::join(
+        || crate::likelihood::ml_fit(model, curves, space, start, settings, &opts),
+        || crate::likelihood::ml_fit(model, curves, space, start, settings, &direct_opts),
+    );
     let (its, evs) = (
         white.iterations + direct.iterations,
         white.evaluations + direct.evaluations,
@@ -1154,36 +1158,45 @@ pub fn run_fit_observed(
                 }
                 f
             };
-            let mut h = polish(
-                &space,
-                crate::likelihood::ml_fit_from(
-                    model.as_ref(),
-                    curves,
-                    &space,
-                    &chosen.params,
-                    None,
-                    &settings,
-                    &opts,
-                ),
-            );
-            // The same guarantee with specimen effects: the nested model's hierarchical fit,
-            // then the extended model's from it (constants and effects), the better kept; the
-            // nested optimum itself is a point of the extended model too.
-            let mut from_nested = false;
-            if let (Some(nested), Some(x)) = (&nested, &nested_optimum) {
-                let hn = polish(
-                    nested,
-                    crate::likelihood::ml_fit_from(
-                        model.as_ref(),
-                        curves,
+            // The hierarchical fit from the chosen fit, and beside it (independent: run side
+            // by side) the same guarantee with specimen effects as without: the nested
+            // model's hierarchical fit, then the extended model's from it (constants and
+            // effects), the better kept; the nested optimum itself is a point of the
+            // extended model too.
+            let (mut h, via_nested) = rayon::join(
+                || {
+                    polish(
+                        &space,
+                        crate::likelihood::ml_fit_from(
+                            model.as_ref(),
+                            curves,
+                            &space,
+                            &chosen.params,
+                            None,
+                            &settings,
+                            &opts,
+                        ),
+                    )
+                },
+                || {
+                    let (Some(nested), Some(x)) = (&nested, &nested_optimum) else {
+                        return vec![];
+                    };
+                    let hn = polish(
                         nested,
-                        x,
-                        None,
-                        &settings,
-                        &opts,
-                    ),
-                );
-                if hn.ok() && hn.specimen.is_some() {
+                        crate::likelihood::ml_fit_from(
+                            model.as_ref(),
+                            curves,
+                            nested,
+                            x,
+                            None,
+                            &settings,
+                            &opts,
+                        ),
+                    );
+                    if !(hn.ok() && hn.specimen.is_some()) {
+                        return vec![];
+                    }
                     let effects = hn
                         .specimen
                         .as_ref()
@@ -1200,12 +1213,14 @@ pub fn run_fit_observed(
                             &opts,
                         ),
                     );
-                    for c in [full, hn] {
-                        if c.ok() && c.specimen.is_some() && (!h.ok() || c.neg2ll < h.neg2ll) {
-                            h = c;
-                            from_nested = true;
-                        }
-                    }
+                    vec![full, hn]
+                },
+            );
+            let mut from_nested = false;
+            for c in via_nested {
+                if c.ok() && c.specimen.is_some() && (!h.ok() || c.neg2ll < h.neg2ll) {
+                    h = c;
+                    from_nested = true;
                 }
             }
             sp.plain_neg2ll = chosen.eval.objective;
