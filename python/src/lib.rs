@@ -810,12 +810,9 @@ fn simulate(
         );
         use creepfit::simulate as sim;
         let mut out = HashMap::new();
-        let h = sim::curves_header(model, &data);
+        let h = sim::curves_header(model, &sims);
         let h: Vec<&str> = h.iter().map(String::as_str).collect();
-        out.insert(
-            "curves",
-            tables::csv_text(&h, sim::curves_rows(&sims, &data)),
-        );
+        out.insert("curves", tables::csv_text(&h, sim::curves_rows(&sims)));
         let (h, rows) = sim::ruptures_table(&sims);
         out.insert("ruptures", tables::csv_text(&h, rows.iter()));
         if let Some(w) = w {

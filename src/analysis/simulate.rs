@@ -7,7 +7,7 @@ use crate::data::{Curve, Dataset};
 use crate::model::objective::{Evaluation, Objective, ObjectiveSettings};
 use crate::model::{Load, Model};
 use crate::ode::{OdeOptions, SimResult};
-use crate::report::tables::{has_specimens, num, with_specimen};
+use crate::report::tables::{num, with_specimen};
 
 /// Points of the dense time grid of each simulated curve (besides the measured times).
 pub const GRID_POINTS: usize = 200;
@@ -71,6 +71,12 @@ pub fn objective_at(
     Objective::new(model, &data.curves, vec![w; data.curves.len()], settings).evaluate(params)
 }
 
+/// Whether a simulated test has a specimen label: the tables then end with a `specimen`
+/// column.
+fn has_specimens(sims: &[Simulated]) -> bool {
+    sims.iter().any(|s| s.curve.specimen.is_some())
+}
+
 /// `ruptures.csv`'s columns before the `specimen` column (present when a curve has one).
 pub const RUPTURES_COLUMNS: [&str; 6] = [
     "temperature_C",
@@ -84,7 +90,7 @@ pub const RUPTURES_COLUMNS: [&str; 6] = [
 /// `ruptures.csv`: each simulated test's rupture time (h) and strain (%) where it ruptured,
 /// its minimum rate (%/h) where it has one, and how the simulation ended (header, rows).
 pub fn ruptures_table(sims: &[Simulated]) -> (Vec<&'static str>, Vec<Vec<String>>) {
-    let specimens = sims.iter().any(|s| s.curve.specimen.is_some());
+    let specimens = has_specimens(sims);
     let rows = sims
         .iter()
         .map(|s| {
@@ -116,13 +122,13 @@ pub fn ruptures_table(sims: &[Simulated]) -> (Vec<&'static str>, Vec<Vec<String>
 }
 
 /// `curves.csv`'s header: the load, time (h) and strain (%), the model's outputs (H, Phi,
-/// omega for KHD), and `specimen` when a curve of `data` has one.
-pub fn curves_header(model: &dyn Model, data: &Dataset) -> Vec<String> {
+/// omega for KHD), and `specimen` when a simulated test has one.
+pub fn curves_header(model: &dyn Model, sims: &[Simulated]) -> Vec<String> {
     let mut h: Vec<String> = ["temperature_C", "stress_MPa", "time_h", "strain_pct"]
         .map(String::from)
         .to_vec();
     h.extend(model.output_names().iter().map(|n| n.to_string()));
-    if has_specimens(&data.curves) {
+    if has_specimens(sims) {
         h.push("specimen".into());
     }
     h
@@ -130,11 +136,8 @@ pub fn curves_header(model: &dyn Model, data: &Dataset) -> Vec<String> {
 
 /// `curves.csv`'s rows ([`curves_header`]), one per trajectory point, formatted as they are
 /// written: an iterator, since a logged curve gives a million of them.
-pub fn curves_rows<'a>(
-    sims: &'a [Simulated],
-    data: &Dataset,
-) -> impl Iterator<Item = Vec<String>> + 'a {
-    let specimens = has_specimens(&data.curves);
+pub fn curves_rows<'a>(sims: &'a [Simulated]) -> impl Iterator<Item = Vec<String>> + 'a {
+    let specimens = has_specimens(sims);
     sims.iter().flat_map(move |s| {
         let c = s.curve;
         s.trajectory.iter().map(move |(t, e, y)| {

@@ -45,12 +45,12 @@ pub fn write(
             100.0 * res.min_rate
         );
     }
-    let header = simulate::curves_header(model, data);
+    let header = simulate::curves_header(model, sims);
     let header: Vec<&str> = header.iter().map(String::as_str).collect();
     tables::write_csv_rows(
         &out.join("curves.csv"),
         &header,
-        simulate::curves_rows(sims, data),
+        simulate::curves_rows(sims),
     )?;
     let (header, rows) = simulate::ruptures_table(sims);
     write_csv(&out.join("ruptures.csv"), &header, &rows)?;
