@@ -41,6 +41,7 @@ __all__ = [
     "ProfileResult",
     "SimulateResult",
     "SweepResult",
+    "SynthSet",
     "diagnose",
     "fit",
     "holdout",
@@ -48,6 +49,7 @@ __all__ = [
     "profile",
     "simulate",
     "sweep",
+    "synth",
 ]
 
 __version__ = "0.1.0"
@@ -312,6 +314,71 @@ class SimulateResult:
 
     def __repr__(self) -> str:
         return f"SimulateResult(tests={len(self.ruptures)}, points={len(self.curves)})"
+
+
+class SynthSet:
+    """A generated data set (``creepfit synth``): data with a known truth, to try a
+    configuration or a procedure on before trusting it with measurements.
+
+    Attributes:
+        curves: the curves table (temperature_C, stress_MPa, time_h, strain_pct[, specimen]).
+        ruptures: the ruptures table (temperature_C, stress_MPa, rupture_time_h,
+            rupture_strain_pct[, specimen]).
+        config: config.toml's text (its data files named ``curves.csv``, ``ruptures.csv``):
+            pass it with ``curves`` and ``ruptures`` to any function, or :meth:`write` the set
+            and give the file's path.
+        truth: truth.json as a dict (family, the true constants, the hidden effect and its
+            size, the sampling, and in a world with specimens their true factors and scatter).
+    """
+
+    def __init__(self, out: Mapping[str, str]):
+        self._texts = dict(out)
+        self.curves: pd.DataFrame = _frame(out["curves"])
+        self.ruptures: pd.DataFrame = _frame(out["ruptures"])
+        self.config: str = out["config"]
+        self.truth: Dict[str, Any] = json.loads(out["truth"])
+
+    def write(self, folder: Union[str, "os.PathLike[str]"]) -> str:
+        """Write curves.csv, ruptures.csv, config.toml and truth.json into ``folder``
+        (created), byte for byte those ``creepfit synth`` writes; returns config.toml's
+        path."""
+        os.makedirs(folder, exist_ok=True)
+        files = {"curves.csv": "curves", "ruptures.csv": "ruptures",
+                 "config.toml": "config", "truth.json": "truth"}
+        for file, key in files.items():
+            with open(os.path.join(folder, file), "w", encoding="utf-8", newline="") as f:
+                f.write(self._texts[key])
+        return os.path.join(folder, "config.toml")
+
+    def __repr__(self) -> str:
+        effect = self.truth.get("effect", {}).get("kind")
+        return (f"SynthSet({self.truth.get('name')!r}, family={self.truth.get('family')!r}, "
+                f"effect={effect!r}, curves={len(self.ruptures)})")
+
+
+def synth(
+    seed: int = 1,
+    scenario: str = "none",
+    world: str = "identical",
+    *,
+    name: Optional[str] = None,
+) -> SynthSet:
+    """``creepfit synth``'s set of ``seed``: a generated data set with a known hidden effect.
+
+    Args:
+        seed: the set's seed (the command line's set ``set-SEED``).
+        scenario: the hidden effect: ``"none"`` (null data) or a catalogued one, as
+            ``--scenario`` (constant_load, loading_strain, dislocation_damage,
+            stress_ductility, primary_transient, mid_life_step, strain_softening,
+            rupture_damage); its size is drawn from the seed.
+        world: the laboratory, as ``--world``: ``"identical"`` specimens, ``"specimens"``
+            (each its own creep rate and ductility, replicates, reading error growing with
+            strain), ``"shapes"`` (each its own onset of tertiary creep too) or
+            ``"campaigns"`` (specimens from two campaigns).
+        name: the run name in config.toml (default ``set-SEED``, the command line's).
+    """
+    name = f"set-{int(seed)}" if name is None else name
+    return SynthSet(_native.synth(int(seed), scenario, world, name))
 
 
 class Diagnosis(dict):

@@ -823,9 +823,43 @@ fn simulate(
     })
 }
 
+/// `creepfit synth`'s set of `seed`: curves.csv, ruptures.csv, config.toml and truth.json's
+/// texts, those the command writes into its folder `name` (`set-SEED` there). `scenario`:
+/// one of `synth --scenario`'s; `world`: one of `--world`'s (identical, specimens, shapes,
+/// campaigns).
+#[pyfunction]
+#[pyo3(signature = (seed, scenario, world, name))]
+fn synth(
+    seed: u64,
+    scenario: &str,
+    world: &str,
+    name: &str,
+) -> PyResult<HashMap<&'static str, String>> {
+    use creepfit::synth as sy;
+    sy::check_scenario(scenario).map_err(|_| {
+        py_err(Error::Invalid(format!(
+            "scenario: unknown scenario '{scenario}' (known: {})",
+            sy::SCENARIOS.join(", ")
+        )))
+    })?;
+    let world: sy::World = serde_json::from_value(serde_json::Value::String(world.to_string()))
+        .map_err(|_| {
+            py_err(Error::Invalid(format!(
+                "world: unknown world '{world}' (known: identical, specimens, shapes, campaigns)"
+            )))
+        })?;
+    let set = sy::generate_in(name, scenario, None, seed, world).map_err(py_err)?;
+    Ok(HashMap::from([
+        ("curves", set.curves_csv),
+        ("ruptures", set.ruptures_csv),
+        ("config", set.config_toml),
+        ("truth", sy::truth_json(&set.truth)),
+    ]))
+}
+
 /// The creepfit library: calibration of creep-damage constitutive equations.
 #[pymodule]
 mod _native {
     #[pymodule_export]
-    use super::{diagnose, fit, holdout, predict, profile, simulate, sweep, CreepfitError};
+    use super::{diagnose, fit, holdout, predict, profile, simulate, sweep, synth, CreepfitError};
 }

@@ -323,3 +323,36 @@ def test_simulate_equals_cli(run_cli, cli_fit, tmp_path, curves, ruptures):
     pd.testing.assert_frame_equal(plain.curves, res.curves, check_exact=True)
     with pytest.raises(creepfit.CreepfitError, match=r"w: must be a weight in \[0, 1\]"):
         creepfit.simulate(CONFIG, fitted, w=2.0)
+
+
+@pytest.mark.parametrize("world", ["identical", "specimens"])
+def test_synth_equals_cli(run_cli, tmp_path, world):
+    """A generated set from Python is, file for file, the one `creepfit synth` writes; its
+    config text with its tables fits as the written folder's config file does."""
+    run_cli("synth", tmp_path / "cli", "--sets", "1", "--seed", "7", "--scenario",
+            "constant_load", "--world", world)
+    s = creepfit.synth(7, "constant_load", world)
+    path = s.write(tmp_path / "py")
+    for f in ("curves.csv", "ruptures.csv", "config.toml", "truth.json"):
+        assert (tmp_path / "py" / f).read_bytes() == (tmp_path / "cli" / "set-7" / f).read_bytes(), f
+    assert s.truth["effect"]["kind"] == "constant_load"
+    assert len(s.ruptures) == len(s.truth["stresses"])
+    # Specimens carry their labels and true factors only where the world has them.
+    assert ("specimen" in s.curves.columns) == (world != "identical")
+    assert ("specimens" in s.truth) == (world != "identical")
+    in_memory = creepfit.fit(s.config, s.curves, s.ruptures, start="guess", w=0.5)
+    from_files = creepfit.fit(path, start="guess", w=0.5)
+    pd.testing.assert_frame_equal(in_memory.constants, from_files.constants, check_exact=True)
+
+
+def test_synth_refuses_an_unknown_scenario_or_world():
+    with pytest.raises(creepfit.CreepfitError, match="scenario: unknown scenario 'creep' "
+                       r"\(known: none, constant_load"):
+        creepfit.synth(1, "creep")
+    with pytest.raises(creepfit.CreepfitError, match="world: unknown world 'lab' "
+                       r"\(known: identical, specimens, shapes, campaigns\)"):
+        creepfit.synth(1, "none", "lab")
+    # Another name is the run's name, and nothing else changes.
+    a, b = creepfit.synth(3), creepfit.synth(3, name="trial")
+    assert 'name = "trial"' in b.config and a.config.replace("set-3", "trial") == b.config
+    pd.testing.assert_frame_equal(a.curves, b.curves, check_exact=True)

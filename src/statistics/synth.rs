@@ -876,10 +876,12 @@ pub fn write_set(set: &SynthSet, dir: &Path) -> Result<()> {
     w("curves.csv", &set.curves_csv)?;
     w("ruptures.csv", &set.ruptures_csv)?;
     w("config.toml", &set.config_toml)?;
-    w(
-        "truth.json",
-        &serde_json::to_string_pretty(&set.truth).expect("plain values"),
-    )
+    w("truth.json", &truth_json(&set.truth))
+}
+
+/// truth.json's text (pretty JSON).
+pub fn truth_json(truth: &Truth) -> String {
+    serde_json::to_string_pretty(truth).expect("plain values")
 }
 
 /// `Ok` for a scenario of [`SCENARIOS`], else the error of a `--scenario` option naming the
