@@ -58,8 +58,9 @@ Config = Union[str, "os.PathLike[str]", Mapping[str, Any]]
 """A TOML file's path, TOML text (a str with a line break), or a dict of the TOML keys."""
 
 Progress = Union[bool, Callable[[int, int], Any], None]
-"""True: a tqdm bar (notebook or terminal); a callable: called with (done, total) about every
-0.1 s (total 0 while the library reports no count); False or None: nothing."""
+"""True: a tqdm bar (notebook or terminal), one per phase of the work; a callable: called with
+(done, total) about every 0.1 s, the count of the current phase (it restarts at 0 when a phase
+begins; total 0 where the library does not know the phase's steps); False or None: nothing."""
 
 CURVE_COLUMNS = ("temperature_C", "stress_MPa", "time_h", "strain_pct", "specimen")
 RUPTURE_COLUMNS = (
@@ -158,26 +159,33 @@ def _warn(lines: Iterable[str]) -> List[str]:
 
 def _progress(
     progress: Progress, what: str, unit: str
-) -> Tuple[Optional[Callable[[int, int], Any]], Callable[[], None]]:
-    """(callback for the native module, closer) of a `progress` argument."""
+) -> Tuple[Optional[Callable[[int, int, str], Any]], Callable[[], None]]:
+    """(callback for the native module, closer) of a `progress` argument. The native module
+    calls it with (done, total, phase): `phase` the library's phase ("" where the command has
+    one), whose count starts at 0 (total 0 where the library does not know its steps)."""
     if progress is None or progress is False:
         return None, lambda: None
     if callable(progress):
-        return progress, lambda: None
+        user = progress
+        return (lambda done, total, phase: user(done, total)), lambda: None
     try:
         from tqdm.auto import tqdm
     except ImportError:  # tqdm is a dependency, but a bar is never worth a failure
         return None, lambda: None
-    state: Dict[str, Any] = {"bar": None}
+    state: Dict[str, Any] = {"bar": None, "phase": None}
 
-    def update(done: int, total: int) -> None:
+    def update(done: int, total: int, phase: str) -> None:
         bar = state["bar"]
+        desc = f"{what}: {phase}" if phase else what
         if bar is None:
-            # Without counts (diagnose) the bar shows the elapsed time alone.
-            fmt = None if total else "{desc}: {elapsed} elapsed"
-            bar = tqdm(total=total or None, desc=what, unit=unit, leave=False, bar_format=fmt)
-            state["bar"] = bar
-        if total and bar.total != total:
+            bar = tqdm(total=total or None, desc=desc, unit=unit, leave=False)
+            state["bar"], state["phase"] = bar, phase
+        elif phase != state["phase"]:
+            # A new phase: its own count and total (None: tqdm shows the count and time).
+            state["phase"] = phase
+            bar.set_description(desc, refresh=False)
+            bar.reset(total=total or None)
+        elif total and bar.total != total:
             bar.total = total
         bar.n = done
         bar.refresh()
@@ -467,20 +475,21 @@ def diagnose(
 ) -> Diagnosis:
     """``creepfit diagnose``: what the calibrated model misses, the named cause, and what an
     extension gains; diagnosis.json as a :class:`Diagnosis` (a dict with ``.table()``).
-    Ctrl-C raises KeyboardInterrupt only once the work ends (the library's diagnose has no
-    stop hook yet; ``fit`` and ``predict`` likewise).
+    Ctrl-C (KeyboardInterrupt) stops it at the library's next check (the end of a fit or of
+    a replicate); ``fit`` and ``predict`` raise it only once their work ends.
 
     Args:
         starts, seed, bootstrap, bootstrap_extended, alpha: ``[diagnose]``'s settings
             (default: the file's; ``bootstrap_extended``: the most replicates of a test whose
             p-value after ``bootstrap`` is at most alpha/2).
         threads: worker threads (default: all cores).
-        progress: a bar (True; the elapsed time: the library reports no counts yet), a
-            callback ``(done, total)``, or nothing.
+        progress: a bar (True: the phase, e.g. "null bootstrap", and its count), a callback
+            ``(done, total)`` (the count restarts at each phase; total 0 where the library
+            does not know it), or nothing.
     """
     text, kind = _config(config)
     c, r = _tables(curves, ruptures)
-    cb, close = _progress(progress, "diagnose", "s")
+    cb, close = _progress(progress, "diagnose", "step")
     try:
         out, warns = _native.diagnose(
             text, kind, c, r, starts, seed, bootstrap, bootstrap_extended,
@@ -520,13 +529,15 @@ def holdout(
         intervals: add each held-out life's 95 % intervals (``--intervals``; default:
             ``[predict]``'s).
         threads: worker threads (default: all cores).
-        progress: a bar (True; the elapsed time), a callback ``(done, total)``, or nothing.
+        progress: a bar (True: the phase and its count), a callback ``(done, total)`` (the
+            count restarts at each phase; total 0 where unknown), or nothing. Ctrl-C
+            (KeyboardInterrupt) stops it at the library's next check.
     """
     if (temperature is None) == (campaign is None):
         raise CreepfitError("give the temperature or the campaign to leave out (one of them)")
     text, kind = _config(config)
     c, r = _tables(curves, ruptures)
-    cb, close = _progress(progress, "holdout", "s")
+    cb, close = _progress(progress, "holdout", "step")
     try:
         out, warns = _native.holdout(
             text, kind, c, r, None if temperature is None else float(temperature),
@@ -579,12 +590,14 @@ def profile(
             :class:`FitResult`, a DataFrame (name, value), a dict or a constants.csv path;
             default: a multistart.
         threads: worker threads (default: all cores).
-        progress: a bar (True; the elapsed time), a callback ``(done, total)``, or nothing.
+        progress: a bar (True: the phase and its count), a callback ``(done, total)`` (the
+            count restarts at each phase; total 0 where unknown), or nothing. Ctrl-C
+            (KeyboardInterrupt) stops it at the library's next check.
     """
     text, kind = _config(config)
     c, r = _tables(curves, ruptures)
     ctext, cname = (None, None) if constants is None else _constants(constants)
-    cb, close = _progress(progress, "profile", "s")
+    cb, close = _progress(progress, "profile", "step")
     try:
         out, warns = _native.profile(text, kind, ctext, cname, c, r, threads, cb)
     finally:

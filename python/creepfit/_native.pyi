@@ -9,7 +9,7 @@ library's warnings.
 from typing import Callable, Dict, List, Optional, Tuple
 
 _Outputs = Tuple[Dict[str, str], List[str]]
-_Progress = Optional[Callable[[int, int], object]]
+_Progress = Optional[Callable[[int, int, str], object]]  # (done, total, phase)
 
 class CreepfitError(ValueError):
     path: Optional[str]

@@ -256,10 +256,45 @@ struct Progress {
     total: AtomicUsize,
     /// Raised by the waiting thread (Ctrl-C, a failing callback): start no new work.
     stop: AtomicBool,
+    /// The phase the library reports (`fits on the data`, `null bootstrap`, …; empty: one
+    /// phase, the command's).
+    phase: std::sync::Mutex<String>,
+}
+
+/// The library's phases and steps as the counts the waiting thread reports (each phase
+/// counts from 0 to its steps, 0 where it does not know them); the library asks it whether
+/// to stop (`stop`: Ctrl-C or a failing callback), and stops at its next check, keeping
+/// nothing (no journal in memory).
+impl creepfit::progress::Observer for Progress {
+    fn phase(&self, name: &str, total: Option<u64>) {
+        *self.phase.lock().unwrap_or_else(|e| e.into_inner()) = name.to_string();
+        self.done.store(0, Ordering::SeqCst);
+        self.total
+            .store(total.unwrap_or(0) as usize, Ordering::SeqCst);
+    }
+    fn resumed(&self, n: u64) {
+        self.done.fetch_add(n as usize, Ordering::SeqCst);
+    }
+    fn advance(&self, n: u64) {
+        self.done.fetch_add(n as usize, Ordering::SeqCst);
+    }
+    fn cancelled(&self) -> bool {
+        self.stop.load(Ordering::SeqCst)
+    }
+}
+
+impl Progress {
+    /// The library's hooks reporting to this progress, with no journal.
+    fn hooks(&self) -> creepfit::progress::Hooks<'_> {
+        creepfit::progress::Hooks {
+            observer: self,
+            journal: None,
+        }
+    }
 }
 
 /// Run `work` on a thread of its own while this thread waits with the GIL released, calling
-/// `callback(done, total)` every [`POLL`] (from this thread, with the GIL: a bar's elapsed
+/// `callback(done, total, phase)` every [`POLL`] (from this thread, with the GIL: a bar's elapsed
 /// time moves even when the work reports no counts) and checking for signals. A KeyboardInterrupt or a failing callback raises `stop`, waits for the
 /// work to end (GIL released) and is returned; a panic of the work is a RuntimeError.
 fn run_detached<T: Send>(
@@ -295,6 +330,11 @@ fn run_detached<T: Send>(
                 let now = (
                     progress.done.load(Ordering::SeqCst),
                     progress.total.load(Ordering::SeqCst),
+                    progress
+                        .phase
+                        .lock()
+                        .unwrap_or_else(|e| e.into_inner())
+                        .clone(),
                 );
                 if let Err(e) = cb.call1(now) {
                     if got.is_ok() {
@@ -498,12 +538,9 @@ fn sweep(
     Ok((out, warnings))
 }
 
-/// `creepfit diagnose`: diagnosis.json's text.
-///
-/// Progress hook: the library's `diagnose` reports no progress yet, so `progress` is called
-/// with (0, 0) (the Python layer shows the elapsed time); when `diagnose` takes a progress
-/// callback, store its counts in `Progress::done`/`total` here (as `sweep` does) and the
-/// Python bar shows them.
+/// `creepfit diagnose`: diagnosis.json's text. `progress` is told of its phases (the fits on
+/// the data, the bootstraps, …) and their replicates; a raised stop ends it at the library's
+/// next check.
 #[pyfunction]
 #[pyo3(signature = (config, kind, curves=None, ruptures=None, starts=None, seed=None, bootstrap=None, bootstrap_extended=None, alpha=None, threads=None, progress=None))]
 #[allow(clippy::too_many_arguments)]
@@ -537,12 +574,17 @@ fn diagnose(
         },
         ..Overrides::default()
     };
-    run_detached(py, progress.as_ref(), move |_| {
+    run_detached(py, progress.as_ref(), move |p| {
         let mut warnings = Vec::new();
         let (cfg, data) = resolve(&src, &cli, tables.as_ref(), &mut warnings)?;
         cfg.check_diagnose(&data)?;
         let d = with_threads(cfg.run.threads, || {
-            creepfit::diagnose::diagnose(&cfg.diagnose_setup()?, &data, &cfg.diagnose)
+            creepfit::diagnose::diagnose_observed(
+                &cfg.diagnose_setup()?,
+                &data,
+                &cfg.diagnose,
+                &p.hooks(),
+            )
         })?;
         let mut out = HashMap::new();
         out.insert("diagnosis", json(&d));
@@ -680,11 +722,17 @@ fn holdout(
         },
         ..Overrides::default()
     };
-    run_detached(py, progress.as_ref(), move |_| {
+    run_detached(py, progress.as_ref(), move |p| {
         let mut warnings = Vec::new();
         let (cfg, data) = resolve(&src, &cli, tables.as_ref(), &mut warnings)?;
         let h = with_threads(cfg.run.threads, || {
-            creepfit::holdout::holdout(&cfg, &data, &left_out, cfg.predict.intervals)
+            creepfit::holdout::holdout_observed(
+                &cfg,
+                &data,
+                &left_out,
+                cfg.predict.intervals,
+                &p.hooks(),
+            )
         })?;
         let mut out = HashMap::new();
         let (h_cols, rows) = creepfit::holdout::csv_table(&h);
@@ -733,7 +781,7 @@ fn profile(
         },
         ..Overrides::default()
     };
-    run_detached(py, progress.as_ref(), move |_| {
+    run_detached(py, progress.as_ref(), move |p| {
         let mut warnings = Vec::new();
         let (cfg, data) = resolve(&src, &cli, tables.as_ref(), &mut warnings)?;
         let run = with_threads(cfg.run.threads, || {
@@ -743,7 +791,13 @@ fn profile(
                 .map(|text| given_constants(text, constants_name.as_deref(), &cfg, &*model))
                 .transpose()?;
             creepfit::uncertainty::report::check(&cfg, &data)?;
-            creepfit::uncertainty::report::run(&cfg, &data, given.as_deref(), &cfg.profile)
+            creepfit::uncertainty::report::run_observed(
+                &cfg,
+                &data,
+                given.as_deref(),
+                &cfg.profile,
+                &p.hooks(),
+            )
         })?;
         use creepfit::uncertainty::report as r;
         let mut out = HashMap::new();

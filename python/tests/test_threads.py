@@ -1,5 +1,5 @@
 """The GIL is released while the library works, progress reaches the callback, and Ctrl-C
-(KeyboardInterrupt) stops a sweep."""
+(KeyboardInterrupt) stops a sweep and a diagnosis."""
 
 from __future__ import annotations
 
@@ -102,3 +102,47 @@ def test_a_failing_callback_stops_the_work(curves, ruptures):
 
     with pytest.raises(RuntimeError, match="stop here"):
         creepfit.sweep(CONFIG, curves, ruptures, starts=50, seed=1, threads=2, progress=boom)
+
+
+# A diagnosis of the 560 °C data with few starts and replicates (alpha 0.4 lets 19 replicates
+# reject over 8 tests, as in test_cli_parity.py): a few seconds, several phases.
+QUICK = {"starts": 4, "bootstrap": 19, "alpha": 0.4, "threads": 2}
+
+
+def test_diagnose_reports_its_phases_counts(curves, ruptures):
+    calls = []
+    d = creepfit.diagnose(CONFIG, curves, ruptures, **QUICK,
+                          progress=lambda done, total: calls.append((done, total)))
+    assert d["verdict"]
+    assert calls, "the callback was never called"
+    # A count never exceeds its phase's total; the bootstrap's phase (its 19 replicates, a
+    # second or more of the work) is seen; the last call, after the work, is the last phase
+    # (leave-one-stress-out: one step per model) counted to its end.
+    assert all(d_ <= t for d_, t in calls if t > 0)
+    assert any(t == 19 for _, t in calls), f"the bootstrap's phase not seen: {set(calls)}"
+    models = 1 + len(d["candidates"])
+    assert calls[-1] == (models, models)
+
+
+def test_a_diagnose_bar_names_the_phase(curves, ruptures, capsys):
+    creepfit.diagnose(CONFIG, curves, ruptures, **QUICK, progress=True)
+    err = capsys.readouterr().err
+    assert "diagnose: null bootstrap" in err, err[-500:]
+
+
+def test_keyboard_interrupt_stops_a_diagnosis(root):
+    # The seed's 590 °C diagnosis takes 33–39 s at 2 threads (docs/SPECIMENS.md, session 94);
+    # the interrupt comes after 2 s and stopped it at 6.5 s (the running fits finish). A
+    # diagnosis that ignored the stop would raise KeyboardInterrupt only at its end.
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        timer = threading.Timer(2.0, _thread.interrupt_main)
+        t0 = time.perf_counter()
+        timer.start()
+        with pytest.raises(KeyboardInterrupt):
+            creepfit.diagnose(root / "configs" / "590C.toml", threads=2, progress=False)
+        elapsed = time.perf_counter() - t0
+        timer.cancel()
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    assert elapsed < 20, f"the diagnosis ran on for {elapsed:.1f} s after the interrupt"
