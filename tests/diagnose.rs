@@ -109,6 +109,44 @@ fn battery_of_2_generated_sets() {
     );
 }
 
+/// Asks to stop from the start.
+struct StopNow;
+
+impl creepfit::progress::Observer for StopNow {
+    fn cancelled(&self) -> bool {
+        true
+    }
+}
+
+/// A battery asked to stop starts no set, records none, and ends with an interruption that
+/// says how to resume; a rerun then computes the sets (the Python package's Ctrl-C).
+#[test]
+fn a_battery_asked_to_stop_starts_no_set() {
+    let dir = TempDir::new().unwrap();
+    let err = run_battery_observed(
+        dir.path(),
+        1001,
+        3,
+        creepfit::synth::World::Identical,
+        Some("none"),
+        &creepfit::battery::SetOverrides::default(),
+        &StopNow,
+    )
+    .unwrap_err();
+    let msg = err.to_string();
+    assert!(
+        matches!(err, creepfit::Error::Interrupted(_)),
+        "not an interruption: {msg}"
+    );
+    assert!(
+        msg.contains("results.jsonl") && msg.contains("resume"),
+        "{msg}"
+    );
+    let recorded = std::fs::read_to_string(dir.path().join("results.jsonl")).unwrap_or_default();
+    assert!(recorded.is_empty(), "sets recorded: {recorded}");
+    assert!(!dir.path().join("sets").exists(), "a set was generated");
+}
+
 /// `data/alloy617/` with every 10th point of each curve kept.
 fn every_tenth(dir: &Path) -> PathBuf {
     let text = std::fs::read_to_string(root().join("data/alloy617/creep_alloy617.csv")).unwrap();

@@ -91,3 +91,12 @@ def simulate(
     w: Optional[float] = None,
 ) -> _Outputs: ...
 def synth(seed: int, scenario: str, world: str, name: str) -> Dict[str, str]: ...
+def battery(
+    folder: str,
+    sets: int,
+    seed: int,
+    world: str,
+    scenario: Optional[str] = None,
+    threads: Optional[int] = None,
+    progress: _Progress = None,
+) -> Dict[str, str]: ...

@@ -890,18 +890,8 @@ fn synth(
     name: &str,
 ) -> PyResult<HashMap<&'static str, String>> {
     use creepfit::synth as sy;
-    sy::check_scenario(scenario).map_err(|_| {
-        py_err(Error::Invalid(format!(
-            "scenario: unknown scenario '{scenario}' (known: {})",
-            sy::SCENARIOS.join(", ")
-        )))
-    })?;
-    let world: sy::World = serde_json::from_value(serde_json::Value::String(world.to_string()))
-        .map_err(|_| {
-            py_err(Error::Invalid(format!(
-                "world: unknown world '{world}' (known: identical, specimens, shapes, campaigns)"
-            )))
-        })?;
+    check_scenario(scenario)?;
+    let world = world_of(world)?;
     let set = sy::generate_in(name, scenario, None, seed, world).map_err(py_err)?;
     Ok(HashMap::from([
         ("curves", set.curves_csv),
@@ -911,9 +901,86 @@ fn synth(
     ]))
 }
 
+/// `Ok` for a scenario of `synth --scenario`, else the error naming the known ones.
+fn check_scenario(scenario: &str) -> PyResult<()> {
+    creepfit::synth::check_scenario(scenario).map_err(|_| {
+        py_err(Error::Invalid(format!(
+            "scenario: unknown scenario '{scenario}' (known: {})",
+            creepfit::synth::SCENARIOS.join(", ")
+        )))
+    })
+}
+
+/// The laboratory `world` names (`synth --world`'s values).
+fn world_of(world: &str) -> PyResult<creepfit::synth::World> {
+    serde_json::from_value(serde_json::Value::String(world.to_string())).map_err(|_| {
+        py_err(Error::Invalid(format!(
+            "world: unknown world '{world}' (known: identical, specimens, shapes, campaigns)"
+        )))
+    })
+}
+
+/// The reports `creepfit battery` writes into its folder, by name.
+const BATTERY_REPORTS: [(&str, &str); 6] = [
+    ("results", "results.csv"),
+    ("confusion", "confusion.csv"),
+    ("confusion_detectable", "confusion_detectable.csv"),
+    ("power", "power.csv"),
+    ("summary", "summary.json"),
+    ("report", "summary.md"),
+];
+
+/// `creepfit battery`: `sets` generated sets from `seed` (of `scenario`, else the battery's
+/// cycle) in `world`, each diagnosed, into `folder`; resumed from the sets an earlier run of
+/// the same battery finished there. Returns the reports' texts (results.csv, confusion.csv,
+/// confusion_detectable.csv, power.csv, summary.json, summary.md). A raised stop starts no
+/// new set; the running ones finish and are recorded.
+#[pyfunction]
+#[pyo3(signature = (folder, sets, seed, world, scenario=None, threads=None, progress=None))]
+#[allow(clippy::too_many_arguments)]
+fn battery(
+    py: Python<'_>,
+    folder: String,
+    sets: usize,
+    seed: u64,
+    world: &str,
+    scenario: Option<String>,
+    threads: Option<usize>,
+    progress: Option<Bound<'_, PyAny>>,
+) -> PyResult<HashMap<&'static str, String>> {
+    let world = world_of(world)?;
+    if let Some(sc) = &scenario {
+        check_scenario(sc)?;
+    }
+    let out = PathBuf::from(folder);
+    let (texts, _) = run_detached(py, progress.as_ref(), move |p| {
+        with_threads(threads, || {
+            creepfit::commands::battery_observed(
+                &out,
+                sets,
+                seed,
+                world,
+                scenario.as_deref(),
+                &creepfit::battery::SetOverrides::default(),
+                p,
+            )
+        })?;
+        let mut texts = HashMap::new();
+        for (key, file) in BATTERY_REPORTS {
+            let path = out.join(file);
+            let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
+            texts.insert(key, text);
+        }
+        Ok((texts, Vec::<String>::new()))
+    })?;
+    Ok(texts)
+}
+
 /// The creepfit library: calibration of creep-damage constitutive equations.
 #[pymodule]
 mod _native {
     #[pymodule_export]
-    use super::{diagnose, fit, holdout, predict, profile, simulate, sweep, synth, CreepfitError};
+    use super::{
+        battery, diagnose, fit, holdout, predict, profile, simulate, sweep, synth, CreepfitError,
+    };
 }

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import sys
+import time
 from pathlib import Path
 
 import pandas as pd
@@ -358,3 +359,28 @@ def test_synth_refuses_an_unknown_scenario_or_world():
     a, b = creepfit.synth(3), creepfit.synth(3, name="trial")
     assert 'name = "trial"' in b.config and a.config.replace("set-3", "trial") == b.config
     pd.testing.assert_frame_equal(a.curves, b.curves, check_exact=True)
+
+
+def test_battery_and_the_command_share_a_folder(run_cli, tmp_path):
+    """A battery of one null set from Python (set 1001: `adequate`, as tests/diagnose.rs
+    has it), then the command into the same folder: it resumes the set, and its reports are
+    the ones Python returned; Python again resumes without computing."""
+    calls = []
+    res = creepfit.battery(tmp_path, sets=1, seed=1001, scenario="none", threads=2,
+                           progress=lambda *a: calls.append(a))
+    assert len(res.results) == 1
+    row = res.results.iloc[0]
+    assert (row["seed"], row["scenario"], row["outcome"]) == (1001, "none", "adequate")
+    assert res.summary["null_sets"] == 1 and res.summary["false_alarms"] == 0
+    assert calls[-1] == (1, 1), calls[-3:]
+    assert (tmp_path / "sets" / "set-1001" / "diagnosis.json").exists()
+    out = run_cli("battery", tmp_path, "--sets", "1", "--seed", "1001", "--scenario", "none",
+                  "--quiet")
+    assert "false alarms 0 of 1" in out.stdout
+    assert_same_table(read_table(tmp_path / "results.csv"), res.results, "results.csv")
+    t0 = time.perf_counter()
+    again = creepfit.battery(tmp_path, sets=1, seed=1001, scenario="none", progress=False)
+    assert time.perf_counter() - t0 < 5, "the finished set was computed again"
+    pd.testing.assert_frame_equal(again.results, res.results, check_exact=True)
+    with pytest.raises(creepfit.CreepfitError, match="world: unknown world 'lab'"):
+        creepfit.battery(tmp_path / "other", sets=1, world="lab")

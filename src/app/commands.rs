@@ -361,6 +361,27 @@ pub fn battery(
     overrides: &crate::battery::SetOverrides,
     quiet: bool,
 ) -> Result<()> {
+    let bars = Bars::new(quiet);
+    let run = battery_observed(out, sets, seed, world, scenario, overrides, &bars);
+    bars.clear();
+    let (results, rates) = run?;
+    export::battery::print_summary(&results, &rates);
+    println!("wrote {}", out.display());
+    Ok(())
+}
+
+/// [`battery`] telling `observer` of its sets (and stopping when it asks to: the finished
+/// sets stay recorded for a rerun), printing nothing: the sets' results in seed order and
+/// the rates its reports give.
+pub fn battery_observed(
+    out: &Path,
+    sets: usize,
+    seed: u64,
+    world: crate::synth::World,
+    scenario: Option<&str>,
+    overrides: &crate::battery::SetOverrides,
+    observer: &dyn crate::progress::Observer,
+) -> Result<(Vec<crate::battery::SetResult>, crate::battery::Rates)> {
     if let Some(sc) = scenario {
         crate::synth::check_scenario(sc)?;
     }
@@ -404,11 +425,12 @@ pub fn battery(
         f == BATTERY_IDENTITY || f == "results.jsonl" || f.starts_with("sets/")
     })?;
     crate::output::record(&out.join(BATTERY_IDENTITY));
-    let bars = Bars::new(quiet);
     let results =
-        crate::battery::run_battery_observed(out, seed, sets, world, scenario, overrides, &bars);
-    bars.clear();
+        crate::battery::run_battery_observed(out, seed, sets, world, scenario, overrides, observer);
     export::battery::record_written(out);
-    let outcome = results.and_then(|r| export::battery::write(out, &r, seed));
+    let outcome = results.and_then(|r| {
+        let rates = export::battery::write(out, &r, seed)?;
+        Ok((r, rates))
+    });
     folder.finish(outcome)
 }

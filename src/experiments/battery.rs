@@ -566,7 +566,9 @@ pub fn run_battery(
 }
 
 /// [`run_battery`] telling `observer` of every finished set (a step, and a line with its
-/// outcome) instead of printing.
+/// outcome) instead of printing. When the observer asks to stop, no new set starts, the
+/// running ones finish and are recorded, and the battery ends with [`Error::Interrupted`]:
+/// a rerun into the same folder resumes from `results.jsonl`.
 pub fn run_battery_observed(
     dir: &Path,
     first_seed: u64,
@@ -591,9 +593,12 @@ pub fn run_battery_observed(
     let total = todo.len();
     observer.phase("sets", Some(n as u64));
     observer.resumed((n - total) as u64);
-    let fresh: Vec<SetResult> = todo
+    let fresh: Vec<Option<SetResult>> = todo
         .par_iter()
         .map(|&(i, seed)| {
+            if observer.cancelled() {
+                return Ok(None);
+            }
             let sc = scenario.unwrap_or_else(|| scenario_of(i));
             let r = run_one_diagnosed_with(dir, sc, seed, world, overrides).0;
             let line = serde_json::to_string(&r).expect("plain values") + "\n";
@@ -621,11 +626,17 @@ pub fn run_battery_observed(
                 },
                 r.wall_s
             ));
-            Ok(r)
+            Ok(Some(r))
         })
         .collect::<Result<_>>()?;
+    if observer.cancelled() {
+        return Err(Error::Interrupted(format!(
+            "stopped during the battery; the finished sets are in {}: rerun the same battery into the same folder to resume",
+            path.display()
+        )));
+    }
     let mut all = done;
-    for r in fresh {
+    for r in fresh.into_iter().flatten() {
         all.insert(r.seed, r);
     }
     Ok(all

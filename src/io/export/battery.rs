@@ -24,10 +24,13 @@ pub fn record_written(out: &Path) {
     walk(&out.join("sets"));
 }
 
-/// Write the battery's reports over `results` (first seed `seed`) into `out` and print the
-/// summary line.
-pub fn write(out: &Path, results: &[SetResult], seed: u64) -> Result<()> {
-    let r = crate::battery::write_reports(out, results, seed)?;
+/// Write the battery's reports over `results` (first seed `seed`) into `out`: their rates.
+pub fn write(out: &Path, results: &[SetResult], seed: u64) -> Result<crate::battery::Rates> {
+    crate::battery::write_reports(out, results, seed)
+}
+
+/// The console's summary line of a battery's `results` with their rates `r`.
+pub fn print_summary(results: &[SetResult], r: &crate::battery::Rates) {
     println!(
         "{} sets: false alarms {} of {} no-effect sets; named correctly (detectable): {}; outside the catalogue with an extension verdict: {} of {}",
         results.len(),
@@ -41,6 +44,4 @@ pub fn write(out: &Path, results: &[SetResult], seed: u64) -> Result<()> {
         r.outside_extension,
         r.outside_sets
     );
-    println!("wrote {}", out.display());
-    Ok(())
 }
