@@ -945,15 +945,6 @@ impl LeastSquaresProblem for LikelihoodProblem<'_> {
         Self::penalties(layout, eta, &self.scatter(), &mut r[md..]);
         Ok(())
     }
-    fn jacobian(
-        &self,
-        u: &[f64],
-        _r: &[f64],
-        jac: &mut DMatrix<f64>,
-    ) -> Option<Result<(), EvalFailure>> {
-        let mut raw = vec![0.0; self.n_residuals()];
-        self.residuals_and_jacobian(u, &mut raw, jac)
-    }
     fn residuals_and_jacobian(
         &self,
         u: &[f64],
@@ -1886,15 +1877,6 @@ impl<P: LeastSquaresProblem> LeastSquaresProblem for WithRow<'_, P> {
             *v *= self.c;
         }
         Ok(())
-    }
-    fn jacobian(
-        &self,
-        u: &[f64],
-        _r: &[f64],
-        jac: &mut DMatrix<f64>,
-    ) -> Option<Result<(), EvalFailure>> {
-        let mut r = vec![0.0; self.n_residuals()];
-        self.residuals_and_jacobian(u, &mut r, jac)
     }
     fn residuals_and_jacobian(
         &self,

@@ -553,15 +553,6 @@ impl LeastSquaresProblem for Penalised<'_, '_> {
         r[m] = (g - self.target) / self.tau;
         Ok(())
     }
-    fn jacobian(
-        &self,
-        u: &[f64],
-        _r: &[f64],
-        jac: &mut DMatrix<f64>,
-    ) -> Option<Result<(), EvalFailure>> {
-        let mut r = vec![0.0; self.n_residuals()];
-        self.residuals_and_jacobian(u, &mut r, jac)
-    }
     fn residuals_and_jacobian(
         &self,
         u: &[f64],

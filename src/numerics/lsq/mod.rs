@@ -37,14 +37,18 @@ pub trait LeastSquaresProblem: Sync {
     /// Write r(x) into `r` (length m).
     fn residuals(&self, x: &[f64], r: &mut [f64]) -> Result<(), EvalFailure>;
     /// Write the Jacobian ∂r/∂x (m × n) into `jac`; `None` means "not available, use finite
-    /// differences" (the default).
+    /// differences". The default takes it from
+    /// [`LeastSquaresProblem::residuals_and_jacobian`] (residuals into a scratch vector), so a
+    /// problem that gives both together need not give the Jacobian alone; `None` where that
+    /// is not available either.
     fn jacobian(
         &self,
-        _x: &[f64],
+        x: &[f64],
         _r: &[f64],
-        _jac: &mut DMatrix<f64>,
+        jac: &mut DMatrix<f64>,
     ) -> Option<Result<(), EvalFailure>> {
-        None
+        let mut scratch = vec![0.0; self.n_residuals()];
+        self.residuals_and_jacobian(x, &mut scratch, jac)
     }
     /// r(x) and ∂r/∂x together, for problems that get both from one evaluation (dual
     /// numbers) at little more than the price of r alone: the optimiser then evaluates every
