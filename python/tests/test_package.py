@@ -65,7 +65,7 @@ runpy.run_path(sys.argv[1], run_name="__main__")
 
 
 def test_quickstart_example_runs(root):
-    """python/examples/quickstart.py runs whole and prints its five results."""
+    """python/examples/quickstart.py runs whole and prints its six results."""
     import subprocess
     import sys
 
@@ -79,3 +79,4 @@ def test_quickstart_example_runs(root):
     assert "extrapolation" in p.stdout and "stress" in p.stdout
     assert "identifiable" in p.stdout and "lo95" in p.stdout
     assert "ruptured" in p.stdout and "outcome" in p.stdout
+    assert "creep-rate scatter between specimens" in p.stdout and "true 0.125" in p.stdout
