@@ -51,7 +51,15 @@ pub const OUTLIER_NEIGHBOURS: usize = 3;
 /// strain, the order of a reading error of a digitised or logged curve).
 pub const OUTLIER_SPREAD_FLOOR: f64 = 1e-4;
 
-/// What [`load`] does with gross outliers of a curve ([`outlier_z`] above [`OUTLIER_Z`]).
+/// A reading later than this many times its test's rupture time is a gross outlier in time
+/// ([`after_rupture`]): a specimen is not read after it broke. Real last readings lie at
+/// 0.93–1.0007 × the rupture time (the seed data's curves, the 34 Alloy 617 curves); 1.5 is
+/// half a life past the rupture, beyond any rounding or digitising of a reading's time, and
+/// a digit too many (×10) or a value from another column is far beyond it.
+pub const AFTER_RUPTURE_FACTOR: f64 = 1.5;
+
+/// What [`load`] does with gross outliers of a curve ([`outlier_z`] above [`OUTLIER_Z`], or
+/// a reading after the test's rupture, [`after_rupture`]).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum OutlierPolicy {
@@ -65,9 +73,12 @@ pub enum OutlierPolicy {
     Keep,
 }
 
-/// A point of a curves file flagged as a gross outlier ([`outlier_z`]).
+/// A point of a curves file flagged as a gross outlier: its strain far from its neighbours'
+/// ([`outlier_z`]) or its time after its test's rupture ([`after_rupture`]).
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Outlier {
+    /// The column found wrong: `strain_pct` or `time_h`.
+    pub column: &'static str,
     /// The curves file.
     pub file: String,
     /// 1-based line in it.
@@ -81,25 +92,45 @@ pub struct Outlier {
     /// Time (h) and strain (%) as in the file.
     pub time_h: f64,
     pub strain_pct: f64,
-    /// Its robust z.
-    pub z: f64,
+    /// Its robust z (a strain outlier).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub z: Option<f64>,
+    /// The test's rupture time, h (a time outlier).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rupture_time_h: Option<f64>,
 }
 
 impl Outlier {
-    /// `FILE:LINE: column 'strain_pct': …` without the leading file and line.
+    /// `FILE:LINE: column '…': …` without the leading file and line.
     fn what(&self) -> String {
-        format!(
-            "column 'strain_pct': {} % at {} h is a gross outlier of the curve at {} °C, {} MPa{} (robust z = {:.3e}, the limit is {OUTLIER_Z})",
-            self.strain_pct,
-            self.time_h,
-            self.temperature_c,
-            self.stress_mpa,
-            self.specimen
-                .as_ref()
-                .map(|s| format!(", specimen {s}"))
-                .unwrap_or_default(),
-            self.z
-        )
+        let specimen = self
+            .specimen
+            .as_ref()
+            .map(|s| format!(", specimen {s}"))
+            .unwrap_or_default();
+        match (self.z, self.rupture_time_h) {
+            (_, Some(tr)) => format!(
+                "column 'time_h': {} h is {} × the rupture time {} h of the test at {} °C, {} MPa{} (a reading after the rupture: a mistyped time? the limit is {AFTER_RUPTURE_FACTOR} ×)",
+                self.time_h,
+                match self.time_h / tr {
+                    r if r < 1e4 => format!("{r:.2}"),
+                    r => format!("{r:.3e}"),
+                },
+                tr,
+                self.temperature_c,
+                self.stress_mpa,
+                specimen
+            ),
+            (z, None) => format!(
+                "column 'strain_pct': {} % at {} h is a gross outlier of the curve at {} °C, {} MPa{} (robust z = {:.3e}, the limit is {OUTLIER_Z})",
+                self.strain_pct,
+                self.time_h,
+                self.temperature_c,
+                self.stress_mpa,
+                specimen,
+                z.unwrap_or(f64::NAN)
+            ),
+        }
     }
 }
 
@@ -160,28 +191,54 @@ pub fn outlier_z(strains: &[f64]) -> Vec<f64> {
         .collect()
 }
 
-/// The gross outliers of a curve read from `path` ([`outlier_z`] above [`OUTLIER_Z`]).
-fn curve_outliers(c: &RawCurve, path: &Path) -> Vec<(usize, Outlier)> {
-    outlier_z(&c.strains)
-        .into_iter()
-        .enumerate()
-        .filter(|(_, z)| *z > OUTLIER_Z)
-        .map(|(k, z)| {
-            (
-                k,
-                Outlier {
-                    file: path.display().to_string(),
-                    line: c.lines[k],
-                    temperature_c: c.temperature_c,
-                    stress_mpa: c.stress_mpa,
-                    specimen: c.specimen.clone(),
-                    time_h: c.times_h[k],
-                    strain_pct: pct(c.strains[k]),
-                    z,
-                },
-            )
-        })
-        .collect()
+/// The readings (indices) of a ruptured test's curve later than [`AFTER_RUPTURE_FACTOR`] ×
+/// its rupture time `rupture_h`: mistyped times, where they are fewer than half of the
+/// readings. Where most lie beyond, the rupture record is what is suspect: none is flagged,
+/// and loading warns that the rupture time is before the last reading.
+pub fn after_rupture(times: &[f64], rupture_h: f64) -> Vec<usize> {
+    let late: Vec<usize> = (0..times.len())
+        .filter(|&k| times[k] > AFTER_RUPTURE_FACTOR * rupture_h)
+        .collect();
+    if 2 * late.len() < times.len() {
+        late
+    } else {
+        Vec::new()
+    }
+}
+
+/// The gross outliers of a curve read from `path`, by index: its readings after the test's
+/// rupture (`rupture_h`, `None` for a test without one), then among the others the strains
+/// with [`outlier_z`] above [`OUTLIER_Z`] (a misplaced reading does not count among its
+/// neighbours).
+fn curve_outliers(c: &RawCurve, path: &Path, rupture_h: Option<f64>) -> Vec<(usize, Outlier)> {
+    let point = |k: usize, z: Option<f64>, tr: Option<f64>| Outlier {
+        column: if tr.is_some() { "time_h" } else { "strain_pct" },
+        file: path.display().to_string(),
+        line: c.lines[k],
+        temperature_c: c.temperature_c,
+        stress_mpa: c.stress_mpa,
+        specimen: c.specimen.clone(),
+        time_h: c.times_h[k],
+        strain_pct: pct(c.strains[k]),
+        z,
+        rupture_time_h: tr,
+    };
+    let late = rupture_h.map_or_else(Vec::new, |tr| after_rupture(&c.times_h, tr));
+    let rest: Vec<usize> = (0..c.times_h.len()).filter(|k| !late.contains(k)).collect();
+    let strains: Vec<f64> = rest.iter().map(|&k| c.strains[k]).collect();
+    let mut found: Vec<(usize, Outlier)> = late
+        .iter()
+        .map(|&k| (k, point(k, None, rupture_h)))
+        .collect();
+    found.extend(
+        outlier_z(&strains)
+            .into_iter()
+            .zip(&rest)
+            .filter(|(z, _)| *z > OUTLIER_Z)
+            .map(|(z, &k)| (k, point(k, Some(z), None))),
+    );
+    found.sort_by_key(|(k, _)| *k);
+    found
 }
 
 /// One measured creep curve (one test), ready for fitting.
@@ -726,8 +783,6 @@ fn load_read(
     if opts.temperature_c.is_none() && !opts.several_temperatures {
         check_one_temperature(&raw, curves)?;
     }
-    let (raw, dropped) = handle_outliers(raw, curves, opts.outliers, &mut warnings)?;
-
     let flags =
         interrupted_flags(&opts.interrupted, &raw, opts.temperature_c).map_err(|(k, m)| {
             let m = format!("interrupted[{k}] = {}: {m}", opts.interrupted[k].label());
@@ -736,11 +791,23 @@ fn load_read(
                 None => Error::Invalid(m),
             }
         })?;
+    let matched = raw
+        .iter()
+        .map(|c| match_record(c, &records, ruptures))
+        .collect::<Result<Vec<Option<usize>>>>()?;
+    // A test's rupture time bounds its readings' times (a record of a test declared
+    // interrupted is ignored).
+    let rupture_h: Vec<Option<f64>> = matched
+        .iter()
+        .zip(&flags)
+        .map(|(m, &i)| m.filter(|_| !i).map(|k| records[k].rupture_time_h))
+        .collect();
+    let (raw, dropped) = handle_outliers(raw, curves, opts.outliers, &rupture_h, &mut warnings)?;
+
     let mut used = vec![false; records.len()];
     let mut out = Vec::with_capacity(raw.len());
-    for (c, interrupted) in raw.into_iter().zip(flags) {
+    for ((c, interrupted), rec) in raw.into_iter().zip(flags).zip(matched) {
         warnings.extend(negative_strain_warning(&c, curves));
-        let rec = match_record(&c, &records, ruptures)?;
         if let Some(i) = rec {
             used[i] = true;
         }
@@ -842,16 +909,21 @@ fn load_read(
     })
 }
 
-/// Apply `policy` to the gross outliers of the curves: refuse (the first, by line), drop
-/// (each in a warning and in the returned list; a curve left with too few points is an
-/// error) or keep (each in a warning).
+/// Apply `policy` to the gross outliers of the curves (`rupture_h`: each curve's rupture
+/// time, if it has one): refuse (the first, by line), drop (each in a warning and in the
+/// returned list; a curve left with too few points is an error) or keep (each in a warning).
 fn handle_outliers(
     raw: Vec<RawCurve>,
     path: &Path,
     policy: OutlierPolicy,
+    rupture_h: &[Option<f64>],
     warnings: &mut Vec<String>,
 ) -> Result<(Vec<RawCurve>, Vec<Outlier>)> {
-    let found: Vec<Vec<(usize, Outlier)>> = raw.iter().map(|c| curve_outliers(c, path)).collect();
+    let found: Vec<Vec<(usize, Outlier)>> = raw
+        .iter()
+        .zip(rupture_h)
+        .map(|(c, tr)| curve_outliers(c, path, *tr))
+        .collect();
     if found.iter().all(Vec::is_empty) {
         return Ok((raw, Vec::new()));
     }
@@ -2470,6 +2542,26 @@ mod tests {
             "{:?}",
             one.warnings
         );
+    }
+
+    #[test]
+    fn readings_after_the_rupture_are_time_outliers_where_few() {
+        // (times h, rupture time h, flagged)
+        let table: [(&[f64], f64, &[usize]); 8] = [
+            (&[0.0, 10.0, 20.0, 90.0], 100.0, &[]),
+            // The last reading at or a little past the rupture: real data (≤ 1.0007 ×).
+            (&[0.0, 10.0, 20.0, 100.07], 100.0, &[]),
+            (&[0.0, 10.0, 20.0, 150.0], 100.0, &[]),
+            (&[0.0, 10.0, 20.0, 90.0, 150.1], 100.0, &[4]),
+            (&[0.0, 10.0, 20.0, 1e30], 100.0, &[3]),
+            (&[0.0, 10.0, 900.0, 20.0, 1000.0, 30.0], 100.0, &[2, 4]),
+            // Half or more beyond: the rupture record is the suspect, no reading is.
+            (&[0.0, 10.0, 200.0, 300.0], 100.0, &[]),
+            (&[0.0, 200.0, 300.0, 400.0], 100.0, &[]),
+        ];
+        for (times, tr, want) in table {
+            assert_eq!(after_rupture(times, tr), want, "{times:?} {tr}");
+        }
     }
 
     #[test]

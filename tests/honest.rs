@@ -673,6 +673,88 @@ fn a_gross_outlier_is_refused_or_dropped() {
     assert_eq!(dropped[0]["line"], n);
     assert_eq!(dropped[0]["strain_pct"], 1_000_000.0);
     assert!(dropped[0]["z"].as_f64().unwrap() > 50.0);
+    assert_eq!(dropped[0]["column"], "strain_pct");
+    assert!(dropped[0].get("rupture_time_h").is_none(), "{m}");
+    assert_eq!(
+        std::fs::read_to_string(out.join("constants.csv")).unwrap(),
+        std::fs::read_to_string(clean.join("constants.csv")).unwrap()
+    );
+}
+
+/// One reading's time mistyped (`560,85,390,0.051` as `560,85,3900000,0.051`: 43 × the
+/// test's rupture time of 91,000 h): `fit` refuses in one line naming the file, line, column
+/// and the rupture time; with `outliers = "drop"` the reading is dropped, named in a warning
+/// and in manifest.json (`column` `time_h`, the rupture time), and the fit is exactly the fit
+/// of the data without that row. Before: exit 0, the reading compared with the model's
+/// continuation past the rupture, a warning on stderr only.
+#[test]
+fn a_reading_after_the_rupture_is_refused_or_dropped() {
+    let tmp = TempDir::new().unwrap();
+    let curves = std::fs::read_to_string(root().join("data/creep_560C.csv")).unwrap();
+    let at = "560,85,390,0.051\n";
+    assert!(curves.contains(at));
+    let n = 3;
+    assert_eq!(curves.lines().nth(n - 1), Some(at.trim_end()));
+    let without = tmp.path().join("without.csv");
+    std::fs::write(&without, curves.replacen(at, "", 1)).unwrap();
+    let typo = tmp.path().join("typo.csv");
+    std::fs::write(&typo, curves.replacen(at, "560,85,3900000,0.051\n", 1)).unwrap();
+    let from = format!("{}/data/creep_560C.csv", root().display());
+    let clean_cfg = config_560(
+        tmp.path(),
+        "w.toml",
+        "",
+        &[(&from, without.to_str().unwrap())],
+    );
+    let clean = tmp.path().join("clean");
+    ok(&[
+        "fit",
+        clean_cfg.to_str().unwrap(),
+        "--out",
+        clean.to_str().unwrap(),
+    ]);
+    let cfg = config_560(tmp.path(), "t.toml", "", &[(&from, typo.to_str().unwrap())]);
+    let out = tmp.path().join("fit");
+    let e = fails(&["fit", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    has(
+        &e,
+        &[
+            &format!(
+                "typo.csv:{n}: column 'time_h': 3900000 h is 42.86 × the rupture time 91000 h"
+            ),
+            "a reading after the rupture",
+            "outliers = \"drop\"",
+        ],
+    );
+    assert_eq!(e.trim().lines().count(), 1, "{e}");
+    assert!(!out.exists());
+    let cfg = config_560(
+        tmp.path(),
+        "d.toml",
+        "",
+        &[
+            (&from, typo.to_str().unwrap()),
+            ("model = ", "outliers = \"drop\"\nmodel = "),
+        ],
+    );
+    let o = creepfit(&["fit", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    has(
+        &err,
+        &[
+            &format!("warning: {}:{n}: column 'time_h'", typo.display()),
+            "dropped (outliers = \"drop\")",
+        ],
+    );
+    let m = json(&out.join("manifest.json"));
+    let dropped = m["dropped_points"].as_array().unwrap();
+    assert_eq!(dropped.len(), 1, "{m}");
+    assert_eq!(dropped[0]["line"], n);
+    assert_eq!(dropped[0]["column"], "time_h");
+    assert_eq!(dropped[0]["time_h"], 3_900_000.0);
+    assert_eq!(dropped[0]["rupture_time_h"], 91_000.0);
+    assert!(dropped[0].get("z").is_none(), "{m}");
     assert_eq!(
         std::fs::read_to_string(out.join("constants.csv")).unwrap(),
         std::fs::read_to_string(clean.join("constants.csv")).unwrap()
