@@ -1416,6 +1416,13 @@ fn read_curves_from(
 
     let mut dups = Duplicates::default();
     let mut warnings = Vec::new();
+    // Tests (temperature, stress) with a labelled specimen: an unlabelled curve among them is
+    // likely rows whose 'specimen' cell was left empty.
+    let labelled: Vec<(f64, f64)> = curves
+        .iter()
+        .filter(|c| c.specimen.is_some())
+        .map(|c| (c.temperature_c, c.stress_mpa))
+        .collect();
     for c in &mut curves {
         sort_and_dedup(c, &mut dups);
         let what = || {
@@ -1431,12 +1438,20 @@ fn read_curves_from(
         };
         let n = c.times_h.len();
         if n < MIN_POINTS {
+            let empty_cell =
+                c.specimen.is_none() && labelled.contains(&(c.temperature_c, c.stress_mpa));
             return Err(Error::data(
                 path,
                 c.first_line,
                 format!(
-                    "{} has {n} distinct point(s); at least {MIN_POINTS} are needed",
-                    what()
+                    "{} has {n} distinct point(s); at least {MIN_POINTS} are needed{}",
+                    what(),
+                    if empty_cell {
+                        " (its rows have an empty 'specimen' cell, while other rows of this \
+                         temperature and stress name a specimen: fill the cell)"
+                    } else {
+                        ""
+                    }
                 ),
             ));
         }

@@ -141,6 +141,26 @@ fn too_few_points() {
     );
 }
 
+/// A row of a labelled test whose 'specimen' cell is empty becomes a curve of its own with too
+/// few points: the error says so. A curve short of points among unlabelled tests does not.
+#[test]
+fn an_empty_specimen_cell_is_named() {
+    let labelled = "temperature_C,stress_MPa,time_h,strain_pct,specimen\n\
+                    600,100,0,0,a\n600,100,10,1,a\n600,100,20,2,\n600,100,30,3,a\n\
+                    600,120,0,0,b\n600,120,5,1,b\n600,120,10,2,b\n";
+    let e = curves_error(labelled);
+    has(
+        &e,
+        &[
+            "curves.csv:4",
+            "stress_MPa = 100 has 1 distinct point(s)",
+            "empty 'specimen' cell",
+        ],
+    );
+    let e = curves_error(&CURVES.replace("600,120,10,2\n", ""));
+    assert!(!e.contains("specimen"), "{e}");
+}
+
 #[test]
 fn curve_without_rupture_record() {
     let dir = TempDir::new().unwrap();
