@@ -58,6 +58,12 @@ pub const OUTLIER_SPREAD_FLOOR: f64 = 1e-4;
 /// a digit too many (×10) or a value from another column is far beyond it.
 pub const AFTER_RUPTURE_FACTOR: f64 = 1.5;
 
+/// A rupture strain below this fraction of the largest strain its curve reached is refused:
+/// strain does not fall by half before rupture, so such a value is a typo or a fraction
+/// given where percent is expected (×0.01). A strain at rupture measured on the broken
+/// specimen may differ from the extensometer's last reading, but not by half.
+pub const MIN_RUPTURE_STRAIN_OF_CURVE: f64 = 0.5;
+
 /// What [`load`] does with gross outliers of a curve ([`outlier_z`] above [`OUTLIER_Z`], or
 /// a reading after the test's rupture, [`after_rupture`]).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -1124,6 +1130,30 @@ fn finish_curve(
                 c.temperature_c,
                 c.stress_mpa,
                 curves.display()
+            ));
+        }
+    }
+    if let Some((r, er)) = rec.and_then(|r| r.rupture_strain.map(|e| (r, e))) {
+        let top = c.strains.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        if top > 0.0 && er < MIN_RUPTURE_STRAIN_OF_CURVE * top {
+            return Err(Error::data(
+                ruptures,
+                r.line,
+                format!(
+                    "column 'rupture_strain_pct': {} % is {:.3} × the largest strain {} % that \
+                     the curve at {} °C, {} MPa{} reached in {}: a strain at rupture is not below \
+                     what the test reached (a fraction where percent is expected?)",
+                    pct(er),
+                    er / top,
+                    pct(top),
+                    c.temperature_c,
+                    c.stress_mpa,
+                    c.specimen
+                        .as_ref()
+                        .map(|s| format!(", specimen {s}"))
+                        .unwrap_or_default(),
+                    curves.display()
+                ),
             ));
         }
     }

@@ -161,6 +161,35 @@ fn an_empty_specimen_cell_is_named() {
     assert!(!e.contains("specimen"), "{e}");
 }
 
+/// A rupture strain given as a fraction (0.02 for a curve that reached 2 %) is refused, naming
+/// the ruptures file's line and column; one a little below the curve's last reading loads.
+#[test]
+fn a_rupture_strain_below_the_curves_is_refused() {
+    let dir = TempDir::new().unwrap();
+    let c = write(&dir, "curves.csv", CURVES);
+    let load = |strain: &str| {
+        let text = format!(
+            "temperature_C,stress_MPa,rupture_time_h,rupture_strain_pct\n600,100,25,{strain}\n600,120,12,2.5\n"
+        );
+        let r = write(&dir, "ruptures.csv", &text);
+        data::load(&c, &r, &LoadOptions::default())
+    };
+    let e = load("0.02")
+        .expect_err("a fraction for percent")
+        .to_string();
+    assert_one_line(&e);
+    has(
+        &e,
+        &[
+            "ruptures.csv:2: column 'rupture_strain_pct': 0.02 % is 0.010 × the largest strain 2 %",
+            "600 °C, 100 MPa",
+            "percent",
+        ],
+    );
+    let d = load("1.9").expect("a rupture strain a little below the last reading is data");
+    assert_eq!(d.curves[0].rupture_strain, 0.019);
+}
+
 #[test]
 fn curve_without_rupture_record() {
     let dir = TempDir::new().unwrap();
