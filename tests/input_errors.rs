@@ -190,6 +190,45 @@ fn a_rupture_strain_below_the_curves_is_refused() {
     assert_eq!(d.curves[0].rupture_strain, 0.019);
 }
 
+/// Units mixed up: strains as fractions where percent is expected, and curve times in
+/// seconds against rupture times in hours, are each named in a warning; the test data as
+/// they are give neither.
+#[test]
+fn mixed_up_units_are_named_in_warnings() {
+    let load = |curves: &str, ruptures: &str| {
+        let dir = TempDir::new().unwrap();
+        let c = write(&dir, "curves.csv", curves);
+        let r = write(&dir, "ruptures.csv", ruptures);
+        data::load(&c, &r, &LoadOptions::default())
+            .unwrap()
+            .warnings
+    };
+    let units = |w: &[String]| {
+        (
+            w.iter().any(|w| w.contains("strain_pct is in percent")),
+            w.iter().any(|w| w.contains("are both files in hours?")),
+        )
+    };
+    assert_eq!(units(&load(CURVES, RUPTURES)), (false, false));
+    let fractions = "temperature_C,stress_MPa,time_h,strain_pct\n\
+                     600,100,0,0\n600,100,10,0.01\n600,100,20,0.02\n\
+                     600,120,0,0\n600,120,5,0.01\n600,120,10,0.02\n";
+    let w = load(fractions, RUPTURES);
+    assert_eq!(units(&w), (true, false), "{w:?}");
+    assert!(w
+        .iter()
+        .any(|w| w.contains("curves.csv: column 'strain_pct'")));
+    // Rupture times in seconds: the curves end at 1/3600 of them.
+    let seconds = "temperature_C,stress_MPa,rupture_time_h\n600,100,90000\n600,120,43200\n";
+    let w = load(CURVES, seconds);
+    assert_eq!(units(&w), (false, true), "{w:?}");
+    assert!(
+        w.iter()
+            .any(|w| w.contains("curves.csv:2: column 'time_h'") && w.contains("ruptures.csv:2")),
+        "{w:?}"
+    );
+}
+
 #[test]
 fn curve_without_rupture_record() {
     let dir = TempDir::new().unwrap();
