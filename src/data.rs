@@ -90,6 +90,23 @@ pub enum OutlierPolicy {
     Keep,
 }
 
+/// ", specimen S" for a labelled test, "" otherwise: the tail of a message naming a test.
+fn specimen_suffix(specimen: &Option<String>) -> String {
+    specimen
+        .as_ref()
+        .map(|s| format!(", specimen {s}"))
+        .unwrap_or_default()
+}
+
+/// ", specimen = S" for a labelled test, "" otherwise: the tail of a message naming a test by
+/// its key columns.
+fn specimen_key(specimen: &Option<String>) -> String {
+    specimen
+        .as_ref()
+        .map(|s| format!(", specimen = {s}"))
+        .unwrap_or_default()
+}
+
 /// A point of a curves file flagged as a gross outlier: its strain far from its neighbours'
 /// ([`outlier_z`]) or its time after its test's rupture ([`after_rupture`]).
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
@@ -120,11 +137,7 @@ pub struct Outlier {
 impl Outlier {
     /// `FILE:LINE: column '…': …` without the leading file and line.
     fn what(&self) -> String {
-        let specimen = self
-            .specimen
-            .as_ref()
-            .map(|s| format!(", specimen {s}"))
-            .unwrap_or_default();
+        let specimen = specimen_suffix(&self.specimen);
         match (self.z, self.rupture_time_h) {
             (_, Some(tr)) => format!(
                 "column 'time_h': {} h is {} × the rupture time {} h of the test at {} °C, {} MPa{} (a reading after the rupture: a mistyped time? the limit is {AFTER_RUPTURE_FACTOR} ×)",
@@ -836,10 +849,7 @@ fn load_read(
                     records[i].line,
                     c.temperature_c,
                     c.stress_mpa,
-                    c.specimen
-                        .as_ref()
-                        .map(|s| format!(", specimen {s}"))
-                        .unwrap_or_default()
+                    specimen_suffix(&c.specimen)
                 ));
                 None
             }
@@ -854,10 +864,7 @@ fn load_read(
                          (declare the test interrupted in the configuration if it did not rupture)",
                     c.temperature_c,
                     c.stress_mpa,
-                    c.specimen
-                        .as_ref()
-                        .map(|s| format!(", specimen = {s}"))
-                        .unwrap_or_default(),
+                    specimen_key(&c.specimen),
                     ruptures.display()
                 ),
                 ))
@@ -877,10 +884,7 @@ fn load_read(
                 r.line,
                 r.temperature_c,
                 r.stress_mpa,
-                r.specimen
-                    .as_ref()
-                    .map(|s| format!(", specimen {s}"))
-                    .unwrap_or_default()
+                specimen_suffix(&r.specimen)
             ));
         }
     }
@@ -1114,10 +1118,7 @@ fn match_record(c: &RawCurve, records: &[RuptureRecord], ruptures: &Path) -> Res
                 records[j].line,
                 c.temperature_c,
                 c.stress_mpa,
-                c.specimen
-                    .as_ref()
-                    .map(|s| format!(", specimen = {s}"))
-                    .unwrap_or_default()
+                specimen_key(&c.specimen)
             ),
         ));
     }
@@ -1174,10 +1175,7 @@ fn finish_curve(
                     pct(top),
                     c.temperature_c,
                     c.stress_mpa,
-                    c.specimen
-                        .as_ref()
-                        .map(|s| format!(", specimen {s}"))
-                        .unwrap_or_default(),
+                    specimen_suffix(&c.specimen),
                     curves.display()
                 ),
             ));
@@ -1211,10 +1209,7 @@ fn finish_curve(
                  strain {} %, not above zero: no creep to fit (or give rupture_strain_pct in {})",
                 c.temperature_c,
                 c.stress_mpa,
-                c.specimen
-                    .as_ref()
-                    .map(|s| format!(", specimen = {s}"))
-                    .unwrap_or_default(),
+                specimen_key(&c.specimen),
                 last_strain * 100.0,
                 ruptures.display()
             ),
@@ -1503,10 +1498,7 @@ fn read_curves_from(
                 "curve at temperature_C = {}, stress_MPa = {}{}",
                 c.temperature_c,
                 c.stress_mpa,
-                c.specimen
-                    .as_ref()
-                    .map(|s| format!(", specimen = {s}"))
-                    .unwrap_or_default()
+                specimen_key(&c.specimen)
             )
         };
         let n = c.times_h.len();
@@ -1584,10 +1576,7 @@ fn negative_strain_warning(c: &RawCurve, path: &Path) -> Option<String> {
             path.display(),
             c.temperature_c,
             c.stress_mpa,
-            c.specimen
-                .as_ref()
-                .map(|s| format!(", specimen {s}"))
-                .unwrap_or_default(),
+            specimen_suffix(&c.specimen),
             pct(lowest)
         )
     })
